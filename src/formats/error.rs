@@ -1,0 +1,172 @@
+//! Positioned errors for every reader. A [`ParseError`] prints as
+//! `path:line:col: message`, with 1-based line and column, so editors and
+//! terminals can jump to the spot.
+
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A place in a text file. Line and column count from 1; `byte` from 0.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Position {
+    pub line: usize,
+    pub column: usize,
+    pub byte: usize,
+}
+
+impl Position {
+    pub fn new(line: usize, column: usize) -> Position {
+        Position {
+            line,
+            column,
+            byte: 0,
+        }
+    }
+
+    /// Position of `byte` in `text` (column counted in characters).
+    pub fn of_byte(text: &str, byte: usize) -> Position {
+        let byte = byte.min(text.len());
+        let before = &text.as_bytes()[..byte];
+        let line = before.iter().filter(|&&b| b == b'\n').count() + 1;
+        let line_start = before
+            .iter()
+            .rposition(|&b| b == b'\n')
+            .map_or(0, |i| i + 1);
+        let column = String::from_utf8_lossy(&before[line_start..])
+            .chars()
+            .count()
+            + 1;
+        Position { line, column, byte }
+    }
+}
+
+/// A reader error with the file and the place it refers to.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParseError {
+    pub path: PathBuf,
+    pub position: Position,
+    pub message: String,
+}
+
+impl ParseError {
+    pub fn new(path: &Path, position: Position, message: impl Into<String>) -> ParseError {
+        ParseError {
+            path: path.to_path_buf(),
+            position,
+            message: message.into(),
+        }
+    }
+
+    /// An error at `line`, column `column` (both 1-based).
+    pub fn at(path: &Path, line: usize, column: usize, message: impl Into<String>) -> ParseError {
+        ParseError::new(path, Position::new(line, column), message)
+    }
+}
+
+impl fmt::Display for ParseError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{}:{}:{}: {}",
+            self.path.display(),
+            self.position.line,
+            self.position.column,
+            self.message
+        )
+    }
+}
+
+impl std::error::Error for ParseError {}
+
+/// Any failure of a reader or writer: I/O on a named file, or a positioned parse error.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum FormatError {
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error(transparent)]
+    Parse(#[from] ParseError),
+    /// Several problems found in one pass (e.g. every bad element at once).
+    #[error("{}", join_errors(.0))]
+    Many(Vec<ParseError>),
+    /// A problem that concerns a whole file rather than a place in it.
+    #[error("{path}: {message}")]
+    File { path: PathBuf, message: String },
+}
+
+fn join_errors(errors: &[ParseError]) -> String {
+    const SHOWN: usize = 20;
+    let mut out: Vec<String> = errors.iter().take(SHOWN).map(|e| e.to_string()).collect();
+    if errors.len() > SHOWN {
+        out.push(format!("… and {} more", errors.len() - SHOWN));
+    }
+    out.join("\n")
+}
+
+impl FormatError {
+    pub fn io(path: &Path, source: std::io::Error) -> FormatError {
+        FormatError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+
+    pub fn file(path: &Path, message: impl Into<String>) -> FormatError {
+        FormatError::File {
+            path: path.to_path_buf(),
+            message: message.into(),
+        }
+    }
+
+    /// Collapses a list of errors: one stays itself, several become `Many`.
+    pub fn from_list(mut errors: Vec<ParseError>) -> Option<FormatError> {
+        match errors.len() {
+            0 => None,
+            1 => Some(FormatError::Parse(errors.remove(0))),
+            _ => Some(FormatError::Many(errors)),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn position_of_byte_counts_lines_and_columns_from_one() {
+        let text = "ab\ncde\nf";
+        assert_eq!(
+            Position::of_byte(text, 0),
+            Position {
+                line: 1,
+                column: 1,
+                byte: 0
+            }
+        );
+        assert_eq!(
+            Position::of_byte(text, 4),
+            Position {
+                line: 2,
+                column: 2,
+                byte: 4
+            }
+        );
+        assert_eq!(
+            Position::of_byte(text, 7),
+            Position {
+                line: 3,
+                column: 1,
+                byte: 7
+            }
+        );
+    }
+
+    #[test]
+    fn parse_error_prints_path_line_column() {
+        let e = ParseError::at(Path::new("a/b.GOM"), 12, 3, "expected a number, found `x`");
+        assert_eq!(e.to_string(), "a/b.GOM:12:3: expected a number, found `x`");
+    }
+}

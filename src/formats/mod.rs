@@ -1,0 +1,7 @@
+//! Text ↔ model. Each file format has a spec page in `formats/<name>.md` at the
+//! repository root. Readers return typed, positioned errors ([`error`]); nom
+//! stays inside this module.
+
+pub mod error;
+
+pub use error::{FormatError, ParseError, Position};

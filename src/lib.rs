@@ -1,0 +1,19 @@
+//! a3d-init: carry a FEM seepage/stress state onto the material points of an
+//! Anura3D model.
+//!
+//! The pipeline, in the order data flows:
+//!
+//! 1. [`formats`] reads FEM node results and the Anura3D model (GOM, CPS)
+//!    into the plain data of [`model`]; the GOM and CPS documents are lossless.
+//! 2. `place` predicts every material point exactly as Anura3D creates it.
+//! 3. `kernel` maps the nodal fields onto the material points with the
+//!    Shepard-normalised kernel interpolation of the seed paper.
+//! 4. `calibrate` chooses the smoothing length by leave-one-out annealing.
+//! 5. [`formats`] writes the MAPF, the CPS switch, tables, VTU and reports.
+//! 6. `mpm` runs an explicit MPM check of the mapped state under gravity.
+//!
+//! [`cli`] is the only module that prints or exits. See ARCHITECTURE.md.
+
+pub mod cli;
+pub mod formats;
+pub mod model;

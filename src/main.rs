@@ -1,0 +1,5 @@
+//! The `a3d-init` binary: a thin shell around [`a3d_init::cli::run`].
+
+fn main() -> std::process::ExitCode {
+    a3d_init::cli::main()
+}

@@ -1,0 +1,109 @@
+//! Materials as read from the GOM's positional material block.
+
+/// Water retention curve of an unsaturated material (`$$WATER_RETENTION_CURVE`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub enum RetentionCurve {
+    /// Anura3D's van Genuchten form: S = Smin + (Smax − Smin)·(1 + (s/P0)^(1/(1−λ)))^(−λ),
+    /// with suction s in kPa.
+    VanGenuchten {
+        s_min: f64,
+        s_max: f64,
+        p0: f64,
+        lambda: f64,
+    },
+    /// Linear: S = max(0, 1 − av·s), suction s in kPa.
+    Linear { av: f64 },
+}
+
+impl RetentionCurve {
+    /// Degree of saturation for a suction `s` (kPa, positive = suction).
+    /// Returns 1 for s ≤ 0.
+    pub fn saturation(&self, s: f64) -> f64 {
+        if s <= 0.0 {
+            return 1.0;
+        }
+        match *self {
+            RetentionCurve::VanGenuchten {
+                s_min,
+                s_max,
+                p0,
+                lambda,
+            } => {
+                let n = 1.0 / (1.0 - lambda);
+                s_min + (s_max - s_min) * (1.0 + (s / p0).powf(n)).powf(-lambda)
+            }
+            RetentionCurve::Linear { av } => (1.0 - av * s).clamp(0.0, 1.0),
+        }
+    }
+}
+
+/// One material record. Known parameters are typed; every name/value pair is
+/// also kept verbatim in `properties`, in file order.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Material {
+    /// 1-based position in the material block.
+    pub index: u32,
+    pub name: String,
+    /// `$$MATERIAL_TYPE`, e.g. `dry_material`.
+    pub material_type: String,
+    /// `$$MATERIAL_MODEL_SOLID` (or `_LIQUID`), e.g. `mohr_coulomb`.
+    pub model: Option<String>,
+    pub porosity: Option<f64>,
+    /// kg/m³
+    pub density_solid: Option<f64>,
+    /// kg/m³
+    pub density_liquid: Option<f64>,
+    pub k0: Option<f64>,
+    /// kPa
+    pub young_modulus: Option<f64>,
+    pub poisson_ratio: Option<f64>,
+    /// degrees
+    pub friction_angle: Option<f64>,
+    /// kPa
+    pub cohesion: Option<f64>,
+    /// degrees
+    pub dilatancy_angle: Option<f64>,
+    /// kPa
+    pub tensile_strength: Option<f64>,
+    pub retention: Option<RetentionCurve>,
+    /// Every (keyword, value line) pair of the record after the head, in order.
+    pub properties: Vec<(String, String)>,
+}
+
+impl Material {
+    /// True for `unsaturated_material_*` types.
+    pub fn is_unsaturated(&self) -> bool {
+        self.material_type.starts_with("unsaturated_material")
+    }
+
+    /// True for types that carry a liquid phase (saturated or unsaturated).
+    pub fn has_water(&self) -> bool {
+        self.material_type.starts_with("saturated_material") || self.is_unsaturated()
+    }
+
+    /// Dry unit weight γ_dry = (1 − n)·ρs·g/1000 (kN/m³).
+    pub fn gamma_dry(&self, g: f64) -> f64 {
+        let n = self.porosity.unwrap_or(0.0);
+        (1.0 - n) * self.density_solid.unwrap_or(0.0) * g / 1000.0
+    }
+
+    /// Unit weight at degree of saturation `s`: ((1 − n)ρs + n·S·ρw)·g/1000 (kN/m³).
+    /// Materials without a liquid phase return γ_dry.
+    pub fn gamma_at_saturation(&self, s: f64, g: f64) -> f64 {
+        if !self.has_water() {
+            return self.gamma_dry(g);
+        }
+        let n = self.porosity.unwrap_or(0.0);
+        let rho_w = self.density_liquid.unwrap_or(1000.0);
+        self.gamma_dry(g) + n * s.clamp(0.0, 1.0) * rho_w * g / 1000.0
+    }
+
+    /// Degree of saturation for an Anura3D-signed pore pressure `pwp`
+    /// (negative = compression, positive = suction). 1 without a retention curve.
+    pub fn saturation(&self, pwp: f64) -> f64 {
+        match &self.retention {
+            Some(curve) if self.is_unsaturated() => curve.saturation(pwp),
+            _ => 1.0,
+        }
+    }
+}
