@@ -1,11 +1,66 @@
 //! Command-line interface: arguments → validated configuration → pipeline.
+//! This is the only module that prints or chooses an exit code. Errors travel as
+//! `anyhow::Error` and print as one chain (`error: {:#}`); see [`main`].
 #![allow(clippy::print_stdout, clippy::print_stderr)]
-//! The only module that prints or chooses an exit code.
+
+pub mod output;
 
 use std::process::ExitCode;
 
+use clap::{Parser, Subcommand};
+
+/// a3d-init: carry a FEM seepage/stress state onto Anura3D material points.
+#[derive(Debug, Parser)]
+#[command(name = "a3d-init", version, about, long_about = None)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Summarise an Anura3D model (GOM/CPS) or a FEM node file.
+    Inspect,
+}
+
+/// An error that carries its own exit code (1 = a negative verdict).
+#[derive(Debug, thiserror::Error)]
+#[error("{message}")]
+pub struct Verdict {
+    pub message: String,
+    pub code: u8,
+}
+
 /// Entry point of the binary. Exit codes: 0 success, 1 a negative verdict
-/// (`diff` found differences, `verify` found no equilibrium), 2 bad input or error.
+/// (`diff` found differences, `verify` found no equilibrium), 2 bad input or any
+/// other error. Never panics on bad input.
 pub fn main() -> ExitCode {
-    ExitCode::SUCCESS
+    let cli = match Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => {
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let _ = e.print();
+            return ExitCode::from(code);
+        }
+    };
+    match run(cli) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => match e.downcast_ref::<Verdict>() {
+            Some(v) => {
+                eprintln!("{}", v.message);
+                ExitCode::from(v.code)
+            }
+            None => {
+                eprintln!("error: {e:#}");
+                ExitCode::from(2)
+            }
+        },
+    }
+}
+
+/// Runs one parsed command.
+pub fn run(cli: Cli) -> anyhow::Result<()> {
+    match cli.command {
+        Command::Inspect => Ok(()),
+    }
 }

@@ -5,3 +5,9 @@
 pub mod error;
 
 pub use error::{FormatError, ParseError, Position};
+pub mod cps;
+pub mod gom;
+pub mod keyword_doc;
+pub mod lex;
+pub mod mps_table;
+pub mod project;

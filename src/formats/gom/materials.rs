@@ -1,0 +1,432 @@
+//! The GOM's positional material block (`$$NUMBER_OF_MATERIALS` …).
+//!
+//! Anura3D reads every property as two lines, a name line it does not check and
+//! a value line, in an order fixed by the material type and model. This reader
+//! does the same: it walks the lines by position, fills the typed fields of
+//! [`Material`] by position, keeps every (name, value) pair verbatim, and warns
+//! where a name line differs from the keyword GiD writes at that position.
+
+use crate::formats::error::ParseError;
+use crate::formats::keyword_doc::KeywordDocument;
+use crate::formats::lex;
+use crate::model::{Material, RetentionCurve};
+
+/// What a material's type contributes, in order, after the common head.
+fn type_properties(material_type: &str) -> Option<&'static [&'static str]> {
+    const SAT: &[&str] = &[
+        "POROSITY_SOLID",
+        "DENSITY_SOLID",
+        "DENSITY_LIQUID",
+        "K0_VALUE_SOLID",
+    ];
+    const COUPLED: &[&str] = &[
+        "POROSITY_SOLID",
+        "DENSITY_SOLID",
+        "DENSITY_LIQUID",
+        "INTRINSIC_PERMEABILITY_LIQUID",
+        "BULK_MODULUS_LIQUID",
+        "DYNAMIC_VISCOSITY_LIQUID",
+        "K0_VALUE_SOLID",
+    ];
+    Some(match material_type {
+        "dry_material" => &["POROSITY_SOLID", "DENSITY_SOLID", "K0_VALUE_SOLID"],
+        "saturated_material_drained"
+        | "saturated_material_undrained_effective"
+        | "saturated_material_undrained_total" => SAT,
+        "saturated_material_coupled" | "unsaturated_material_2phase_suction" => COUPLED,
+        "unsaturated_material_3phase_coupled" => &[
+            "POROSITY_SOLID",
+            "DENSITY_SOLID",
+            "DENSITY_LIQUID",
+            "DENSITY_GAS",
+            "INTRINSIC_PERMEABILITY_LIQUID",
+            "INTRINSIC_PERMEABILITY_GAS",
+            "BULK_MODULUS_LIQUID",
+            "BULK_MODULUS_GAS",
+            "DYNAMIC_VISCOSITY_LIQUID",
+            "DYNAMIC_VISCOSITY_GAS",
+            "SWELLING_INDEX",
+            "K0_VALUE_SOLID",
+        ],
+        "liquid" => &[
+            "DENSITY_LIQUID",
+            "BULK_MODULUS_LIQUID",
+            "DYNAMIC_VISCOSITY_LIQUID",
+            "LIQUID_CAVITATION",
+            "APPLY_DETECT_LIQUID_SURFACE",
+        ],
+        _ => return None,
+    })
+}
+
+const KNOWN_TYPES: &str = "dry_material, saturated_material_drained, saturated_material_undrained_effective, \
+saturated_material_undrained_total, saturated_material_coupled, unsaturated_material_2phase_suction, \
+unsaturated_material_3phase_coupled, liquid";
+
+/// Parameters of a constitutive model, in order. `undrained` adds the undrained
+/// Poisson ratio after ν (only for `saturated_material_undrained_effective`).
+fn model_parameters(model: &str, undrained: bool) -> Option<Vec<&'static str>> {
+    let elastic: Vec<&str> = if undrained {
+        vec!["YOUNG_MODULUS", "POISSON_RATIO", "POISSON_RATIO_UNDRAINED"]
+    } else {
+        vec!["YOUNG_MODULUS", "POISSON_RATIO"]
+    };
+    let mut p = match model {
+        "linear_elasticity" => elastic,
+        "mohr_coulomb" => {
+            let mut p = elastic;
+            p.extend([
+                "FRICTION_ANGLE",
+                "COHESION",
+                "DILATANCY_ANGLE",
+                "TENSILE_STRENGTH",
+            ]);
+            p
+        }
+        "strain_softening_mohr_coulomb" => {
+            let mut p = elastic;
+            p.extend([
+                "PEAK_COHESION",
+                "RESIDUAL_COHESION",
+                "PEAK_FRICTION_ANGLE",
+                "RESIDUAL_FRICTION_ANGLE",
+                "PEAK_DILATANCY_ANGLE",
+                "RESIDUAL_DILATANCY_ANGLE",
+                "SHAPE_FACTOR",
+            ]);
+            p
+        }
+        "newtonian_liquid" => vec![],
+        "bingham_liquid" => vec![
+            "BINGHAM_YIELD_STRESS",
+            "BINGHAM_YOUNG_MODULUS",
+            "BINGHAM_POISSON_RATIO",
+        ],
+        "frictional_liquid" => vec![
+            "FRICTIONAL_FRICTION_ANGLE",
+            "FRICTIONAL_YOUNG_MODULUS",
+            "FRICTIONAL_POISSON_RATIO",
+        ],
+        _ => return None,
+    };
+    p.shrink_to_fit();
+    Some(p)
+}
+
+/// Keywords that certainly start a non-material GOM block: where an unknown
+/// material model's parameters end.
+pub(super) fn is_structural_keyword(keyword: &str) -> bool {
+    keyword.starts_with("$$START")
+        || keyword == "$$MATERIAL_INDEX"
+        || keyword == "$$FINISH"
+        || keyword == "$$DIMENSION"
+        || keyword == "$$ELEMENTTYPE"
+        || keyword.starts_with("$$PRESCRIBED")
+        || keyword.starts_with("$$ABSORBING")
+        || keyword.starts_with("$$BOUNDARY")
+        || keyword.starts_with("$$INITIAL_")
+        || keyword.ends_with("_CORNER_NODES")
+        || keyword.starts_with("$$MOVING_MESH")
+}
+
+/// A cursor over the non-blank lines of the document.
+struct Cursor<'d> {
+    doc: &'d KeywordDocument,
+    next: usize,
+    end: usize,
+}
+
+impl<'d> Cursor<'d> {
+    fn next_line(&mut self) -> Option<(usize, &'d str)> {
+        while self.next < self.end {
+            let i = self.next;
+            self.next += 1;
+            let line = self.doc.line(i);
+            if !line.trim().is_empty() {
+                return Some((i, line));
+            }
+        }
+        None
+    }
+
+    fn peek_line(&self) -> Option<(usize, &'d str)> {
+        let mut copy = Cursor {
+            doc: self.doc,
+            next: self.next,
+            end: self.end,
+        };
+        copy.next_line()
+    }
+}
+
+/// A (name line, value line) pair read by position.
+struct Pair {
+    name: String,
+    value: String,
+    value_line: usize,
+}
+
+/// Result of reading the material block.
+pub struct MaterialBlock {
+    pub materials: Vec<Material>,
+    pub warnings: Vec<String>,
+}
+
+/// Reads the material block that starts at the `$$NUMBER_OF_MATERIALS` line `start`.
+pub fn read_materials(
+    doc: &KeywordDocument,
+    start: usize,
+    end: usize,
+) -> Result<MaterialBlock, ParseError> {
+    let mut cur = Cursor {
+        doc,
+        next: start + 1,
+        end,
+    };
+    let (count_line, count_text) = cur.next_line().ok_or_else(|| {
+        doc.error_at(
+            start,
+            0,
+            "expected the number of materials after $$NUMBER_OF_MATERIALS",
+        )
+    })?;
+    let first = lex::tokens(count_text).next().map(|(_, t)| t).unwrap_or("");
+    let n = lex::parse_uint(first).ok_or_else(|| {
+        doc.error_at(
+            count_line,
+            0,
+            format!(
+                "expected the number of materials, found `{}`",
+                count_text.trim()
+            ),
+        )
+    })? as usize;
+    let mut warnings = Vec::new();
+    let mut materials = Vec::with_capacity(n);
+
+    let read_pair = |cur: &mut Cursor<'_>,
+                     expected: &str,
+                     what: &str|
+     -> Result<(usize, String, usize, String), ParseError> {
+        let (name_line, name) = cur.next_line().ok_or_else(|| {
+            doc.error_at(
+                end.saturating_sub(1),
+                0,
+                format!("material block ends early: expected {expected} ({what})"),
+            )
+        })?;
+        let (value_line, value) = cur.next_line().ok_or_else(|| {
+            doc.error_at(
+                name_line,
+                0,
+                format!("expected a value line after `{}`", name.trim()),
+            )
+        })?;
+        Ok((
+            name_line,
+            name.trim_end().to_string(),
+            value_line,
+            value.trim().to_string(),
+        ))
+    };
+
+    for position in 1..=n {
+        let mut pairs: Vec<(String, String)> = Vec::new();
+        let mut get = |cur: &mut Cursor<'_>,
+                       expected: &str,
+                       warn: bool,
+                       warnings: &mut Vec<String>|
+         -> Result<Pair, ParseError> {
+            let (name_line, name, value_line, value) = read_pair(
+                cur,
+                &format!("$${expected}"),
+                &format!("material {position}"),
+            )?;
+            if warn && name.trim_start_matches("$$").trim() != expected {
+                warnings.push(format!(
+                    "{}:{}: material {position}: expected $${expected} at this position, found `{name}` (Anura3D reads materials by position, so the value is taken as {expected})",
+                    doc.path().display(),
+                    name_line + 1
+                ));
+            }
+            pairs.push((name.clone(), value.clone()));
+            Ok(Pair {
+                name,
+                value,
+                value_line,
+            })
+        };
+        let index_pair = get(&mut cur, "MATERIAL_INDEX", true, &mut warnings)?;
+        let index = lex::parse_uint(&index_pair.value).ok_or_else(|| {
+            doc.error_at(
+                index_pair.value_line,
+                0,
+                format!("expected a material index, found `{}`", index_pair.value),
+            )
+        })?;
+        if index as usize != position {
+            return Err(doc.error_at(
+                index_pair.value_line,
+                0,
+                format!("material index {index} at position {position}: Anura3D refers to materials by position, so the index must equal {position}"),
+            ));
+        }
+        let name = get(&mut cur, "MATERIAL_NAME", true, &mut warnings)?.value;
+        let type_pair = get(&mut cur, "MATERIAL_TYPE", true, &mut warnings)?;
+        let material_type = type_pair.value.clone();
+        let Some(props) = type_properties(&material_type) else {
+            return Err(doc.error_at(
+                type_pair.value_line,
+                0,
+                format!("unknown material type `{material_type}` (known: {KNOWN_TYPES})"),
+            ));
+        };
+        let mut material = Material {
+            index: position as u32,
+            name,
+            material_type: material_type.clone(),
+            model: None,
+            porosity: None,
+            density_solid: None,
+            density_liquid: None,
+            k0: None,
+            young_modulus: None,
+            poisson_ratio: None,
+            friction_angle: None,
+            cohesion: None,
+            dilatancy_angle: None,
+            tensile_strength: None,
+            retention: None,
+            properties: Vec::new(),
+        };
+        let real = |p: &Pair| -> Result<f64, ParseError> {
+            let tok = lex::tokens(&p.value).next().map(|(_, t)| t).unwrap_or("");
+            lex::parse_real(tok).ok_or_else(|| {
+                doc.error_at(
+                    p.value_line,
+                    0,
+                    format!(
+                        "expected a number for {}, found `{}`",
+                        p.name.trim(),
+                        p.value
+                    ),
+                )
+            })
+        };
+        for &prop in props {
+            let p = get(&mut cur, prop, true, &mut warnings)?;
+            if prop == "APPLY_DETECT_LIQUID_SURFACE" || prop == "LIQUID_CAVITATION" {
+                continue;
+            }
+            let v = real(&p)?;
+            match prop {
+                "POROSITY_SOLID" => material.porosity = Some(v),
+                "DENSITY_SOLID" => material.density_solid = Some(v),
+                "DENSITY_LIQUID" => material.density_liquid = Some(v),
+                "K0_VALUE_SOLID" => material.k0 = Some(v),
+                _ => {}
+            }
+        }
+        let model_keyword = if material_type == "liquid" {
+            "MATERIAL_MODEL_LIQUID"
+        } else {
+            "MATERIAL_MODEL_SOLID"
+        };
+        let model_pair = get(&mut cur, model_keyword, true, &mut warnings)?;
+        let model = model_pair.value.clone();
+        let undrained = material_type == "saturated_material_undrained_effective";
+        match model_parameters(&model, undrained) {
+            Some(params) => {
+                for prop in params {
+                    let p = get(&mut cur, prop, true, &mut warnings)?;
+                    let v = real(&p)?;
+                    match prop {
+                        "YOUNG_MODULUS" => material.young_modulus = Some(v),
+                        "POISSON_RATIO" => material.poisson_ratio = Some(v),
+                        "FRICTION_ANGLE" | "PEAK_FRICTION_ANGLE" => {
+                            material.friction_angle = Some(v)
+                        }
+                        "COHESION" | "PEAK_COHESION" => material.cohesion = Some(v),
+                        "DILATANCY_ANGLE" | "PEAK_DILATANCY_ANGLE" => {
+                            material.dilatancy_angle = Some(v)
+                        }
+                        "TENSILE_STRENGTH" => material.tensile_strength = Some(v),
+                        _ => {}
+                    }
+                }
+            }
+            None => {
+                // Unknown or free-form model (external_soil_model, rigid_body): keep
+                // its pairs verbatim up to the next structural keyword.
+                warnings.push(format!(
+                    "{}:{}: material {position}: model `{model}` is kept verbatim; a3d-init's runner treats it as linear elastic only if E and ν are given",
+                    doc.path().display(),
+                    model_pair.value_line + 1
+                ));
+                while let Some((_, line)) = cur.peek_line() {
+                    let keyword = line.trim_end();
+                    if is_structural_keyword(keyword) || keyword == "$$NUMBER_OF_MATERIALS" {
+                        break;
+                    }
+                    get(&mut cur, "", false, &mut warnings)?;
+                }
+            }
+        }
+        material.model = Some(model);
+        if material.is_unsaturated() {
+            let curve = get(&mut cur, "WATER_RETENTION_CURVE", true, &mut warnings)?;
+            match curve.value.as_str() {
+                "van_genuchten" => {
+                    let mut v = [0.0; 4];
+                    for slot in &mut v {
+                        let p = get(&mut cur, "", false, &mut warnings)?;
+                        *slot = real(&p)?;
+                    }
+                    material.retention = Some(RetentionCurve::VanGenuchten {
+                        s_min: v[0],
+                        s_max: v[1],
+                        p0: v[2],
+                        lambda: v[3],
+                    });
+                }
+                "linear" => {
+                    let p = get(&mut cur, "", false, &mut warnings)?;
+                    material.retention = Some(RetentionCurve::Linear { av: real(&p)? });
+                }
+                other => {
+                    return Err(doc.error_at(
+                        curve.value_line,
+                        0,
+                        format!(
+                            "unknown water retention curve `{other}` (known: van_genuchten, linear)"
+                        ),
+                    ));
+                }
+            }
+            let conductivity = get(&mut cur, "HYDR_CONDUCTIVITY_CURVE", true, &mut warnings)?;
+            let n_params = match conductivity.value.as_str() {
+                "constant" => 0,
+                "hillel" => 1,
+                "mualem" => 4,
+                other => {
+                    return Err(doc.error_at(
+                        conductivity.value_line,
+                        0,
+                        format!("unknown hydraulic conductivity curve `{other}` (known: constant, hillel, mualem)"),
+                    ));
+                }
+            };
+            for _ in 0..n_params {
+                let p = get(&mut cur, "", false, &mut warnings)?;
+                real(&p)?;
+            }
+        }
+        // Everything after the head is kept verbatim.
+        material.properties = pairs.split_off(3.min(pairs.len()));
+        materials.push(material);
+    }
+    Ok(MaterialBlock {
+        materials,
+        warnings,
+    })
+}

@@ -1,0 +1,542 @@
+//! Anura3D GOM files (geometry, mesh, conditions, materials, MP counts).
+//! Spec: `formats/gom.md`.
+//!
+//! [`GomDocument`] is lossless: it wraps a [`KeywordDocument`] and reproduces the
+//! file byte for byte unless a block is edited through the typed setters, which
+//! re-render only the blocks they touch. [`GomDocument::model`] builds the typed
+//! view ([`AnuraModel`]) and checks counts, ids and numbers, reporting
+//! `path:line:col` errors. Material-point placement lives in `place`.
+
+mod materials;
+
+use std::path::Path;
+
+use super::error::{FormatError, ParseError};
+use super::keyword_doc::KeywordDocument;
+use super::lex;
+use crate::model::{AnuraModel, Dimension, ElementType, Material, Mesh};
+
+/// Element types Anura3D's readers accept but a3d-init cannot place MPs in.
+const KNOWN_UNSUPPORTED_TYPES: [&str; 6] = [
+    "triangular_6-noded",
+    "quadrilateral_8-noded",
+    "tetrahedral_4-noded",
+    "tetrahedral_10-noded",
+    "hexahedral_8-noded",
+    "hexahedral_20-noded",
+];
+
+/// The nine solid/liquid/gas fixity blocks; only the solid ones enter the model.
+const SOLID_FIXITY_BLOCKS: [&str; 3] = [
+    "$$START_FIXITY_SURFACE_SOLID",
+    "$$START_FIXITY_LINE_SOLID",
+    "$$START_FIXITY_POINT_SOLID",
+];
+
+/// Facts about a GOM beyond the plain model: version, formulation, where things
+/// are in the file, and soft problems.
+#[derive(Debug, Clone, Default)]
+pub struct GomInfo {
+    pub version: String,
+    pub formulation: Option<String>,
+    /// 1-based file line of each element's connectivity line.
+    pub element_lines: Vec<u32>,
+    /// Things that are legal for Anura3D but worth telling the user.
+    pub warnings: Vec<String>,
+}
+
+/// A lossless GOM document.
+#[derive(Debug, Clone)]
+pub struct GomDocument {
+    doc: KeywordDocument,
+}
+
+impl GomDocument {
+    /// Reads a GOM (`.GOM`, `.GOM_stage<k>` or a GiD `-2.dat` export).
+    pub fn read(path: &Path) -> Result<GomDocument, FormatError> {
+        Ok(GomDocument {
+            doc: KeywordDocument::read(path, "$$FINISH", false)?,
+        })
+    }
+
+    /// Parses GOM text; `path` is used in error messages.
+    pub fn parse(path: &Path, text: String) -> Result<GomDocument, FormatError> {
+        Ok(GomDocument {
+            doc: KeywordDocument::parse(path, text, "$$FINISH", false)?,
+        })
+    }
+
+    /// The underlying keyword document (blocks, lines).
+    pub fn document(&self) -> &KeywordDocument {
+        &self.doc
+    }
+
+    pub fn version(&self) -> &str {
+        self.doc.version()
+    }
+
+    /// The text to write: byte-identical to the input unless edited.
+    pub fn to_text(&self) -> String {
+        self.doc.to_text()
+    }
+
+    fn block(&self, keyword: &str) -> Option<usize> {
+        self.doc.find(keyword, false)
+    }
+
+    /// Non-blank data lines of block `b`: (0-based line index, text).
+    fn rows(&self, b: usize) -> impl Iterator<Item = (usize, &str)> {
+        let range = self.doc.blocks()[b].data.clone();
+        range
+            .map(|i| (i, self.doc.line(i)))
+            .filter(|(_, l)| !l.trim().is_empty())
+    }
+
+    /// The first non-blank data line of a block, trimmed.
+    fn single_value(&self, keyword: &str) -> Option<(usize, &str)> {
+        let b = self.block(keyword)?;
+        self.rows(b).next().map(|(i, l)| (i, l.trim()))
+    }
+
+    fn required(&self, keyword: &str) -> Result<usize, ParseError> {
+        self.block(keyword).ok_or_else(|| {
+            let last = self.doc.terminator_block().line;
+            self.doc
+                .error_at(last, 0, format!("missing required block {keyword}"))
+        })
+    }
+
+    /// Where a block's data ran out: the next keyword line (or the end of the file).
+    fn short_block(&self, b: usize, expected: usize, found: usize, what: &str) -> ParseError {
+        let block = &self.doc.blocks()[b];
+        let at = block.data.end.min(self.doc.n_lines().saturating_sub(1));
+        self.doc.error_at(
+            at,
+            0,
+            format!(
+                "{} (line {}) expects {expected} {what}, found {found}",
+                block.keyword,
+                block.line + 1
+            ),
+        )
+    }
+
+    /// Builds the typed view. Every count, id and number is checked; errors name
+    /// the file, line and column.
+    pub fn model(&self) -> Result<(AnuraModel, GomInfo), FormatError> {
+        let mut info = GomInfo {
+            version: self.version().to_string(),
+            ..GomInfo::default()
+        };
+        let mut errors: Vec<ParseError> = Vec::new();
+
+        let dimension = match self.single_value("$$DIMENSION") {
+            Some((line, value)) => Dimension::from_gom(value).ok_or_else(|| {
+                self.doc.error_at(line, 0, format!(
+                    "unknown dimension `{value}` (known: 2D-plane_strain, 2D-axisymmetric, 3D-cartesian, 3D-cylindrical)"
+                ))
+            })?,
+            None => {
+                info.warnings.push("no $$DIMENSION block: Anura3D's default 3D-cartesian is used".into());
+                Dimension::Cartesian3D
+            }
+        };
+        let element_type = match self.single_value("$$ELEMENTTYPE") {
+            Some((line, value)) => match ElementType::from_gom(value) {
+                Some(t) => t,
+                None => {
+                    let why = if KNOWN_UNSUPPORTED_TYPES.contains(&value) {
+                        "is not supported by a3d-init (nor run by the Anura3D kernel)"
+                    } else {
+                        "is unknown"
+                    };
+                    return Err(self.doc.error_at(line, 0, format!(
+                        "element type `{value}` {why}; supported: triangular_3-noded, tetrahedral_old, quadrilateral_4-noded"
+                    )).into());
+                }
+            },
+            None => {
+                info.warnings.push(
+                    "no $$ELEMENTTYPE block: Anura3D's default tetrahedral_old is used".into(),
+                );
+                ElementType::TetOld
+            }
+        };
+        if element_type.n_dim() != dimension.n_dim() {
+            let line = self.single_value("$$ELEMENTTYPE").map_or(0, |(l, _)| l);
+            return Err(self
+                .doc
+                .error_at(
+                    line,
+                    0,
+                    format!(
+                        "element type {} is {}D but the model is {}",
+                        element_type.gom_name(),
+                        element_type.n_dim(),
+                        dimension.gom_name()
+                    ),
+                )
+                .into());
+        }
+        if element_type == ElementType::Quad4 {
+            info.warnings.push(
+                "quadrilateral_4-noded runs only with the upstream Anura3D kernel (Anura3D/Anura3D_OpenSource)".into(),
+            );
+        }
+        info.formulation = self
+            .single_value("$$FORMULATION")
+            .map(|(_, v)| v.to_string());
+
+        // Counters: NEl NNodes (elements first).
+        let counters = self.required("$$STARTCOUNTERS")?;
+        let (cline, ctext) = self
+            .rows(counters)
+            .next()
+            .ok_or_else(|| self.short_block(counters, 1, 0, "line `NEl NNodes`"))?;
+        let mut counts = [0u64; 2];
+        lex::uints(ctext, &mut counts).map_err(|bad| match bad {
+            Some(t) => self.doc.error_at(
+                cline,
+                t.offset,
+                format!("expected a count, found `{}`", t.text),
+            ),
+            None => self.doc.error_at(
+                cline,
+                0,
+                "expected `NEl NNodes` (number of elements, then nodes)",
+            ),
+        })?;
+        let (n_elements, n_nodes) = (counts[0] as usize, counts[1] as usize);
+
+        let nodes = self.read_nodes(dimension.n_dim(), n_nodes)?;
+        let (connectivity, element_lines) =
+            self.read_connectivity(element_type, n_elements, n_nodes)?;
+        info.element_lines = element_lines;
+
+        let mut solid_fixity = vec![[false; 3]; n_nodes];
+        for keyword in SOLID_FIXITY_BLOCKS {
+            if let Some(b) = self.block(keyword)
+                && let Err(e) = self.read_fixity(b, dimension.n_dim(), &mut solid_fixity)
+            {
+                errors.push(e);
+            }
+        }
+
+        let materials = match self.block("$$NUMBER_OF_MATERIALS") {
+            Some(b) => {
+                let start = self.doc.blocks()[b].line;
+                let end = self.doc.terminator_block().line;
+                let block = materials::read_materials(&self.doc, start, end)?;
+                info.warnings.extend(block.warnings);
+                block.materials
+            }
+            None => {
+                info.warnings
+                    .push("no $$NUMBER_OF_MATERIALS block: no materials".into());
+                Vec::new()
+            }
+        };
+
+        let element_material = self.read_element_materials(n_elements, &materials, &mut errors)?;
+        let mp_counts = match self.block("$$START_NUMBER_OF_MATERIAL_POINTS") {
+            Some(b) => {
+                self.read_mp_counts(b, n_elements, element_type, &element_material, &mut errors)?
+            }
+            None => {
+                info.warnings
+                    .push("no $$START_NUMBER_OF_MATERIAL_POINTS block: no MPs are placed".into());
+                vec![(0, 0); n_elements]
+            }
+        };
+        let damping = match self.block("$$STARTDAMPING") {
+            Some(b) => Some(self.read_per_element_reals(b, n_elements, "damping factors")?),
+            None => None,
+        };
+        if let Some(e) = FormatError::from_list(errors) {
+            return Err(e);
+        }
+        let mesh = Mesh {
+            dimension,
+            element_type,
+            nodes,
+            connectivity,
+        };
+        let model = AnuraModel {
+            mesh,
+            materials,
+            element_material,
+            mp_counts,
+            solid_fixity,
+            damping,
+        };
+        Ok((model, info))
+    }
+
+    fn read_nodes(&self, n_dim: usize, n_nodes: usize) -> Result<Vec<[f64; 3]>, ParseError> {
+        let b = self.required("$$STARTNODES")?;
+        let mut nodes = Vec::with_capacity(n_nodes);
+        let mut xyz = [0.0f64; 3];
+        for (i, line) in self.rows(b).take(n_nodes) {
+            lex::reals(line, &mut xyz[..n_dim]).map_err(|bad| match bad {
+                Some(t) => self.doc.error_at(
+                    i,
+                    t.offset,
+                    format!("expected a coordinate, found `{}`", t.text),
+                ),
+                None => self.doc.error_at(
+                    i,
+                    line.len(),
+                    format!("node {} needs {n_dim} coordinates", nodes.len() + 1),
+                ),
+            })?;
+            nodes.push(xyz);
+        }
+        if nodes.len() < n_nodes {
+            return Err(self.short_block(b, n_nodes, nodes.len(), "node lines ($$STARTCOUNTERS)"));
+        }
+        Ok(nodes)
+    }
+
+    fn read_connectivity(
+        &self,
+        element_type: ElementType,
+        n_elements: usize,
+        n_nodes: usize,
+    ) -> Result<(Vec<u32>, Vec<u32>), ParseError> {
+        let b = self.required("$$STARTELEMCON")?;
+        let per = element_type.nodes_per_element();
+        let mut connectivity = Vec::with_capacity(n_elements * per);
+        let mut lines = Vec::with_capacity(n_elements);
+        let mut ids = [0u64; 10];
+        for (i, line) in self.rows(b).take(n_elements) {
+            let e = lines.len() + 1;
+            lex::uints(line, &mut ids[..per]).map_err(|bad| match bad {
+                Some(t) => self.doc.error_at(
+                    i,
+                    t.offset,
+                    format!("expected a node id, found `{}`", t.text),
+                ),
+                None => self.doc.error_at(
+                    i,
+                    line.len(),
+                    format!(
+                        "element {e} needs {per} node ids for {}",
+                        element_type.gom_name()
+                    ),
+                ),
+            })?;
+            for (k, &id) in ids[..per].iter().enumerate() {
+                if id == 0 || id as usize > n_nodes {
+                    let offset = lex::tokens(line).nth(k).map_or(0, |(o, _)| o);
+                    return Err(self.doc.error_at(
+                        i,
+                        offset,
+                        format!("element {e}: node id {id} is out of range 1..={n_nodes}"),
+                    ));
+                }
+                connectivity.push((id - 1) as u32);
+            }
+            lines.push(i as u32 + 1);
+        }
+        if lines.len() < n_elements {
+            return Err(self.short_block(
+                b,
+                n_elements,
+                lines.len(),
+                "element lines ($$STARTCOUNTERS)",
+            ));
+        }
+        Ok((connectivity, lines))
+    }
+
+    fn read_fixity(
+        &self,
+        b: usize,
+        n_dim: usize,
+        fixity: &mut [[bool; 3]],
+    ) -> Result<(), ParseError> {
+        let mut rows = self.rows(b);
+        let Some((cline, ctext)) = rows.next() else {
+            return Err(self.short_block(b, 1, 0, "count line"));
+        };
+        let mut count = [0u64];
+        lex::uints(ctext, &mut count).map_err(|_| {
+            self.doc.error_at(
+                cline,
+                0,
+                format!(
+                    "expected the number of fixed nodes, found `{}`",
+                    ctext.trim()
+                ),
+            )
+        })?;
+        let mut seen = 0;
+        let mut values = [0u64; 4];
+        for (i, line) in rows.take(count[0] as usize) {
+            lex::uints(line, &mut values[..1 + n_dim]).map_err(|bad| match bad {
+                Some(t) => self.doc.error_at(
+                    i,
+                    t.offset,
+                    format!("expected a node id or a 0/1 flag, found `{}`", t.text),
+                ),
+                None => self.doc.error_at(
+                    i,
+                    line.len(),
+                    format!(
+                        "expected `node {}`",
+                        if n_dim == 2 { "fx fy" } else { "fx fy fz" }
+                    ),
+                ),
+            })?;
+            let node = values[0] as usize;
+            if node == 0 || node > fixity.len() {
+                return Err(self.doc.error_at(
+                    i,
+                    0,
+                    format!("node id {node} is out of range 1..={}", fixity.len()),
+                ));
+            }
+            for d in 0..n_dim {
+                fixity[node - 1][d] |= values[1 + d] == 1;
+            }
+            seen += 1;
+        }
+        if seen < count[0] as usize {
+            return Err(self.short_block(b, count[0] as usize, seen, "fixity lines"));
+        }
+        Ok(())
+    }
+
+    fn read_element_materials(
+        &self,
+        n_elements: usize,
+        materials: &[Material],
+        errors: &mut Vec<ParseError>,
+    ) -> Result<Vec<u32>, ParseError> {
+        let b = self.required("$$STARTELMMAT")?;
+        let mut out = Vec::with_capacity(n_elements);
+        let mut value = [0u64];
+        for (i, line) in self.rows(b).take(n_elements) {
+            lex::uints(line, &mut value).map_err(|bad| match bad {
+                Some(t) => self.doc.error_at(
+                    i,
+                    t.offset,
+                    format!("expected a material index, found `{}`", t.text),
+                ),
+                None => self.doc.error_at(i, 0, "expected a material index"),
+            })?;
+            if value[0] as usize > materials.len() {
+                errors.push(self.doc.error_at(
+                    i,
+                    0,
+                    format!(
+                        "element {}: material {} does not exist ({} materials)",
+                        out.len() + 1,
+                        value[0],
+                        materials.len()
+                    ),
+                ));
+            }
+            out.push(value[0] as u32);
+        }
+        if out.len() < n_elements {
+            return Err(self.short_block(b, n_elements, out.len(), "element material lines"));
+        }
+        Ok(out)
+    }
+
+    fn read_mp_counts(
+        &self,
+        b: usize,
+        n_elements: usize,
+        element_type: ElementType,
+        element_material: &[u32],
+        errors: &mut Vec<ParseError>,
+    ) -> Result<Vec<(u32, u32)>, ParseError> {
+        let mut out = Vec::with_capacity(n_elements);
+        let mut values = [0u64; 2];
+        for (i, line) in self.rows(b).take(n_elements) {
+            lex::uints(line, &mut values).map_err(|bad| match bad {
+                Some(t) => self.doc.error_at(
+                    i,
+                    t.offset,
+                    format!("expected an MP count, found `{}`", t.text),
+                ),
+                None => self
+                    .doc
+                    .error_at(i, line.len(), "expected `nSolid nLiquid`"),
+            })?;
+            let e = out.len();
+            let solid = values[0] as u32;
+            if solid != 0 && !element_type.allowed_mp_counts().contains(&solid) {
+                errors.push(self.doc.error_at(
+                    i,
+                    0,
+                    format!(
+                        "element {}: {solid} MPs per element is not allowed for {} (allowed: {:?})",
+                        e + 1,
+                        element_type.gom_name(),
+                        element_type.allowed_mp_counts()
+                    ),
+                ));
+            }
+            if element_material.get(e).is_some_and(|&m| m > 0) && solid == 0 {
+                errors.push(self.doc.error_at(
+                    i,
+                    0,
+                    format!(
+                        "element {}: active element (material {}) without material points",
+                        e + 1,
+                        element_material[e]
+                    ),
+                ));
+            }
+            out.push((solid, values[1] as u32));
+        }
+        if out.len() < n_elements {
+            return Err(self.short_block(b, n_elements, out.len(), "MP count lines"));
+        }
+        Ok(out)
+    }
+
+    fn read_per_element_reals(
+        &self,
+        b: usize,
+        n_elements: usize,
+        what: &str,
+    ) -> Result<Vec<f64>, ParseError> {
+        let mut out = Vec::with_capacity(n_elements);
+        let mut value = [0.0];
+        for (i, line) in self.rows(b).take(n_elements) {
+            lex::reals(line, &mut value).map_err(|bad| match bad {
+                Some(t) => self.doc.error_at(
+                    i,
+                    t.offset,
+                    format!("expected a number, found `{}`", t.text),
+                ),
+                None => self.doc.error_at(i, 0, "expected a number"),
+            })?;
+            out.push(value[0]);
+        }
+        if out.len() < n_elements {
+            return Err(self.short_block(b, n_elements, out.len(), what));
+        }
+        Ok(out)
+    }
+
+    /// Replaces `$$STARTELMMAT` with one material index per element.
+    pub fn set_element_materials(&mut self, element_material: &[u32]) -> Result<(), FormatError> {
+        let b = self.required("$$STARTELMMAT")?;
+        self.doc
+            .replace_block(b, element_material.iter().map(|m| m.to_string()).collect());
+        Ok(())
+    }
+
+    /// Replaces `$$START_NUMBER_OF_MATERIAL_POINTS` with `nSolid nLiquid` per element.
+    pub fn set_mp_counts(&mut self, counts: &[(u32, u32)]) -> Result<(), FormatError> {
+        let b = self.required("$$START_NUMBER_OF_MATERIAL_POINTS")?;
+        self.doc
+            .replace_block(b, counts.iter().map(|(s, l)| format!("{s} {l}")).collect());
+        Ok(())
+    }
+}
