@@ -330,3 +330,46 @@ fn malformed_cps_gives_positioned_errors() {
         );
     }
 }
+
+#[test]
+fn generated_models_survive_write_then_read() {
+    use a3d_init::formats::gom::write::model_to_text;
+    use a3d_init::model::RetentionCurve;
+    use a3d_init::model::generate::{self, MaterialSpec};
+    let spec = MaterialSpec {
+        name: "sand".into(),
+        porosity: 0.58,
+        density_solid: 2718.0,
+        density_liquid: Some(1000.0),
+        k0: 0.4554,
+        young_modulus: 2500.0,
+        poisson_ratio: 0.3,
+        mohr_coulomb: Some((33.0, 0.0, 0.0)),
+        retention: Some(RetentionCurve::VanGenuchten {
+            s_min: 0.1,
+            s_max: 1.0,
+            p0: 1.0 / 0.51,
+            lambda: 1.0 - 1.0 / 2.73,
+        }),
+        permeability: 2.087e-11,
+    };
+    for mesh in [
+        generate::structured_tri_mesh(0.0, -1.0, 2.0, 3.0, 4, 5),
+        generate::structured_tet_mesh(1.0, 0.0, 2.0, 1.0, 2, 3, 1),
+    ] {
+        let model = generate::single_material_model(mesh, &spec, 1);
+        let text = model_to_text(&model, "2023");
+        let (back, info) = GomDocument::parse(Path::new("gen.GOM"), text.clone())
+            .unwrap()
+            .model()
+            .unwrap();
+        assert!(info.warnings.is_empty(), "{:?}", info.warnings);
+        assert_eq!(back, model);
+        assert_eq!(
+            GomDocument::parse(Path::new("gen.GOM"), text.clone())
+                .unwrap()
+                .to_text(),
+            text
+        );
+    }
+}

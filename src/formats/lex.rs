@@ -64,6 +64,20 @@ pub fn tokens(line: &str) -> impl Iterator<Item = (usize, &str)> {
 
 /// Parses a whole token as a real number.
 pub fn parse_real(tok: &str) -> Option<f64> {
+    // Fast path: plain decimal tokens go straight to the standard parser, which
+    // accepts exactly the forms `fortran_real` recognises except `inf`/`nan`
+    // (excluded by the byte check) and the `d` exponent (handled below).
+    let b = tok.as_bytes();
+    if !b.is_empty()
+        && b[0] != b'e'
+        && b[0] != b'E'
+        && b.iter()
+            .all(|&c| c.is_ascii_digit() || matches!(c, b'.' | b'-' | b'+' | b'e' | b'E'))
+        && b.iter().any(u8::is_ascii_digit)
+        && let Ok(v) = tok.parse::<f64>()
+    {
+        return Some(v);
+    }
     match fortran_real(tok) {
         Ok(("", text)) => {
             if text.contains(['d', 'D']) {

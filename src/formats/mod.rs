@@ -9,5 +9,7 @@ pub mod cps;
 pub mod gom;
 pub mod keyword_doc;
 pub mod lex;
+pub mod mapf;
 pub mod mps_table;
 pub mod project;
+pub mod vtu;

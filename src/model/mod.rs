@@ -9,6 +9,7 @@
 //! memory; ids printed for users and written to Anura3D files are 1-based.
 
 mod fem;
+pub mod generate;
 mod material;
 mod mesh;
 mod points;

@@ -8,6 +8,7 @@
 //! `path:line:col` errors. Material-point placement lives in `place`.
 
 mod materials;
+pub mod write;
 
 use std::path::Path;
 
@@ -90,6 +91,37 @@ impl GomDocument {
         range
             .map(|i| (i, self.doc.line(i)))
             .filter(|(_, l)| !l.trim().is_empty())
+    }
+
+    /// Parses the first `n` non-blank data lines of block `b` with `parse`, in
+    /// parallel. On failure the error of the earliest bad line is returned, so the
+    /// result does not depend on scheduling; a block with fewer than `n` lines is a
+    /// positioned error at the line where its data ends.
+    fn parse_rows<T: Send>(
+        &self,
+        b: usize,
+        n: usize,
+        what: &str,
+        parse: impl Fn(usize, usize, &str) -> Result<T, ParseError> + Sync,
+    ) -> Result<Vec<T>, ParseError> {
+        use rayon::prelude::*;
+        let rows: Vec<usize> = self.rows(b).take(n).map(|(i, _)| i).collect();
+        if rows.len() < n {
+            return Err(self.short_block(b, n, rows.len(), what));
+        }
+        let parsed: Result<Vec<T>, ParseError> = rows
+            .par_iter()
+            .enumerate()
+            .with_min_len(4096)
+            .map(|(k, &i)| parse(k, i, self.doc.line(i)))
+            .collect();
+        parsed.map_err(|_| {
+            // Rare path: find the first failing line serially for a stable message.
+            rows.iter()
+                .enumerate()
+                .find_map(|(k, &i)| parse(k, i, self.doc.line(i)).err())
+                .unwrap_or_else(|| self.doc.error_at(rows[0], 0, "parse error"))
+        })
     }
 
     /// The first non-blank data line of a block, trimmed.
@@ -274,9 +306,8 @@ impl GomDocument {
 
     fn read_nodes(&self, n_dim: usize, n_nodes: usize) -> Result<Vec<[f64; 3]>, ParseError> {
         let b = self.required("$$STARTNODES")?;
-        let mut nodes = Vec::with_capacity(n_nodes);
-        let mut xyz = [0.0f64; 3];
-        for (i, line) in self.rows(b).take(n_nodes) {
+        self.parse_rows(b, n_nodes, "node lines ($$STARTCOUNTERS)", |k, i, line| {
+            let mut xyz = [0.0f64; 3];
             lex::reals(line, &mut xyz[..n_dim]).map_err(|bad| match bad {
                 Some(t) => self.doc.error_at(
                     i,
@@ -286,15 +317,11 @@ impl GomDocument {
                 None => self.doc.error_at(
                     i,
                     line.len(),
-                    format!("node {} needs {n_dim} coordinates", nodes.len() + 1),
+                    format!("node {} needs {n_dim} coordinates", k + 1),
                 ),
             })?;
-            nodes.push(xyz);
-        }
-        if nodes.len() < n_nodes {
-            return Err(self.short_block(b, n_nodes, nodes.len(), "node lines ($$STARTCOUNTERS)"));
-        }
-        Ok(nodes)
+            Ok(xyz)
+        })
     }
 
     fn read_connectivity(
@@ -305,46 +332,48 @@ impl GomDocument {
     ) -> Result<(Vec<u32>, Vec<u32>), ParseError> {
         let b = self.required("$$STARTELEMCON")?;
         let per = element_type.nodes_per_element();
+        let rows = self.parse_rows(
+            b,
+            n_elements,
+            "element lines ($$STARTCOUNTERS)",
+            |k, i, line| {
+                let e = k + 1;
+                let mut ids = [0u64; 10];
+                lex::uints(line, &mut ids[..per]).map_err(|bad| match bad {
+                    Some(t) => self.doc.error_at(
+                        i,
+                        t.offset,
+                        format!("expected a node id, found `{}`", t.text),
+                    ),
+                    None => self.doc.error_at(
+                        i,
+                        line.len(),
+                        format!(
+                            "element {e} needs {per} node ids for {}",
+                            element_type.gom_name()
+                        ),
+                    ),
+                })?;
+                let mut out = [0u32; 10];
+                for (slot, (k, &id)) in out.iter_mut().zip(ids[..per].iter().enumerate()) {
+                    if id == 0 || id as usize > n_nodes {
+                        let offset = lex::tokens(line).nth(k).map_or(0, |(o, _)| o);
+                        return Err(self.doc.error_at(
+                            i,
+                            offset,
+                            format!("element {e}: node id {id} is out of range 1..={n_nodes}"),
+                        ));
+                    }
+                    *slot = (id - 1) as u32;
+                }
+                Ok((out, i as u32 + 1))
+            },
+        )?;
         let mut connectivity = Vec::with_capacity(n_elements * per);
         let mut lines = Vec::with_capacity(n_elements);
-        let mut ids = [0u64; 10];
-        for (i, line) in self.rows(b).take(n_elements) {
-            let e = lines.len() + 1;
-            lex::uints(line, &mut ids[..per]).map_err(|bad| match bad {
-                Some(t) => self.doc.error_at(
-                    i,
-                    t.offset,
-                    format!("expected a node id, found `{}`", t.text),
-                ),
-                None => self.doc.error_at(
-                    i,
-                    line.len(),
-                    format!(
-                        "element {e} needs {per} node ids for {}",
-                        element_type.gom_name()
-                    ),
-                ),
-            })?;
-            for (k, &id) in ids[..per].iter().enumerate() {
-                if id == 0 || id as usize > n_nodes {
-                    let offset = lex::tokens(line).nth(k).map_or(0, |(o, _)| o);
-                    return Err(self.doc.error_at(
-                        i,
-                        offset,
-                        format!("element {e}: node id {id} is out of range 1..={n_nodes}"),
-                    ));
-                }
-                connectivity.push((id - 1) as u32);
-            }
-            lines.push(i as u32 + 1);
-        }
-        if lines.len() < n_elements {
-            return Err(self.short_block(
-                b,
-                n_elements,
-                lines.len(),
-                "element lines ($$STARTCOUNTERS)",
-            ));
+        for (ids, line) in rows {
+            connectivity.extend_from_slice(&ids[..per]);
+            lines.push(line);
         }
         Ok((connectivity, lines))
     }
@@ -414,9 +443,8 @@ impl GomDocument {
         errors: &mut Vec<ParseError>,
     ) -> Result<Vec<u32>, ParseError> {
         let b = self.required("$$STARTELMMAT")?;
-        let mut out = Vec::with_capacity(n_elements);
-        let mut value = [0u64];
-        for (i, line) in self.rows(b).take(n_elements) {
+        let out = self.parse_rows(b, n_elements, "element material lines", |_, i, line| {
+            let mut value = [0u64];
             lex::uints(line, &mut value).map_err(|bad| match bad {
                 Some(t) => self.doc.error_at(
                     i,
@@ -425,22 +453,20 @@ impl GomDocument {
                 ),
                 None => self.doc.error_at(i, 0, "expected a material index"),
             })?;
-            if value[0] as usize > materials.len() {
+            Ok(value[0] as u32)
+        })?;
+        for (e, (&m, (i, _))) in out.iter().zip(self.rows(b)).enumerate() {
+            if m as usize > materials.len() {
                 errors.push(self.doc.error_at(
                     i,
                     0,
                     format!(
-                        "element {}: material {} does not exist ({} materials)",
-                        out.len() + 1,
-                        value[0],
+                        "element {}: material {m} does not exist ({} materials)",
+                        e + 1,
                         materials.len()
                     ),
                 ));
             }
-            out.push(value[0] as u32);
-        }
-        if out.len() < n_elements {
-            return Err(self.short_block(b, n_elements, out.len(), "element material lines"));
         }
         Ok(out)
     }
@@ -453,9 +479,8 @@ impl GomDocument {
         element_material: &[u32],
         errors: &mut Vec<ParseError>,
     ) -> Result<Vec<(u32, u32)>, ParseError> {
-        let mut out = Vec::with_capacity(n_elements);
-        let mut values = [0u64; 2];
-        for (i, line) in self.rows(b).take(n_elements) {
+        let out = self.parse_rows(b, n_elements, "MP count lines", |_, i, line| {
+            let mut values = [0u64; 2];
             lex::uints(line, &mut values).map_err(|bad| match bad {
                 Some(t) => self.doc.error_at(
                     i,
@@ -466,8 +491,9 @@ impl GomDocument {
                     .doc
                     .error_at(i, line.len(), "expected `nSolid nLiquid`"),
             })?;
-            let e = out.len();
-            let solid = values[0] as u32;
+            Ok((values[0] as u32, values[1] as u32))
+        })?;
+        for (e, (&(solid, _), (i, _))) in out.iter().zip(self.rows(b)).enumerate() {
             if solid != 0 && !element_type.allowed_mp_counts().contains(&solid) {
                 errors.push(self.doc.error_at(
                     i,
@@ -491,10 +517,6 @@ impl GomDocument {
                     ),
                 ));
             }
-            out.push((solid, values[1] as u32));
-        }
-        if out.len() < n_elements {
-            return Err(self.short_block(b, n_elements, out.len(), "MP count lines"));
         }
         Ok(out)
     }

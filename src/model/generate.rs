@@ -1,0 +1,258 @@
+//! Builders for structured meshes and simple materials: the analytic test cases,
+//! benchmarks, examples and generated fixtures. Pure data, no I/O.
+
+use super::material::{Material, RetentionCurve};
+use super::mesh::{AnuraModel, Dimension, ElementType, Mesh};
+
+/// A rectangle [x0, x0+width] × [y0, y0+height] split into nx × ny cells, each
+/// cut into two counter-clockwise triangles along alternating diagonals.
+pub fn structured_tri_mesh(
+    x0: f64,
+    y0: f64,
+    width: f64,
+    height: f64,
+    nx: usize,
+    ny: usize,
+) -> Mesh {
+    let mut nodes = Vec::with_capacity((nx + 1) * (ny + 1));
+    for j in 0..=ny {
+        for i in 0..=nx {
+            nodes.push([
+                x0 + width * i as f64 / nx as f64,
+                y0 + height * j as f64 / ny as f64,
+                0.0,
+            ]);
+        }
+    }
+    let id = |i: usize, j: usize| (j * (nx + 1) + i) as u32;
+    let mut connectivity = Vec::with_capacity(nx * ny * 6);
+    for j in 0..ny {
+        for i in 0..nx {
+            let (a, b, c, d) = (id(i, j), id(i + 1, j), id(i + 1, j + 1), id(i, j + 1));
+            if (i + j) % 2 == 0 {
+                connectivity.extend_from_slice(&[a, b, c, a, c, d]);
+            } else {
+                connectivity.extend_from_slice(&[a, b, d, b, c, d]);
+            }
+        }
+    }
+    Mesh {
+        dimension: Dimension::PlaneStrain,
+        element_type: ElementType::Tri3,
+        nodes,
+        connectivity,
+    }
+}
+
+/// A box [0, wx] × [y0, y0+height] × [0, wz] split into nx × ny × nz cubes, each cut
+/// into six positive-volume tetrahedra (Kuhn subdivision), written as
+/// `tetrahedral_old` with the six mid-edge nodes appended to the node list.
+pub fn structured_tet_mesh(
+    wx: f64,
+    y0: f64,
+    height: f64,
+    wz: f64,
+    nx: usize,
+    ny: usize,
+    nz: usize,
+) -> Mesh {
+    let mut nodes = Vec::new();
+    for k in 0..=nz {
+        for j in 0..=ny {
+            for i in 0..=nx {
+                nodes.push([
+                    wx * i as f64 / nx as f64,
+                    y0 + height * j as f64 / ny as f64,
+                    wz * k as f64 / nz as f64,
+                ]);
+            }
+        }
+    }
+    let id = |i: usize, j: usize, k: usize| (k * (ny + 1) * (nx + 1) + j * (nx + 1) + i) as u32;
+    let mut mid: std::collections::HashMap<(u32, u32), u32> = std::collections::HashMap::new();
+    let mut connectivity = Vec::new();
+    // Kuhn: the six tetrahedra share the main diagonal 0 → 7 of the cube.
+    const PATHS: [[usize; 3]; 6] = [
+        [0, 1, 2],
+        [0, 2, 1],
+        [1, 0, 2],
+        [1, 2, 0],
+        [2, 0, 1],
+        [2, 1, 0],
+    ];
+    for k in 0..nz {
+        for j in 0..ny {
+            for i in 0..nx {
+                for path in PATHS {
+                    let mut c = [i, j, k];
+                    let mut corners = [id(c[0], c[1], c[2]); 4];
+                    for (step, &axis) in path.iter().enumerate() {
+                        c[axis] += 1;
+                        corners[step + 1] = id(c[0], c[1], c[2]);
+                    }
+                    // Orientation: make (x2−x1)·[(x3−x1)×(x4−x1)] > 0.
+                    let p = |n: u32| nodes[n as usize];
+                    let (a, b, cc, d) =
+                        (p(corners[0]), p(corners[1]), p(corners[2]), p(corners[3]));
+                    let sub = |u: [f64; 3], v: [f64; 3]| [u[0] - v[0], u[1] - v[1], u[2] - v[2]];
+                    let (u, v, w) = (sub(b, a), sub(cc, a), sub(d, a));
+                    let triple = u[0] * (v[1] * w[2] - v[2] * w[1])
+                        - u[1] * (v[0] * w[2] - v[2] * w[0])
+                        + u[2] * (v[0] * w[1] - v[1] * w[0]);
+                    if triple < 0.0 {
+                        corners.swap(2, 3);
+                    }
+                    let mut ids = corners.to_vec();
+                    for (e1, e2) in [(0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3)] {
+                        let key = (corners[e1].min(corners[e2]), corners[e1].max(corners[e2]));
+                        let m = *mid.entry(key).or_insert_with(|| {
+                            let (pa, pb) = (nodes[key.0 as usize], nodes[key.1 as usize]);
+                            nodes.push([
+                                (pa[0] + pb[0]) / 2.0,
+                                (pa[1] + pb[1]) / 2.0,
+                                (pa[2] + pb[2]) / 2.0,
+                            ]);
+                            (nodes.len() - 1) as u32
+                        });
+                        ids.push(m);
+                    }
+                    connectivity.extend_from_slice(&ids);
+                }
+            }
+        }
+    }
+    Mesh {
+        dimension: Dimension::Cartesian3D,
+        element_type: ElementType::TetOld,
+        nodes,
+        connectivity,
+    }
+}
+
+/// Solid fixities of a box: base (y = min) fixed in all directions, the lateral
+/// faces (x = min/max, and z = min/max in 3D) on rollers.
+pub fn box_fixities(mesh: &Mesh) -> Vec<[bool; 3]> {
+    let (lo, hi) = mesh.bounding_box();
+    let tol = 1e-9 * (hi[0] - lo[0]).abs().max(hi[1] - lo[1]).max(1.0);
+    let three_d = mesh.dimension.n_dim() == 3;
+    mesh.nodes
+        .iter()
+        .map(|p| {
+            let base = (p[1] - lo[1]).abs() < tol;
+            let side_x = (p[0] - lo[0]).abs() < tol || (p[0] - hi[0]).abs() < tol;
+            let side_z = three_d && ((p[2] - lo[2]).abs() < tol || (p[2] - hi[2]).abs() < tol);
+            [base || side_x, base, three_d && (base || side_z)]
+        })
+        .collect()
+}
+
+/// Parameters of a material built here.
+#[derive(Clone, Debug)]
+pub struct MaterialSpec {
+    pub name: String,
+    pub porosity: f64,
+    pub density_solid: f64,
+    /// `Some(ρw)` for a material with water (saturated_material_drained, or
+    /// unsaturated_material_2phase_suction when `retention` is given).
+    pub density_liquid: Option<f64>,
+    pub k0: f64,
+    pub young_modulus: f64,
+    pub poisson_ratio: f64,
+    /// `Some((φ', c', ψ))` for Mohr–Coulomb, `None` for linear elasticity.
+    pub mohr_coulomb: Option<(f64, f64, f64)>,
+    pub retention: Option<RetentionCurve>,
+    pub permeability: f64,
+}
+
+/// Builds a [`Material`] with its verbatim positional properties.
+pub fn material(index: u32, spec: &MaterialSpec) -> Material {
+    let mut props: Vec<(String, String)> = Vec::new();
+    let mut push = |k: &str, v: String| props.push((format!("$${k}"), v));
+    let material_type = match (spec.density_liquid, &spec.retention) {
+        (None, _) => "dry_material",
+        (Some(_), None) => "saturated_material_drained",
+        (Some(_), Some(_)) => "unsaturated_material_2phase_suction",
+    };
+    push("POROSITY_SOLID", spec.porosity.to_string());
+    push("DENSITY_SOLID", spec.density_solid.to_string());
+    if let Some(rho_w) = spec.density_liquid {
+        push("DENSITY_LIQUID", rho_w.to_string());
+        if spec.retention.is_some() {
+            push(
+                "INTRINSIC_PERMEABILITY_LIQUID",
+                spec.permeability.to_string(),
+            );
+            push("BULK_MODULUS_LIQUID", "45000".into());
+            push("DYNAMIC_VISCOSITY_LIQUID", "1e-6".into());
+        }
+    }
+    push("K0_VALUE_SOLID", spec.k0.to_string());
+    let model = if spec.mohr_coulomb.is_some() {
+        "mohr_coulomb"
+    } else {
+        "linear_elasticity"
+    };
+    push("MATERIAL_MODEL_SOLID", model.into());
+    push("YOUNG_MODULUS", spec.young_modulus.to_string());
+    push("POISSON_RATIO", spec.poisson_ratio.to_string());
+    if let Some((phi, c, psi)) = spec.mohr_coulomb {
+        push("FRICTION_ANGLE", phi.to_string());
+        push("COHESION", c.to_string());
+        push("DILATANCY_ANGLE", psi.to_string());
+        push("TENSILE_STRENGTH", "0.0".into());
+    }
+    match &spec.retention {
+        Some(RetentionCurve::VanGenuchten {
+            s_min,
+            s_max,
+            p0,
+            lambda,
+        }) => {
+            push("WATER_RETENTION_CURVE", "van_genuchten".into());
+            push("Smin", s_min.to_string());
+            push("Smax", s_max.to_string());
+            push("P0", p0.to_string());
+            push("lambda", lambda.to_string());
+            push("HYDR_CONDUCTIVITY_CURVE", "constant".into());
+        }
+        Some(RetentionCurve::Linear { av }) => {
+            push("WATER_RETENTION_CURVE", "linear".into());
+            push("av", av.to_string());
+            push("HYDR_CONDUCTIVITY_CURVE", "constant".into());
+        }
+        None => {}
+    }
+    Material {
+        index,
+        name: spec.name.clone(),
+        material_type: material_type.into(),
+        model: Some(model.into()),
+        porosity: Some(spec.porosity),
+        density_solid: Some(spec.density_solid),
+        density_liquid: spec.density_liquid,
+        k0: Some(spec.k0),
+        young_modulus: Some(spec.young_modulus),
+        poisson_ratio: Some(spec.poisson_ratio),
+        friction_angle: spec.mohr_coulomb.map(|m| m.0),
+        cohesion: spec.mohr_coulomb.map(|m| m.1),
+        dilatancy_angle: spec.mohr_coulomb.map(|m| m.2),
+        tensile_strength: spec.mohr_coulomb.map(|_| 0.0),
+        retention: spec.retention.clone(),
+        properties: props,
+    }
+}
+
+/// A one-material model on `mesh`: every element active with `mps_per_element`
+/// MPs, box fixities.
+pub fn single_material_model(mesh: Mesh, spec: &MaterialSpec, mps_per_element: u32) -> AnuraModel {
+    let n_el = mesh.n_elements();
+    let solid_fixity = box_fixities(&mesh);
+    AnuraModel {
+        mesh,
+        materials: vec![material(1, spec)],
+        element_material: vec![1; n_el],
+        mp_counts: vec![(mps_per_element, 0); n_el],
+        solid_fixity,
+        damping: None,
+    }
+}
