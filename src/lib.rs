@@ -17,4 +17,5 @@
 pub mod cli;
 pub mod formats;
 pub mod model;
+pub mod place;
 pub mod state;

@@ -7,9 +7,9 @@ use std::path::PathBuf;
 use anyhow::Context;
 use serde::Serialize;
 
+use crate::formats::cps::CpsDocument;
 use crate::formats::gom::{GomDocument, GomInfo};
 use crate::formats::project::{self, ProjectFiles};
-use crate::formats::cps::CpsDocument;
 use crate::model::{AnuraModel, MaterialPoint};
 
 #[derive(Debug, clap::Args)]
@@ -22,6 +22,9 @@ pub struct InspectArgs {
     /// Print a machine-readable JSON summary instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Replace an existing --mps file.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// A loaded Anura3D project: files, documents, typed model and predicted MPs.
@@ -46,7 +49,11 @@ pub fn load_project(path: &std::path::Path) -> anyhow::Result<LoadedProject> {
             .iter()
             .take(20)
             .map(|e| {
-                let line = e.element().and_then(|el| info.element_lines.get(el)).copied().unwrap_or(0);
+                let line = e
+                    .element()
+                    .and_then(|el| info.element_lines.get(el))
+                    .copied()
+                    .unwrap_or(0);
                 format!("{}:{}:1: {}", files.gom.display(), line, e)
             })
             .collect();
@@ -54,7 +61,11 @@ pub fn load_project(path: &std::path::Path) -> anyhow::Result<LoadedProject> {
         anyhow::anyhow!(
             "{}{}",
             lines.join("\n"),
-            if more > 0 { format!("\n… and {more} more") } else { String::new() }
+            if more > 0 {
+                format!("\n… and {more} more")
+            } else {
+                String::new()
+            }
         )
     })?;
     if let Some(cps) = &cps {
@@ -65,7 +76,14 @@ pub fn load_project(path: &std::path::Path) -> anyhow::Result<LoadedProject> {
             ));
         }
     }
-    Ok(LoadedProject { files, gom, cps, model, info, points })
+    Ok(LoadedProject {
+        files,
+        gom,
+        cps,
+        model,
+        info,
+        points,
+    })
 }
 
 #[derive(Serialize)]
@@ -107,7 +125,10 @@ struct Summary<'a> {
 
 pub fn run(args: InspectArgs) -> anyhow::Result<()> {
     let p = load_project(&args.model)?;
-    let g = p.cps.as_ref().map_or(crate::model::DEFAULT_GRAVITY, CpsDocument::gravity);
+    let g = p
+        .cps
+        .as_ref()
+        .map_or(crate::model::DEFAULT_GRAVITY, CpsDocument::gravity);
     let materials = p
         .model
         .materials
@@ -117,7 +138,12 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
             name: m.name.clone(),
             material_type: m.material_type.clone(),
             model: m.model.clone(),
-            elements: p.model.element_material.iter().filter(|&&e| e == m.index).count(),
+            elements: p
+                .model
+                .element_material
+                .iter()
+                .filter(|&&e| e == m.index)
+                .count(),
             mps: p.points.iter().filter(|mp| mp.material == m.index).count(),
             porosity: m.porosity,
             density_solid: m.density_solid,
@@ -142,14 +168,21 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
         elements: mesh.n_elements(),
         active_elements: p.model.element_material.iter().filter(|&&m| m > 0).count(),
         material_points: p.points.len(),
-        fixed_nodes: p.model.solid_fixity.iter().filter(|f| f.iter().any(|&b| b)).count(),
+        fixed_nodes: p
+            .model
+            .solid_fixity
+            .iter()
+            .filter(|f| f.iter().any(|&b| b))
+            .count(),
         bounding_box: mesh.bounding_box(),
         materials,
         warnings: &p.info.warnings,
     };
     if let Some(path) = &args.mps {
-        crate::cli::output::write_new(path, false, |w| crate::formats::mps_table::write_points(w, &p.points, mesh.dimension.n_dim()))
-            .with_context(|| format!("writing {}", path.display()))?;
+        crate::cli::output::write_new(path, args.force, |w| {
+            crate::formats::mps_table::write_points(w, &p.points, mesh.dimension.n_dim())
+        })
+        .with_context(|| format!("writing {}", path.display()))?;
     }
     let mut out = std::io::stdout().lock();
     if args.json {
@@ -173,7 +206,9 @@ fn print_summary(out: &mut impl Write, s: &Summary<'_>) -> std::io::Result<()> {
         out,
         "version    GOM {}{}",
         s.version,
-        s.cps_version.map(|v| format!(", CPS {v}")).unwrap_or_default()
+        s.cps_version
+            .map(|v| format!(", CPS {v}"))
+            .unwrap_or_default()
     )?;
     writeln!(out, "dimension  {} ({})", s.dimension, s.element_type)?;
     if let Some(f) = s.formulation {

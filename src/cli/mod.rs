@@ -3,6 +3,7 @@
 //! `anyhow::Error` and print as one chain (`error: {:#}`); see [`main`].
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
+mod inspect;
 pub mod output;
 
 use std::process::ExitCode;
@@ -20,7 +21,7 @@ pub struct Cli {
 #[derive(Debug, Subcommand)]
 pub enum Command {
     /// Summarise an Anura3D model (GOM/CPS) or a FEM node file.
-    Inspect,
+    Inspect(inspect::InspectArgs),
 }
 
 /// An error that carries its own exit code (1 = a negative verdict).
@@ -61,6 +62,6 @@ pub fn main() -> ExitCode {
 /// Runs one parsed command.
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
-        Command::Inspect => Ok(()),
+        Command::Inspect(args) => inspect::run(args),
     }
 }

@@ -1,0 +1,121 @@
+//! The real binary, run in temporary folders: exit codes, positioned errors on
+//! stderr, and output files that are complete or absent.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_a3d-init"))
+}
+
+fn fixture(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures")
+        .join(rel)
+}
+
+fn run(args: &[&str]) -> (i32, String, String) {
+    let out = bin().args(args).output().unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stdout).into_owned(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn inspect_a_sample_project() {
+    let dir = fixture("anura3d/K0_phreaticSurf_Geom");
+    let (code, stdout, stderr) = run(&["inspect", dir.to_str().unwrap()]);
+    assert_eq!(code, 0, "{stderr}");
+    assert!(stdout.contains("MPs        993"), "{stdout}");
+    assert!(stdout.contains("K0_phreaticSurf_Geom.CPS_001"));
+    let (code, json, _) = run(&[
+        "inspect",
+        "--json",
+        dir.join("K0_phreaticSurf_Geom.CPS_001").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0);
+    let v: serde_json::Value = serde_json::from_str(&json).unwrap();
+    assert_eq!(v["material_points"], 993);
+    assert_eq!(v["materials"][0]["name"], "Sand");
+}
+
+#[test]
+fn inspect_writes_the_mp_table_and_refuses_to_overwrite() {
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = tmp.path().join("mps.csv");
+    let gom = fixture("anura3d/test-1005_3D/test-1005_3D.GOM");
+    let (code, _, stderr) = run(&[
+        "inspect",
+        gom.to_str().unwrap(),
+        "--mps",
+        csv.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(text.lines().count(), 241);
+    assert!(text.starts_with("id,element,material,local,x,y,z,volume\n1,"));
+    let (code, _, stderr) = run(&[
+        "inspect",
+        gom.to_str().unwrap(),
+        "--mps",
+        csv.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("exists; pass --force"), "{stderr}");
+}
+
+#[test]
+fn malformed_inputs_exit_2_with_a_positioned_message() {
+    let tmp = tempfile::tempdir().unwrap();
+    let base = std::fs::read_to_string(fixture("anura3d-mini/TwoMat.GOM")).unwrap();
+    let cases = [
+        (
+            "clockwise",
+            base.replacen("1 2 5\n", "1 5 2\n", 1),
+            "TwoMat.GOM:18:1: element 1: clockwise or degenerate triangle",
+        ),
+        (
+            "missing_finish",
+            base.replace("$$FINISH\n", ""),
+            "TwoMat.GOM:89:1: missing `$$FINISH`",
+        ),
+        (
+            "bad_number",
+            base.replacen("1.0 1.0\n", "1.0 x\n", 1),
+            "TwoMat.GOM:15:5: expected a coordinate, found `x`",
+        ),
+    ];
+    for (name, text, expected) in cases {
+        let dir = tmp.path().join(name);
+        std::fs::create_dir(&dir).unwrap();
+        let gom = dir.join("TwoMat.GOM");
+        std::fs::write(&gom, text).unwrap();
+        let (code, _, stderr) = run(&[
+            "inspect",
+            gom.to_str().unwrap(),
+            "--mps",
+            dir.join("mps.csv").to_str().unwrap(),
+        ]);
+        assert_eq!(code, 2, "{name}: {stderr}");
+        assert!(
+            stderr.contains(expected),
+            "{name}: expected `{expected}` in {stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{name}: {stderr}");
+        assert!(
+            !dir.join("mps.csv").exists(),
+            "{name}: no output after an error"
+        );
+    }
+}
+
+#[test]
+fn unknown_file_kind_and_missing_file_exit_2() {
+    let (code, _, stderr) = run(&["inspect", "/nonexistent/x.GOM"]);
+    assert_eq!(code, 2);
+    assert!(stderr.starts_with("error: /nonexistent/x.GOM"), "{stderr}");
+    let (code, _, _) = run(&["inspect", fixture("anura3d/README.md").to_str().unwrap()]);
+    assert_eq!(code, 2);
+}
