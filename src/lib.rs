@@ -16,6 +16,7 @@
 
 pub mod cli;
 pub mod formats;
+pub mod kernel;
 pub mod model;
 pub mod place;
 pub mod state;

@@ -4,6 +4,7 @@
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
 mod inspect;
+pub mod map;
 pub mod output;
 
 use std::process::ExitCode;
@@ -22,6 +23,8 @@ pub struct Cli {
 pub enum Command {
     /// Summarise an Anura3D model (GOM/CPS) or a FEM node file.
     Inspect(inspect::InspectArgs),
+    /// Map FEM node results onto the MPs of an Anura3D model and write a ready-to-run project.
+    Map(map::MapArgs),
 }
 
 /// An error that carries its own exit code (1 = a negative verdict).
@@ -63,5 +66,6 @@ pub fn main() -> ExitCode {
 pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Inspect(args) => inspect::run(args),
+        Command::Map(args) => map::run(args),
     }
 }

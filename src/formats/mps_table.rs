@@ -40,3 +40,116 @@ pub fn write_points(
     }
     Ok(())
 }
+
+/// Mapping diagnostics of one MP.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MpDiagnostics {
+    pub neighbours: u32,
+    pub shepard: f64,
+    /// `mapped`, `nearest` or `skipped`.
+    pub status: &'static str,
+}
+
+/// Header of the mapped-state table.
+pub const STATE_HEADER: &str = "id,element,material,local,x,y,z,volume,pwp,sxx,syy,szz,sxy,syz,sxz,esxx,esyy,eszz,esxy,esyz,esxz,saturation,neighbours,shepard,status";
+
+/// Writes the mapped-state table (`mps.csv`): placement, pwp, total and effective
+/// stress (Anura3D signs, kPa), saturation and diagnostics.
+pub fn write_states(
+    w: &mut dyn Write,
+    points: &[MaterialPoint],
+    states: &[crate::model::MpState],
+    diagnostics: &[MpDiagnostics],
+) -> std::io::Result<()> {
+    writeln!(w, "{STATE_HEADER}")?;
+    for ((p, s), d) in points.iter().zip(states).zip(diagnostics) {
+        let eff = s.effective();
+        let mut row = vec![
+            p.id.to_string(),
+            (p.element + 1).to_string(),
+            p.material.to_string(),
+            p.local.to_string(),
+        ];
+        row.extend(p.position.iter().map(|v| fmt_f64(*v)));
+        row.push(fmt_f64(p.volume));
+        row.push(fmt_f64(s.pwp));
+        row.extend(s.total.iter().map(|v| fmt_f64(*v)));
+        row.extend(eff.iter().map(|v| fmt_f64(*v)));
+        row.push(fmt_f64(s.saturation));
+        row.push(d.neighbours.to_string());
+        row.push(fmt_f64(d.shepard));
+        row.push(d.status.to_string());
+        writeln!(w, "{}", row.join(","))?;
+    }
+    Ok(())
+}
+
+/// Reads a mapped-state table back: (points, states). Positioned errors.
+pub fn read_states(
+    path: &std::path::Path,
+) -> Result<(Vec<MaterialPoint>, Vec<crate::model::MpState>), super::error::FormatError> {
+    use super::error::ParseError;
+    let text = super::keyword_doc::read_text(path)?;
+    let mut lines = text.lines().enumerate();
+    let header = lines.next().map(|(_, l)| l.trim()).unwrap_or("");
+    if !header.starts_with("id,element,material,local,x,y,z,volume,pwp,sxx") {
+        return Err(ParseError::at(
+            path,
+            1,
+            1,
+            format!("not an a3d-init MP state table: expected the header `{STATE_HEADER}`"),
+        )
+        .into());
+    }
+    let mut points = Vec::new();
+    let mut states = Vec::new();
+    for (i, line) in lines {
+        if line.trim().is_empty() {
+            continue;
+        }
+        let f: Vec<&str> = line.split(',').collect();
+        if f.len() < 22 {
+            return Err(ParseError::at(
+                path,
+                i + 1,
+                1,
+                format!("expected at least 22 fields, found {}", f.len()),
+            )
+            .into());
+        }
+        let num = |k: usize| -> Result<f64, ParseError> {
+            f[k].trim().parse::<f64>().map_err(|_| {
+                ParseError::at(
+                    path,
+                    i + 1,
+                    1,
+                    format!("field {}: expected a number, found `{}`", k + 1, f[k]),
+                )
+            })
+        };
+        let int = |k: usize| -> Result<u32, ParseError> {
+            f[k].trim().parse::<u32>().map_err(|_| {
+                ParseError::at(
+                    path,
+                    i + 1,
+                    1,
+                    format!("field {}: expected an integer, found `{}`", k + 1, f[k]),
+                )
+            })
+        };
+        points.push(MaterialPoint {
+            id: int(0)?,
+            element: int(1)?.saturating_sub(1),
+            material: int(2)?,
+            local: int(3)?,
+            position: [num(4)?, num(5)?, num(6)?],
+            volume: num(7)?,
+        });
+        states.push(crate::model::MpState {
+            pwp: num(8)?,
+            total: [num(9)?, num(10)?, num(11)?, num(12)?, num(13)?, num(14)?],
+            saturation: num(21)?,
+        });
+    }
+    Ok((points, states))
+}

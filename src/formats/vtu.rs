@@ -7,8 +7,8 @@ use std::io::Write;
 use super::mps_table::fmt_f64;
 
 /// A named point-data array: 1 (scalar), 3 (vector) or 9 (tensor) components.
-pub struct PointArray<'a> {
-    pub name: &'a str,
+pub struct PointArray {
+    pub name: String,
     pub components: usize,
     pub values: Vec<f64>,
 }
@@ -17,7 +17,7 @@ pub struct PointArray<'a> {
 pub fn write_points(
     w: &mut dyn Write,
     points: &[[f64; 3]],
-    arrays: &[PointArray<'_>],
+    arrays: &[PointArray],
 ) -> std::io::Result<()> {
     let n = points.len();
     writeln!(w, r#"<?xml version="1.0"?>"#)?;
