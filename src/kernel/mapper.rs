@@ -37,6 +37,7 @@ pub struct MapSettings {
 }
 
 /// The FEM side of a mapping.
+#[derive(Clone, Copy)]
 pub struct NodeCloud<'a> {
     pub positions: &'a [[f64; 3]],
     pub dim: usize,
@@ -192,9 +193,15 @@ fn run(
     if !(settings.h > 0.0 && settings.h.is_finite()) {
         return Err(MapError::BadSmoothingLength(settings.h));
     }
-    let indices = build_indices(nodes);
+    // Groups separate only when both sides carry them.
+    let grouped = nodes.group.is_some() && point_group.is_some();
+    let ungrouped_nodes = NodeCloud {
+        group: None,
+        ..*nodes
+    };
+    let indices = build_indices(if grouped { nodes } else { &ungrouped_nodes });
     let lookup = |g: u32| -> Result<&Indexed, MapError> {
-        if nodes.group.is_none() {
+        if !grouped {
             return Ok(&indices[0]);
         }
         indices
@@ -215,7 +222,11 @@ fn run(
         let mut meta = Vec::with_capacity(pts.len());
         for (k, p) in pts.iter().enumerate() {
             let i = c * chunk + k;
-            let g = point_group.map_or(u32::MAX, |gs| gs[i]);
+            let g = if grouped {
+                point_group.map_or(u32::MAX, |gs| gs[i])
+            } else {
+                u32::MAX
+            };
             let idx = lookup(g).unwrap_or(&indices[0]);
             meta.push(map_one(
                 nodes,

@@ -1,0 +1,348 @@
+//! Kernels, neighbour search and the mapper against their oracles: analytic
+//! normalisation, partition of unity, constant and linear fields, brute-force
+//! neighbour search, and the serial mapper (bit for bit, any thread count).
+
+use a3d_init::kernel::mapper::{self, MapSettings, NodeCloud, OutsidePolicy, PointStatus};
+use a3d_init::kernel::neighbours::{NeighbourIndex, within_brute_force};
+use a3d_init::kernel::{Gaussian, Kernel, KernelKind};
+use proptest::prelude::*;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+const KERNELS: [KernelKind; 3] = [
+    KernelKind::Cubic,
+    KernelKind::Gaussian { cutoff: 3.0 },
+    KernelKind::Wendland { dim1: false },
+];
+
+/// ∫ w over the line, plane or space, by the trapezoid rule in radial form.
+fn integral(kernel: &KernelKind, dim: usize, h: f64) -> f64 {
+    let n = 200_000;
+    let r_max = kernel.support() * h;
+    let dr = r_max / n as f64;
+    let mut sum = 0.0;
+    for i in 0..=n {
+        let r = i as f64 * dr;
+        let shell = match dim {
+            1 => 2.0,
+            2 => 2.0 * std::f64::consts::PI * r,
+            _ => 4.0 * std::f64::consts::PI * r * r,
+        };
+        let f = kernel.weight(r, h, dim) * shell;
+        sum += if i == 0 || i == n { 0.5 * f } else { f };
+    }
+    sum * dr
+}
+
+#[test]
+fn kernels_integrate_to_one_with_the_papers_alpha() {
+    for dim in 1..=3 {
+        for kernel in KERNELS {
+            let kernel = match kernel {
+                KernelKind::Wendland { .. } => KernelKind::Wendland { dim1: dim == 1 },
+                k => k,
+            };
+            for h in [0.3, 1.0, 4.2] {
+                let expected = match kernel {
+                    KernelKind::Gaussian { cutoff } => {
+                        1.0 - Gaussian { cutoff }.truncated_mass(dim)
+                    }
+                    _ => 1.0,
+                };
+                let got = integral(&kernel, dim, h);
+                assert!(
+                    (got - expected).abs() < 1e-6,
+                    "{} dim {dim} h {h}: {got} vs {expected}",
+                    kernel.name()
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn gaussian_truncated_mass_at_3h() {
+    let g = Gaussian::default();
+    assert!((g.truncated_mass(2) - (-9.0f64).exp()).abs() < 1e-15);
+    assert!(g.truncated_mass(1) < 3e-5 && g.truncated_mass(3) < 5e-4);
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(128))]
+
+    #[test]
+    fn weights_are_nonnegative_zero_beyond_support_and_decreasing(r in 0.0f64..5.0, k in 0usize..3) {
+        let kernel = KERNELS[k];
+        let w = kernel.shape(r);
+        prop_assert!(w >= 0.0);
+        if r >= kernel.support() {
+            prop_assert_eq!(w, 0.0);
+        }
+        prop_assert!(kernel.shape(r + 1e-3) <= w + 1e-15);
+    }
+
+    #[test]
+    fn normalised_weights_sum_to_one_and_constants_are_exact(seed in 0u64..10_000, k in 0usize..3, c in -500.0f64..500.0) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let nodes: Vec<[f64; 3]> = (0..200).map(|_| [rng.random_range(0.0..10.0), rng.random_range(0.0..10.0), 0.0]).collect();
+        let values = vec![c; nodes.len()];
+        let cloud = NodeCloud { positions: &nodes, dim: 2, values: &values, n_fields: 1, group: None, node_volume: 0.5 };
+        let points: Vec<[f64; 3]> = (0..50).map(|_| [rng.random_range(1.0..9.0), rng.random_range(1.0..9.0), 0.0]).collect();
+        let settings = MapSettings { kernel: KERNELS[k], h: 1.2, min_shepard: 0.0, outside: OutsidePolicy::Skip };
+        let r = mapper::map_points(&cloud, &points, None, &settings).unwrap();
+        for (i, s) in r.status.iter().enumerate() {
+            if *s == PointStatus::Mapped {
+                prop_assert!((r.values[i] - c).abs() <= 1e-12 * c.abs().max(1.0), "{} vs {}", r.values[i], c);
+            }
+        }
+    }
+}
+
+#[test]
+fn linear_fields_are_exact_at_interior_points_of_a_uniform_grid() {
+    let n = 21;
+    let nodes: Vec<[f64; 3]> = (0..n * n)
+        .map(|k| [(k % n) as f64 * 0.5, (k / n) as f64 * 0.5, 0.0])
+        .collect();
+    let f = |p: &[f64; 3]| 3.0 * p[0] - 2.0 * p[1] + 7.0;
+    let values: Vec<f64> = nodes.iter().map(f).collect();
+    let cloud = NodeCloud {
+        positions: &nodes,
+        dim: 2,
+        values: &values,
+        n_fields: 1,
+        group: None,
+        node_volume: 0.25,
+    };
+    // Interior grid points and cell centres: symmetric stencils.
+    let points: Vec<[f64; 3]> = vec![
+        [5.0, 5.0, 0.0],
+        [3.5, 6.0, 0.0],
+        [4.25, 4.25, 0.0],
+        [6.0, 3.0, 0.0],
+    ];
+    for kernel in KERNELS {
+        let settings = MapSettings {
+            kernel,
+            h: 0.6,
+            min_shepard: 0.0,
+            outside: OutsidePolicy::Error,
+        };
+        let r = mapper::map_points(&cloud, &points, None, &settings).unwrap();
+        for (p, v) in points.iter().zip(&r.values) {
+            assert!(
+                (v - f(p)).abs() < 1e-10,
+                "{}: {v} vs {}",
+                kernel.name(),
+                f(p)
+            );
+        }
+    }
+}
+
+#[test]
+fn kiddo_search_equals_brute_force() {
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    for dim in [2usize, 3] {
+        let mut pts: Vec<[f64; 3]> = (0..3000)
+            .map(|_| {
+                [
+                    rng.random_range(-5.0..5.0),
+                    rng.random_range(-5.0..5.0),
+                    if dim == 3 {
+                        rng.random_range(-5.0..5.0)
+                    } else {
+                        0.0
+                    },
+                ]
+            })
+            .collect();
+        // Many duplicates and a tight cluster.
+        for _ in 0..300 {
+            pts.push([1.0, 1.0, if dim == 3 { 1.0 } else { 0.0 }]);
+        }
+        let index = NeighbourIndex::new(&pts, dim);
+        let mut got = Vec::new();
+        for _ in 0..200 {
+            let q = [
+                rng.random_range(-6.0..6.0),
+                rng.random_range(-6.0..6.0),
+                if dim == 3 {
+                    rng.random_range(-6.0..6.0)
+                } else {
+                    0.0
+                },
+            ];
+            let r = rng.random_range(0.0..2.5);
+            index.within(q, r, &mut got);
+            let want = within_brute_force(&pts, dim, q, r);
+            assert_eq!(got.len(), want.len(), "dim {dim} q {q:?} r {r}");
+            for (a, b) in got.iter().zip(&want) {
+                assert_eq!(a.0, b.0);
+                assert!((a.1 - b.1).abs() < 1e-12);
+            }
+        }
+        let q = [1.0, 1.0, if dim == 3 { 1.0 } else { 0.0 }];
+        index.within(q, 0.0, &mut got);
+        assert_eq!(got.len(), 300, "duplicates at the query point");
+    }
+}
+
+#[test]
+fn parallel_map_equals_serial_map_bit_for_bit() {
+    let mut rng = ChaCha8Rng::seed_from_u64(11);
+    let nodes: Vec<[f64; 3]> = (0..20_000)
+        .map(|_| {
+            [
+                rng.random_range(0.0..50.0),
+                rng.random_range(0.0..50.0),
+                0.0,
+            ]
+        })
+        .collect();
+    let values: Vec<f64> = nodes
+        .iter()
+        .flat_map(|p| [p[0].sin() * 100.0 + p[1], p[1] * p[1] * 0.3])
+        .collect();
+    let groups: Vec<u32> = nodes
+        .iter()
+        .map(|p| if p[1] < 20.0 { 1 } else { 2 })
+        .collect();
+    let cloud = NodeCloud {
+        positions: &nodes,
+        dim: 2,
+        values: &values,
+        n_fields: 2,
+        group: Some(&groups),
+        node_volume: 0.125,
+    };
+    let points: Vec<[f64; 3]> = (0..10_000)
+        .map(|_| {
+            [
+                rng.random_range(0.0..50.0),
+                rng.random_range(0.0..50.0),
+                0.0,
+            ]
+        })
+        .collect();
+    let point_groups: Vec<u32> = points
+        .iter()
+        .map(|p| if p[1] < 20.0 { 1 } else { 2 })
+        .collect();
+    for kernel in KERNELS {
+        let settings = MapSettings {
+            kernel,
+            h: 0.5,
+            min_shepard: 0.0,
+            outside: OutsidePolicy::Nearest,
+        };
+        let serial =
+            mapper::map_points_serial(&cloud, &points, Some(&point_groups), &settings).unwrap();
+        for threads in [1, 2, 4] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let parallel = pool.install(|| {
+                mapper::map_points(&cloud, &points, Some(&point_groups), &settings).unwrap()
+            });
+            assert!(
+                serial
+                    .values
+                    .iter()
+                    .zip(&parallel.values)
+                    .all(|(a, b)| a.to_bits() == b.to_bits()),
+                "{} threads",
+                threads
+            );
+            assert_eq!(serial.n_neighbours, parallel.n_neighbours);
+        }
+    }
+}
+
+#[test]
+fn groups_keep_a_material_step_sharp() {
+    // Two materials meeting at y = 5 with a jump in the field; no smoothing across.
+    let n = 21;
+    let nodes: Vec<[f64; 3]> = (0..n * n)
+        .map(|k| [(k % n) as f64 * 0.5, (k / n) as f64 * 0.5, 0.0])
+        .collect();
+    let groups: Vec<u32> = nodes
+        .iter()
+        .map(|p| if p[1] <= 5.0 { 1 } else { 2 })
+        .collect();
+    let values: Vec<f64> = groups
+        .iter()
+        .map(|&g| if g == 1 { 10.0 } else { 100.0 })
+        .collect();
+    let cloud = NodeCloud {
+        positions: &nodes,
+        dim: 2,
+        values: &values,
+        n_fields: 1,
+        group: Some(&groups),
+        node_volume: 0.25,
+    };
+    let points = [[4.0, 4.9, 0.0], [4.0, 5.1, 0.0]];
+    let settings = MapSettings {
+        kernel: KernelKind::Cubic,
+        h: 1.0,
+        min_shepard: 0.0,
+        outside: OutsidePolicy::Error,
+    };
+    let r = mapper::map_points(&cloud, &points, Some(&[1, 2]), &settings).unwrap();
+    assert!(
+        (r.values[0] - 10.0).abs() < 1e-12 && (r.values[1] - 100.0).abs() < 1e-12,
+        "{:?}",
+        r.values
+    );
+    let mixed = mapper::map_points(&cloud, &points, None, &settings).unwrap();
+    assert!(
+        mixed.values[0] > 10.0 && mixed.values[1] < 100.0,
+        "without groups the step is smoothed"
+    );
+}
+
+#[test]
+fn null_points_follow_the_policy() {
+    let nodes: Vec<[f64; 3]> = (0..100)
+        .map(|k| [(k % 10) as f64, (k / 10) as f64, 0.0])
+        .collect();
+    let values: Vec<f64> = nodes.iter().map(|p| p[0]).collect();
+    let cloud = NodeCloud {
+        positions: &nodes,
+        dim: 2,
+        values: &values,
+        n_fields: 1,
+        group: None,
+        node_volume: 1.0,
+    };
+    let points = [[4.5, 4.5, 0.0], [30.0, 4.0, 0.0], [-20.0, 0.0, 0.0]];
+    let mut settings = MapSettings {
+        kernel: KernelKind::Cubic,
+        h: 1.0,
+        min_shepard: 0.02,
+        outside: OutsidePolicy::Error,
+    };
+    let err = mapper::map_points(&cloud, &points, None, &settings)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.starts_with("2 material point(s) have no FEM node") && err.contains("[2, 3]"),
+        "{err}"
+    );
+    settings.outside = OutsidePolicy::Nearest;
+    let r = mapper::map_points(&cloud, &points, None, &settings).unwrap();
+    assert_eq!(
+        r.status,
+        vec![
+            PointStatus::Mapped,
+            PointStatus::Nearest,
+            PointStatus::Nearest
+        ]
+    );
+    assert_eq!(&r.values[1..], &[9.0, 0.0]);
+    settings.outside = OutsidePolicy::Skip;
+    let r = mapper::map_points(&cloud, &points, None, &settings).unwrap();
+    assert!(r.values[1].is_nan() && r.status[2] == PointStatus::Skipped);
+}

@@ -1,0 +1,426 @@
+//! `a3d-init map` end to end: an analytic hydrostatic/geostatic block, a real
+//! Anura3D sample (MAPF parsed back row by row, CPS changed in two keywords only,
+//! GOM byte-identical), and bad inputs that exit 2 and leave nothing behind.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use a3d_init::formats::cps::CpsDocument;
+use a3d_init::formats::gom::write::model_to_text;
+use a3d_init::formats::{mapf, mps_table};
+use a3d_init::model::generate::{self, MaterialSpec};
+
+fn bin() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_a3d-init"))
+}
+
+fn fixture(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures")
+        .join(rel)
+}
+
+fn run(args: &[&str]) -> (i32, String) {
+    let out = bin().args(args).output().unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+const GAMMA_W: f64 = 9.807;
+
+fn block_spec() -> MaterialSpec {
+    MaterialSpec {
+        name: "soil".into(),
+        porosity: 0.4,
+        density_solid: 2650.0,
+        density_liquid: Some(1000.0),
+        k0: 0.5,
+        young_modulus: 1e4,
+        poisson_ratio: 0.3,
+        mohr_coulomb: None,
+        retention: None,
+        permeability: 1e-10,
+    }
+}
+
+/// A 20 × 10 m block (TRI3, 1 m cells, 3 MPs each) and FEM nodes on a 0.5 m grid
+/// with hydrostatic pwp, water table at the top (y = 10).
+fn write_block(dir: &Path) -> (PathBuf, PathBuf) {
+    let mesh = generate::structured_tri_mesh(0.0, 0.0, 20.0, 10.0, 20, 10);
+    let model = generate::single_material_model(mesh, &block_spec(), 3);
+    let gom = dir.join("block.GOM");
+    std::fs::write(&gom, model_to_text(&model, "2023")).unwrap();
+    std::fs::write(
+        dir.join("block.CPS_001"),
+        "### Anura3D_2023 ###\n$$GRAVITY_ACCELERATION\n9.81\n$$K0_PROCEDURE\n1\n$$END\n",
+    )
+    .unwrap();
+    let mut csv = String::from("X (m),Y (m),PWP (kPa)\n");
+    for j in 0..=20 {
+        for i in 0..=40 {
+            let (x, y) = (i as f64 * 0.5, j as f64 * 0.5);
+            csv.push_str(&format!("{x},{y},{}\n", GAMMA_W * (10.0 - y)));
+        }
+    }
+    let fem = dir.join("seep.csv");
+    std::fs::write(&fem, csv).unwrap();
+    (gom, fem)
+}
+
+#[test]
+fn hydrostatic_block_maps_to_the_analytic_state() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (gom, fem) = write_block(tmp.path());
+    let out = tmp.path().join("out");
+    let (code, stderr) = run(&[
+        "map",
+        "--fem",
+        fem.to_str().unwrap(),
+        "--mpm",
+        gom.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let (points, states) = mps_table::read_states(&out.join("mps.csv")).unwrap();
+    assert_eq!(points.len(), 20 * 10 * 2 * 3);
+    let g = 9.81;
+    let gamma_sat = (0.6 * 2650.0 + 0.4 * 1000.0) * g / 1000.0;
+    let (mut interior, mut worst_interior, mut worst_edge) = (0, 0.0f64, 0.0f64);
+    for (p, s) in points.iter().zip(&states) {
+        let [x, y, _] = p.position;
+        let depth = 10.0 - y;
+        let pwp = -GAMMA_W * depth;
+        let err = (s.pwp - pwp).abs();
+        if x > 1.0 && x < 19.0 && y > 1.0 && y < 9.0 {
+            interior += 1;
+            worst_interior = worst_interior.max(err);
+        } else {
+            worst_edge = worst_edge.max(err);
+        }
+        // Geostatic: σv = −γsat·depth exactly (saturated everywhere), σh = K0·σ'v + p.
+        let sigma_v = -gamma_sat * depth;
+        assert!(
+            (s.total[1] - sigma_v).abs() < 1e-9 * (1.0 + sigma_v.abs()),
+            "σv at {:?}: {} vs {sigma_v}",
+            p.position,
+            s.total[1]
+        );
+        let sigma_h = 0.5 * (sigma_v - s.pwp) + s.pwp;
+        assert!((s.total[0] - sigma_h).abs() < 1e-9 * (1.0 + sigma_h.abs()));
+    }
+    assert!(interior > 500);
+    // Shepard interpolation reproduces a linear field exactly only on symmetric
+    // stencils; at the MP positions of 1 m triangles over a 0.5 m node grid the
+    // interior error stays below 0.01 kPa (1e-4 of the 98 kPa range); at the
+    // edges the one-sided stencil is off by at most γw·h.
+    assert!(
+        worst_interior < 0.01,
+        "interior pwp error {worst_interior} kPa"
+    );
+    assert!(
+        worst_edge < GAMMA_W * 0.5,
+        "edge pwp error {worst_edge} kPa"
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["fem_nodes"], 41 * 21);
+    assert_eq!(report["material_points"], 1200);
+    assert_eq!(report["null_points"], 0);
+    assert_eq!(report["stress_source"], "geostatic");
+    assert!((report["smoothing_length"].as_f64().unwrap() - 0.5).abs() < 1e-12);
+}
+
+#[test]
+fn sample_project_round_trip_through_map() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("slope");
+    let fem = fixture("geostudio-csv/k0-slope-hydrostatic.csv");
+    let model_dir = fixture("anura3d/K0_phreaticSurf_Geom");
+    let (code, stderr) = run(&[
+        "map",
+        "--fem",
+        fem.to_str().unwrap(),
+        "--mpm",
+        model_dir.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    // GOM byte-identical.
+    assert_eq!(
+        std::fs::read(out.join("K0_phreaticSurf_Geom.GOM")).unwrap(),
+        std::fs::read(model_dir.join("K0_phreaticSurf_Geom.GOM")).unwrap()
+    );
+    // CPS differs only in the two keywords.
+    let cps = CpsDocument::read(&out.join("K0_phreaticSurf_Geom.CPS_001")).unwrap();
+    assert_eq!(cps.get("$$K0_PROCEDURE"), Some(vec!["0"]));
+    assert_eq!(
+        cps.get("$$MP_STRESS_INITIALIZATION_FROMFILE"),
+        Some(vec!["1"])
+    );
+    let original = CpsDocument::read(&model_dir.join("K0_phreaticSurf_Geom.CPS_001")).unwrap();
+    for block in original.document().blocks() {
+        let k = block.keyword.to_ascii_uppercase();
+        if k != "$$K0_PROCEDURE" && k != "$$MP_STRESS_INITIALIZATION_FROMFILE" {
+            assert_eq!(cps.get(&block.keyword), original.get(&block.keyword), "{k}");
+        }
+    }
+    // MAPF: one row per MP, in MP order, exactly the mapped values.
+    let table = mapf::read(&out.join("K0_phreaticSurf_Geom.MAPF")).unwrap();
+    let (points, states) = mps_table::read_states(&out.join("mps.csv")).unwrap();
+    assert_eq!(table.rows.len(), 993);
+    assert_eq!(table.headers, mapf::headers(2));
+    let h = table.rows[0][6];
+    for ((row, p), s) in table.rows.iter().zip(&points).zip(&states) {
+        assert_eq!((row[0], row[1]), (p.position[0], p.position[1]));
+        assert_eq!(
+            (row[2], row[3], row[4], row[5]),
+            (s.pwp, s.total[0], s.total[1], s.total[3])
+        );
+        assert!(row.iter().all(|v| v.is_finite()));
+        assert_eq!(row[6], h);
+    }
+    // Exact-point mode: 2h below half the smallest MP spacing.
+    let mut min_d = f64::INFINITY;
+    for (i, a) in points.iter().enumerate() {
+        for b in &points[i + 1..] {
+            min_d = min_d.min(
+                ((a.position[0] - b.position[0]).powi(2) + (a.position[1] - b.position[1]).powi(2))
+                    .sqrt(),
+            );
+        }
+    }
+    assert!(2.0 * h < 0.5 * min_d, "h = {h}, min spacing {min_d}");
+    // The fixture is the hydrostatic field it claims to be (GeoStudio sign).
+    let text = std::fs::read_to_string(&fem).unwrap();
+    for line in text.lines().skip(1) {
+        let f: Vec<f64> = line.split(',').map(|v| v.parse().unwrap()).collect();
+        assert!((f[3] - GAMMA_W * (1.0 - f[2])).abs() < 1e-9);
+    }
+    // Below the water table (y = 1) pwp is compressive (negative), above it suction;
+    // Shepard's one-sided stencils under the slope surface bias the value by up to
+    // a quarter of γw·h (h = 0.5 m here).
+    for (p, s) in points.iter().zip(&states) {
+        assert!(
+            (s.pwp - (-GAMMA_W * (1.0 - p.position[1]))).abs() < 0.25 * GAMMA_W * 0.5,
+            "{:?}: {}",
+            p.position,
+            s.pwp
+        );
+    }
+    // Refuses to overwrite without --force, and leaves the old folder intact.
+    let (code, stderr) = run(&[
+        "map",
+        "--fem",
+        fem.to_str().unwrap(),
+        "--mpm",
+        model_dir.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("exists; pass --force"));
+    assert!(out.join("report.json").exists());
+}
+
+#[test]
+fn bad_inputs_exit_2_and_leave_no_output() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (gom, good) = write_block(tmp.path());
+    let good_text = std::fs::read_to_string(&good).unwrap();
+    let with_line = |k: usize, line: &str| {
+        let mut lines: Vec<String> = good_text.lines().map(String::from).collect();
+        lines[k] = line.to_string();
+        lines.join("\n") + "\n"
+    };
+    let far: String = "X (m),Y (m),PWP (kPa)\n".to_string()
+        + &(0..10)
+            .map(|i| format!("{},{},1\n", 100.0 + i as f64, 100.0 + (i % 3) as f64))
+            .collect::<String>();
+    let cases: Vec<(&str, String, Vec<&str>, &str)> = vec![
+        (
+            "missing_coordinate_column",
+            good_text.replace("X (m),", "A,"),
+            vec![],
+            "seep.csv:1:1: no header with X and Y",
+        ),
+        (
+            "unknown_unit",
+            good_text.replace("PWP (kPa)", "PWP (bar)"),
+            vec![],
+            "seep.csv:1:13: unknown pressure unit `bar`",
+        ),
+        (
+            "non_numeric_cell",
+            with_line(5, "2,0,abc"),
+            vec![],
+            "seep.csv:6:5: expected a number for pwp, found `abc`",
+        ),
+        (
+            "nan_cell",
+            with_line(5, "2,0,NaN"),
+            vec![],
+            "seep.csv:6:5: expected a number for pwp, found `NaN`",
+        ),
+        (
+            "duplicate_nodes",
+            with_line(5, "0,0,98.07"),
+            vec![],
+            "seep.csv:6:1: duplicate node: same coordinates as line 2",
+        ),
+        (
+            "missing_y",
+            with_line(5, "2"),
+            vec![],
+            "seep.csv:6:2: missing y coordinate",
+        ),
+        (
+            "mixed_2d_3d",
+            "X,Y,Z,PWP\n0,0,0,1\n1,0,0,1\n0,1\n".into(),
+            vec![],
+            "seep.csv:4:4: missing z: some rows are 3D and this one is 2D",
+        ),
+        (
+            "empty_file",
+            String::new(),
+            vec![],
+            "seep.csv:1:1: empty file",
+        ),
+        (
+            "header_only",
+            "X,Y,PWP\n".into(),
+            vec![],
+            "seep.csv:1:1: the table has a header but no data rows",
+        ),
+        (
+            "every_node_outside",
+            far,
+            vec![],
+            "material point(s) have no FEM node inside the kernel support",
+        ),
+        (
+            "bad_columns_override",
+            good_text.clone(),
+            vec!["--columns", "pwp=Pressure"],
+            "seep.csv:1:1: --columns pwp=Pressure: no such header",
+        ),
+        (
+            "bad_columns_field",
+            good_text.clone(),
+            vec!["--columns", "foo=X"],
+            "--columns: `foo`: unknown field",
+        ),
+        (
+            "bad_units_override",
+            good_text.clone(),
+            vec!["--fem-units", "length=furlong"],
+            "--fem-units: unknown unit `furlong`",
+        ),
+        (
+            "bad_kernel",
+            good_text.clone(),
+            vec!["--kernel", "epanechnikov"],
+            "--kernel epanechnikov",
+        ),
+        (
+            "negative_h",
+            good_text.clone(),
+            vec!["--h=-1"],
+            "--h -1: the smoothing length must be a positive",
+        ),
+        (
+            "stress_fem_without_stress",
+            good_text.clone(),
+            vec!["--stress", "fem"],
+            "--stress fem: the FEM files have no total stress columns",
+        ),
+        (
+            "utf16",
+            String::from_utf8_lossy(&[0xFF, 0xFE, b'X', 0]).into_owned(),
+            vec![],
+            "seep.csv:1:1:",
+        ),
+        (
+            "too_few_nodes",
+            "X,Y,PWP\n0,0,1\n1,0,1\n".into(),
+            vec![],
+            "at least 3 FEM nodes are needed",
+        ),
+    ];
+    assert!(cases.len() >= 15);
+    for (name, text, extra, expected) in cases {
+        let dir = tmp.path().join(name);
+        std::fs::create_dir(&dir).unwrap();
+        let fem = dir.join("seep.csv");
+        if name == "utf16" {
+            std::fs::write(&fem, [0xFF, 0xFE, b'X', 0, b',', 0]).unwrap();
+        } else {
+            std::fs::write(&fem, &text).unwrap();
+        }
+        let out = dir.join("out");
+        let mut args = vec![
+            "map",
+            "--fem",
+            fem.to_str().unwrap(),
+            "--mpm",
+            gom.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend(extra);
+        let (code, stderr) = run(&args);
+        assert_eq!(code, 2, "{name}: {stderr}");
+        assert!(
+            stderr.contains(expected),
+            "{name}: expected `{expected}` in:\n{stderr}"
+        );
+        assert!(!stderr.contains("panicked"), "{name}: {stderr}");
+        assert!(!out.exists(), "{name}: an output folder was left behind");
+        let leftovers: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(leftovers.len(), 1, "{name}: {leftovers:?}");
+    }
+}
+
+#[test]
+fn conflicting_joins_are_errors() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (gom, _) = write_block(tmp.path());
+    let a = tmp.path().join("a.csv");
+    let b = tmp.path().join("b.csv");
+    std::fs::write(&a, "Node,X,Y,PWP\n1,0,0,1\n2,1,0,2\n3,0,1,3\n").unwrap();
+    std::fs::write(&b, "Node,X,Y,PWP\n1,0,0,1\n2,1,0,5\n3,0,1,3\n").unwrap();
+    let (code, stderr) = run(&[
+        "map",
+        "--fem",
+        a.to_str().unwrap(),
+        "--fem",
+        b.to_str().unwrap(),
+        "--mpm",
+        gom.to_str().unwrap(),
+        "--out",
+        tmp.path().join("o").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("pwp of node 2 is -5 but -2"), "{stderr}");
+    std::fs::write(&b, "Node,X,Y,PWP\n1,0,0,1\n2,1,0,2\n4,0,1,3\n").unwrap();
+    let (code, stderr) = run(&[
+        "map",
+        "--fem",
+        a.to_str().unwrap(),
+        "--fem",
+        b.to_str().unwrap(),
+        "--mpm",
+        gom.to_str().unwrap(),
+        "--out",
+        tmp.path().join("o").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2);
+    assert!(stderr.contains("node 3 of"), "{stderr}");
+    assert!(!tmp.path().join("o").exists());
+}
