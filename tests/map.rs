@@ -424,3 +424,121 @@ fn conflicting_joins_are_errors() {
     assert!(stderr.contains("node 3 of"), "{stderr}");
     assert!(!tmp.path().join("o").exists());
 }
+
+#[test]
+fn real_geostudio_node_csv_with_mesh_ply() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("rd");
+    let dir = fixture("geostudio-gsz-internal/rapid-drawdown");
+    let node = dir.join("1-initial-steady-state_001_node.csv");
+    let ply = dir.join("1-initial-steady-state_Mesh.ply");
+    let gom = fixture("anura3d-rapid-drawdown/rapid_drawdown.GOM");
+    let args = [
+        "map",
+        "--fem",
+        node.to_str().unwrap(),
+        "--fem-mesh",
+        ply.to_str().unwrap(),
+        "--mpm",
+        gom.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    let (code, stderr) = run(&args);
+    assert_eq!(code, 0, "{stderr}");
+    let (points, states) = mps_table::read_states(&out.join("mps.csv")).unwrap();
+    assert_eq!(points.len(), 992 * 3);
+    // GeoStudio: −38.8 .. 78.5 kPa (positive below the water table). Anura3D: flipped.
+    let (lo, hi) = states
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| {
+            (a.min(s.pwp), b.max(s.pwp))
+        });
+    assert!(lo < -70.0 && lo >= -78.5 - 1e-9, "min pwp {lo}");
+    assert!(hi > 30.0 && hi <= 38.8 + 1e-9, "max pwp {hi}");
+    // The most compressive pwp lies below the strongest suction.
+    let most = points
+        .iter()
+        .zip(&states)
+        .min_by(|a, b| a.1.pwp.total_cmp(&b.1.pwp))
+        .unwrap();
+    let least = points
+        .iter()
+        .zip(&states)
+        .max_by(|a, b| a.1.pwp.total_cmp(&b.1.pwp))
+        .unwrap();
+    assert!(
+        most.0.position[1] < least.0.position[1] - 5.0,
+        "{:?} vs {:?}",
+        most.0.position,
+        least.0.position
+    );
+    // Without the mesh the node.csv has no coordinates: a clear error.
+    let (code, stderr) = run(&[
+        "map",
+        "--fem",
+        node.to_str().unwrap(),
+        "--mpm",
+        gom.to_str().unwrap(),
+        "--out",
+        tmp.path().join("x").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2);
+    assert!(
+        stderr.contains("no X and Y columns; give the GeoStudio mesh with --fem-mesh"),
+        "{stderr}"
+    );
+}
+
+#[test]
+fn malformed_ply_files_are_positioned_errors() {
+    use a3d_init::formats::ply::parse_ply_nodes;
+    let good = std::fs::read(fixture(
+        "geostudio-gsz-internal/rapid-drawdown/1-initial-steady-state_Mesh.ply",
+    ))
+    .unwrap();
+    assert_eq!(
+        parse_ply_nodes(Path::new("m.ply"), &good).unwrap().len(),
+        553
+    );
+    let header_end = good.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+    let text = String::from_utf8_lossy(&good[..header_end]).into_owned();
+    let with_header = |h: &str| [h.as_bytes(), &good[header_end..]].concat();
+    for (name, bytes, expected) in [
+        (
+            "bad_magic",
+            [b"plx".as_slice(), &good[3..]].concat(),
+            "m.ply:1:1: not a PLY file",
+        ),
+        (
+            "ascii_format",
+            with_header(&text.replace("binary_little_endian", "ascii")),
+            "m.ply:2:8: unsupported PLY format `ascii`",
+        ),
+        (
+            "no_node_element",
+            with_header(&text.replace("element node", "element knot")),
+            "m.ply:1:1: the PLY has no `node` element",
+        ),
+        (
+            "float_coordinates",
+            with_header(&text.replace("property double x", "property float x")),
+            "must be `double x, y, z`",
+        ),
+        (
+            "truncated",
+            good[..header_end + 4 + 24 * 100].to_vec(),
+            "truncated PLY: 553 nodes need 13272 bytes",
+        ),
+        (
+            "no_end_header",
+            good[..50].to_vec(),
+            "m.ply:1:1: not a PLY file: no `end_header`",
+        ),
+    ] {
+        let err = parse_ply_nodes(Path::new("m.ply"), &bytes)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(expected), "{name}: {err}");
+    }
+}

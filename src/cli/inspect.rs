@@ -15,7 +15,10 @@ use crate::model::{AnuraModel, MaterialPoint};
 #[derive(Debug, clap::Args)]
 pub struct InspectArgs {
     /// Anura3D model: a .GOM, .GOM_stage<k>, -2.dat, .CPS_<nnn> or a project directory.
-    pub model: PathBuf,
+    pub model: Option<PathBuf>,
+    /// Inspect FEM node file(s) instead: how each column was understood.
+    #[command(flatten)]
+    pub fem: super::map::FemArgs,
     /// Write the predicted material points (id, element, material, x, y, z, volume) to this CSV.
     #[arg(long, value_name = "CSV")]
     pub mps: Option<PathBuf>,
@@ -124,7 +127,13 @@ struct Summary<'a> {
 }
 
 pub fn run(args: InspectArgs) -> anyhow::Result<()> {
-    let p = load_project(&args.model)?;
+    if !args.fem.fem.is_empty() {
+        return inspect_fem(&args);
+    }
+    let Some(model) = &args.model else {
+        anyhow::bail!("give a model (GOM, CPS or folder) or --fem FILE");
+    };
+    let p = load_project(model)?;
     let g = p
         .cps
         .as_ref()
@@ -261,5 +270,62 @@ fn print_summary(out: &mut impl Write, s: &Summary<'_>) -> std::io::Result<()> {
             writeln!(out, "  - {w}")?;
         }
     }
+    Ok(())
+}
+
+fn inspect_fem(args: &InspectArgs) -> anyhow::Result<()> {
+    let fem = super::map::load_fem(&args.fem)?;
+    let mut out = std::io::stdout().lock();
+    if args.json {
+        serde_json::to_writer_pretty(&mut out, &fem.reports)?;
+        writeln!(out)?;
+        return Ok(());
+    }
+    for r in &fem.reports {
+        writeln!(out, "file       {}", r.path.display())?;
+        writeln!(
+            out,
+            "dialect    delimiter `{}`, decimal {}, BOM {}, header on line {}",
+            r.delimiter,
+            if r.decimal_comma { "comma" } else { "point" },
+            if r.bom { "yes" } else { "no" },
+            r.header_line
+        )?;
+        writeln!(out, "nodes      {} ({}D)", r.nodes, r.dim)?;
+        writeln!(out, "sign       {:?}", r.sign)?;
+        writeln!(out, "columns")?;
+        for c in &r.columns {
+            writeln!(
+                out,
+                "  {:<32} → {:<8} unit {:<6} ×{}{}",
+                format!("`{}`", c.header),
+                c.understood_as,
+                c.unit.as_deref().unwrap_or("-"),
+                c.factor,
+                if c.sign_flipped { ", sign flipped" } else { "" }
+            )?;
+        }
+        for w in &r.warnings {
+            writeln!(out, "  warning: {w}")?;
+        }
+    }
+    let nodes = &fem.nodes;
+    for (q, v) in &nodes.fields {
+        let (lo, hi) = v
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                (a.min(*x), b.max(*x))
+            });
+        writeln!(
+            out,
+            "field      {:<6} {lo:.4} .. {hi:.4} kPa (Anura3D signs)",
+            q.name()
+        )?;
+    }
+    writeln!(
+        out,
+        "spacing    median nearest-node distance l = {:.6} m",
+        crate::kernel::mapper::median_spacing(&nodes.positions, nodes.dim)
+    )?;
     Ok(())
 }

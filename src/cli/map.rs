@@ -50,7 +50,7 @@ pub enum StressArg {
 #[derive(Debug, Clone, clap::Args)]
 pub struct FemArgs {
     /// FEM node file(s): CSV node tables, or a GeoStudio node.csv with --fem-mesh. Several files are joined by node id or coordinates.
-    #[arg(long = "fem", required = true, value_name = "FILE")]
+    #[arg(long = "fem", value_name = "FILE")]
     pub fem: Vec<PathBuf>,
     /// Explicit column mapping, e.g. `x=X (m),y=Y (m),pwp=PWP`.
     #[arg(long, value_name = "FIELD=HEADER,…")]
@@ -61,6 +61,9 @@ pub struct FemArgs {
     /// Sign convention of the FEM file.
     #[arg(long, value_enum, default_value_t = SignArg::Geostudio)]
     pub fem_sign: SignArg,
+    /// GeoStudio mesh (`Mesh.ply`) giving the coordinates of a `node.csv` without X, Y columns.
+    #[arg(long, value_name = "PLY")]
+    pub fem_mesh: Option<PathBuf>,
 }
 
 #[derive(Debug, clap::Args)]
@@ -104,6 +107,9 @@ pub struct LoadedFem {
 
 /// Reads every `--fem` file with the shared options and joins them.
 pub fn load_fem(args: &FemArgs) -> anyhow::Result<LoadedFem> {
+    if args.fem.is_empty() {
+        bail!("give the FEM node file(s) with --fem FILE");
+    }
     let columns = match &args.columns {
         Some(s) => {
             fem_csv::parse_columns_option(s).map_err(|e| anyhow::anyhow!("--columns: {e}"))?
@@ -126,8 +132,22 @@ pub fn load_fem(args: &FemArgs) -> anyhow::Result<LoadedFem> {
     };
     let mut parts = Vec::new();
     let mut reports = Vec::new();
+    let mesh = args
+        .fem_mesh
+        .as_deref()
+        .map(crate::formats::ply::read_ply_nodes)
+        .transpose()?;
     for path in &args.fem {
-        let (nodes, report) = fem_csv::read_csv(path, &options)?;
+        let (mut nodes, report) = fem_csv::read_csv(path, &options)?;
+        if !report.has_coordinates {
+            match &mesh {
+                Some(mesh) => fem_csv::attach_mesh(&mut nodes, path, mesh)?,
+                None => bail!(
+                    "{}: no X and Y columns; give the GeoStudio mesh with --fem-mesh Mesh.ply",
+                    path.display()
+                ),
+            }
+        }
         parts.push(nodes);
         reports.push(report);
     }

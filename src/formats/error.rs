@@ -64,6 +64,16 @@ impl ParseError {
 
 impl fmt::Display for ParseError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.position.line == 0 {
+            // Binary files: the place is a byte offset.
+            return write!(
+                f,
+                "{}: byte {}: {}",
+                self.path.display(),
+                self.position.byte,
+                self.message
+            );
+        }
         write!(
             f,
             "{}:{}:{}: {}",

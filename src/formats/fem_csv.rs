@@ -109,6 +109,8 @@ pub struct FemReadReport {
     pub nodes: usize,
     pub dim: usize,
     pub sign: SignConvention,
+    /// False for a GeoStudio `node.csv` (coordinates live in the mesh PLY).
+    pub has_coordinates: bool,
     pub warnings: Vec<String>,
 }
 
@@ -678,7 +680,7 @@ pub fn parse_csv(
             .into());
         }
         warnings.push(
-            "no coordinate columns: coordinates must come from a mesh file (--fem-mesh)".into(),
+            "no coordinate columns: coordinates are taken from the mesh given with --fem-mesh (node k = PLY node k − 1)".into(),
         );
     } else {
         check_duplicates(path, &nodes, &lines_of)?;
@@ -697,6 +699,7 @@ pub fn parse_csv(
         nodes: nodes.len(),
         dim: nodes.dim,
         sign: options.sign,
+        has_coordinates: cx.is_some() && cy.is_some(),
         warnings,
     };
     Ok((nodes, report))
@@ -790,6 +793,35 @@ pub fn parse_units_option(s: &str) -> Result<UnitOverride, String> {
         }
     }
     Ok(out)
+}
+
+/// Gives a GeoStudio `node.csv` its coordinates from the mesh PLY: node id k is
+/// PLY node k − 1. 2D when every z is 0.
+pub fn attach_mesh(
+    nodes: &mut FemNodes,
+    csv_path: &Path,
+    mesh: &[[f64; 3]],
+) -> Result<(), FormatError> {
+    for (i, id) in nodes.ids.iter().enumerate() {
+        let k = *id;
+        if k < 1 || k as usize > mesh.len() {
+            return Err(FormatError::file(
+                csv_path,
+                format!(
+                    "node {k} (row {}) has no coordinates: the mesh has {} nodes",
+                    i + 1,
+                    mesh.len()
+                ),
+            ));
+        }
+        nodes.positions[i] = mesh[k as usize - 1];
+    }
+    nodes.dim = if nodes.positions.iter().all(|p| p[2] == 0.0) {
+        2
+    } else {
+        3
+    };
+    Ok(())
 }
 
 #[cfg(test)]

@@ -12,5 +12,6 @@ pub mod keyword_doc;
 pub mod lex;
 pub mod mapf;
 pub mod mps_table;
+pub mod ply;
 pub mod project;
 pub mod vtu;

@@ -1,0 +1,76 @@
+//! Builds `fixtures/anura3d-rapid-drawdown/rapid_drawdown.GOM`: an Anura3D TRI3
+//! model over the GeoStudio rapid-drawdown mesh (`Mesh.ply`), made by splitting
+//! every FEM element into counter-clockwise triangles (quads along a diagonal).
+//! Run: `cargo run --example rapid_drawdown_gom`. The output is deterministic.
+
+use std::path::Path;
+
+use a3d_init::formats::gom::write::model_to_text;
+use a3d_init::formats::ply::read_ply_mesh;
+use a3d_init::model::generate::{self, MaterialSpec};
+use a3d_init::model::{Dimension, ElementType, Mesh};
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let ply =
+        root.join("fixtures/geostudio-gsz-internal/rapid-drawdown/1-initial-steady-state_Mesh.ply");
+    let (nodes, cells) = read_ply_mesh(&ply)?;
+    let mut connectivity = Vec::new();
+    let area = |a: u32, b: u32, c: u32| {
+        let (p, q, r) = (nodes[a as usize], nodes[b as usize], nodes[c as usize]);
+        (q[0] - p[0]) * (r[1] - p[1]) - (r[0] - p[0]) * (q[1] - p[1])
+    };
+    let mut push = |a: u32, b: u32, c: u32| {
+        let s = area(a, b, c);
+        if s.abs() < 1e-12 {
+            return;
+        }
+        if s > 0.0 {
+            connectivity.extend([a, b, c])
+        } else {
+            connectivity.extend([a, c, b])
+        }
+    };
+    for cell in &cells {
+        // GeoStudio lists corner nodes first; higher-order nodes (if any) follow.
+        match cell.len() {
+            3 | 6 => push(cell[0], cell[1], cell[2]),
+            4 | 8 => {
+                push(cell[0], cell[1], cell[2]);
+                push(cell[0], cell[2], cell[3]);
+            }
+            _ => {}
+        }
+    }
+    let mesh = Mesh {
+        dimension: Dimension::PlaneStrain,
+        element_type: ElementType::Tri3,
+        nodes,
+        connectivity,
+    };
+    let spec = MaterialSpec {
+        name: "embankment".into(),
+        porosity: 0.4,
+        density_solid: 2650.0,
+        density_liquid: Some(1000.0),
+        k0: 0.5,
+        young_modulus: 2e4,
+        poisson_ratio: 0.3,
+        mohr_coulomb: Some((30.0, 5.0, 0.0)),
+        retention: None,
+        permeability: 1e-11,
+    };
+    let model = generate::single_material_model(mesh, &spec, 3);
+    let out = root.join("fixtures/anura3d-rapid-drawdown");
+    std::fs::create_dir_all(&out)?;
+    std::fs::write(
+        out.join("rapid_drawdown.GOM"),
+        model_to_text(&model, "2023"),
+    )?;
+    println!(
+        "{} nodes, {} triangles",
+        model.mesh.n_nodes(),
+        model.mesh.n_elements()
+    );
+    Ok(())
+}

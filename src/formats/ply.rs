@@ -1,0 +1,314 @@
+//! A small, strict reader for the binary little-endian PLY meshes GeoStudio keeps
+//! in `.gsz` archives (`Mesh.ply`). Spec: `formats/ply.md`.
+//!
+//! Only what a3d-init needs: the ASCII header, then the elements before `node`
+//! (skipped by their declared sizes), then `node` with x, y, z as doubles. Header
+//! errors give line and column; binary errors give the byte offset.
+
+use std::path::Path;
+
+use super::error::{FormatError, ParseError, Position};
+
+/// Node coordinates and, per element, its 0-based node indices.
+pub type PlyMesh = (Vec<[f64; 3]>, Vec<Vec<u32>>);
+
+#[derive(Debug, Clone)]
+struct Property {
+    /// Scalar type, or for a list the (count type, item type).
+    kind: PropKind,
+    name: String,
+}
+
+#[derive(Debug, Clone)]
+enum PropKind {
+    Scalar(usize),
+    List(usize, usize),
+}
+
+#[derive(Debug, Clone)]
+struct Element {
+    name: String,
+    count: usize,
+    properties: Vec<Property>,
+}
+
+fn type_size(t: &str) -> Option<usize> {
+    Some(match t {
+        "char" | "uchar" | "int8" | "uint8" => 1,
+        "short" | "ushort" | "int16" | "uint16" => 2,
+        "int" | "uint" | "float" | "int32" | "uint32" | "float32" => 4,
+        "double" | "float64" => 8,
+        _ => return None,
+    })
+}
+
+fn read_uint(bytes: &[u8], size: usize) -> u64 {
+    let mut v = 0u64;
+    for (k, b) in bytes.iter().take(size).enumerate() {
+        v |= u64::from(*b) << (8 * k);
+    }
+    v
+}
+
+/// Reads the node coordinates of a GeoStudio PLY mesh.
+pub fn read_ply_nodes(path: &Path) -> Result<Vec<[f64; 3]>, FormatError> {
+    let bytes = std::fs::read(path).map_err(|e| FormatError::io(path, e))?;
+    parse_ply_nodes(path, &bytes)
+}
+
+/// Parses PLY bytes (see [`read_ply_nodes`]).
+pub fn parse_ply_nodes(path: &Path, bytes: &[u8]) -> Result<Vec<[f64; 3]>, FormatError> {
+    parse_ply(path, bytes, false).map(|(nodes, _)| nodes)
+}
+
+/// Reads nodes and the node lists of the `element` element (converted from
+/// GeoStudio's 1-based ids to 0-based indices).
+pub fn read_ply_mesh(path: &Path) -> Result<PlyMesh, FormatError> {
+    let bytes = std::fs::read(path).map_err(|e| FormatError::io(path, e))?;
+    parse_ply(path, &bytes, true)
+}
+
+fn parse_ply(
+    path: &Path,
+    bytes: &[u8],
+    with_elements: bool,
+) -> Result<PlyMesh, FormatError> {
+    let at = |line: usize, col: usize, msg: String| -> FormatError {
+        ParseError::at(path, line, col, msg).into()
+    };
+    let end_marker = b"end_header\n";
+    let header_end = bytes
+        .windows(end_marker.len())
+        .position(|w| w == end_marker)
+        .map(|p| p + end_marker.len())
+        .ok_or_else(|| at(1, 1, "not a PLY file: no `end_header` line".into()))?;
+    let header = std::str::from_utf8(&bytes[..header_end])
+        .map_err(|_| at(1, 1, "PLY header is not ASCII text".into()))?;
+    let mut lines = header.lines().enumerate();
+    match lines.next() {
+        Some((_, "ply")) => {}
+        _ => {
+            return Err(at(
+                1,
+                1,
+                "not a PLY file: the first line must be `ply`".into(),
+            ));
+        }
+    }
+    let mut elements: Vec<Element> = Vec::new();
+    let mut format_ok = false;
+    for (i, line) in lines {
+        let words: Vec<&str> = line.split_whitespace().collect();
+        match words.as_slice() {
+            ["format", "binary_little_endian", "1.0"] => format_ok = true,
+            ["format", other, ..] => {
+                return Err(at(
+                    i + 1,
+                    8,
+                    format!(
+                        "unsupported PLY format `{other}`: a3d-init reads binary_little_endian 1.0"
+                    ),
+                ));
+            }
+            ["comment", ..] | ["obj_info", ..] | ["end_header"] => {}
+            ["element", name, count] => {
+                let count = count.parse().map_err(|_| {
+                    at(
+                        i + 1,
+                        10 + name.len(),
+                        format!("bad element count `{count}`"),
+                    )
+                })?;
+                elements.push(Element {
+                    name: name.to_string(),
+                    count,
+                    properties: Vec::new(),
+                });
+            }
+            ["property", "list", ct, it, name] => {
+                let (c, t) = (type_size(ct), type_size(it));
+                let (Some(c), Some(t)) = (c, t) else {
+                    return Err(at(i + 1, 15, format!("unknown PLY list type `{ct} {it}`")));
+                };
+                let el = elements
+                    .last_mut()
+                    .ok_or_else(|| at(i + 1, 1, "property before any element".into()))?;
+                el.properties.push(Property {
+                    kind: PropKind::List(c, t),
+                    name: name.to_string(),
+                });
+            }
+            ["property", t, name] => {
+                let size =
+                    type_size(t).ok_or_else(|| at(i + 1, 10, format!("unknown PLY type `{t}`")))?;
+                let el = elements
+                    .last_mut()
+                    .ok_or_else(|| at(i + 1, 1, "property before any element".into()))?;
+                el.properties.push(Property {
+                    kind: PropKind::Scalar(size),
+                    name: name.to_string(),
+                });
+            }
+            // GeoStudio writes `property int` with no name in its `precision` element.
+            ["property", t] if type_size(t).is_some() => {
+                let el = elements
+                    .last_mut()
+                    .ok_or_else(|| at(i + 1, 1, "property before any element".into()))?;
+                el.properties.push(Property {
+                    kind: PropKind::Scalar(type_size(t).unwrap_or(4)),
+                    name: String::new(),
+                });
+            }
+            [] => {}
+            _ => return Err(at(i + 1, 1, format!("unexpected PLY header line `{line}`"))),
+        }
+    }
+    if !format_ok {
+        return Err(at(2, 1, "missing `format binary_little_endian 1.0`".into()));
+    }
+    let node_index = elements
+        .iter()
+        .position(|e| e.name == "node")
+        .ok_or_else(|| {
+            FormatError::from(ParseError::at(path, 1, 1, "the PLY has no `node` element"))
+        })?;
+    let node = &elements[node_index];
+    let names: Vec<&str> = node.properties.iter().map(|p| p.name.as_str()).collect();
+    if names != ["x", "y", "z"]
+        || node
+            .properties
+            .iter()
+            .any(|p| !matches!(p.kind, PropKind::Scalar(8)))
+    {
+        return Err(ParseError::at(
+            path,
+            1,
+            1,
+            format!("the PLY `node` element must be `double x, y, z`, found {names:?}"),
+        )
+        .into());
+    }
+    // Skip the elements before `node` by their sizes.
+    let mut offset = header_end;
+    let truncated = |offset: usize, what: &str| -> FormatError {
+        ParseError::new(
+            path,
+            Position {
+                line: 0,
+                column: 0,
+                byte: offset,
+            },
+            format!(
+                "truncated PLY: the data ends at byte {} inside {what}",
+                bytes.len()
+            ),
+        )
+        .into()
+    };
+    for el in &elements[..node_index] {
+        for _ in 0..el.count {
+            for p in &el.properties {
+                match p.kind {
+                    PropKind::Scalar(s) => offset += s,
+                    PropKind::List(c, t) => {
+                        if offset + c > bytes.len() {
+                            return Err(truncated(offset, &el.name));
+                        }
+                        let n = read_uint(&bytes[offset..], c) as usize;
+                        offset += c + n * t;
+                    }
+                }
+            }
+        }
+    }
+    let need = node.count * 24;
+    if offset + need > bytes.len() {
+        return Err(ParseError::new(
+            path,
+            Position { line: 0, column: 0, byte: offset },
+            format!(
+                "truncated PLY: {} nodes need {need} bytes from byte {offset}, but only {} remain ({} whole nodes)",
+                node.count,
+                bytes.len().saturating_sub(offset),
+                bytes.len().saturating_sub(offset) / 24
+            ),
+        )
+        .into());
+    }
+    let mut nodes = Vec::with_capacity(node.count);
+    for k in 0..node.count {
+        let base = offset + 24 * k;
+        let mut p = [0.0; 3];
+        for (c, slot) in p.iter_mut().enumerate() {
+            let mut b = [0u8; 8];
+            b.copy_from_slice(&bytes[base + 8 * c..base + 8 * c + 8]);
+            *slot = f64::from_le_bytes(b);
+        }
+        if p.iter().any(|v| !v.is_finite()) {
+            return Err(ParseError::new(
+                path,
+                Position {
+                    line: 0,
+                    column: 0,
+                    byte: base,
+                },
+                format!("node {} has a non-finite coordinate", k + 1),
+            )
+            .into());
+        }
+        nodes.push(p);
+    }
+    let mut cells = Vec::new();
+    if with_elements {
+        let mut offset = offset + need;
+        if let Some(el) = elements[node_index + 1..]
+            .iter()
+            .find(|e| e.name == "element")
+        {
+            for _ in 0..el.count {
+                for p in &el.properties {
+                    match p.kind {
+                        PropKind::Scalar(sz) => offset += sz,
+                        PropKind::List(c, t) => {
+                            if offset + c > bytes.len() {
+                                return Err(truncated(offset, "element"));
+                            }
+                            let n = read_uint(&bytes[offset..], c) as usize;
+                            offset += c;
+                            if offset + n * t > bytes.len() {
+                                return Err(truncated(offset, "element"));
+                            }
+                            if p.name == "id" {
+                                // GeoStudio numbers element nodes from 1.
+                                let ids: Vec<u32> = (0..n)
+                                    .map(|k| read_uint(&bytes[offset + k * t..], t) as u32)
+                                    .collect();
+                                if let Some(bad) =
+                                    ids.iter().find(|&&id| id == 0 || id as usize > nodes.len())
+                                {
+                                    return Err(ParseError::new(
+                                        path,
+                                        Position {
+                                            line: 0,
+                                            column: 0,
+                                            byte: offset,
+                                        },
+                                        format!(
+                                            "element {} refers to node {bad}, outside 1..={}",
+                                            cells.len() + 1,
+                                            nodes.len()
+                                        ),
+                                    )
+                                    .into());
+                                }
+                                cells.push(ids.into_iter().map(|id| id - 1).collect());
+                            }
+                            offset += n * t;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    Ok((nodes, cells))
+}
