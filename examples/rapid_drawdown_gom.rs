@@ -3,6 +3,8 @@
 //! every FEM element into counter-clockwise triangles (quads along a diagonal).
 //! Run: `cargo run --example rapid_drawdown_gom`. The output is deterministic.
 
+#![allow(clippy::print_stdout)]
+
 use std::path::Path;
 
 use a3d_init::formats::gom::write::model_to_text;

@@ -454,8 +454,8 @@ fn real_geostudio_node_csv_with_mesh_ply() {
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| {
             (a.min(s.pwp), b.max(s.pwp))
         });
-    assert!(lo < -70.0 && lo >= -78.5 - 1e-9, "min pwp {lo}");
-    assert!(hi > 30.0 && hi <= 38.8 + 1e-9, "max pwp {hi}");
+    assert!((-78.5 - 1e-9..-70.0).contains(&lo), "min pwp {lo}");
+    assert!(hi > 30.0 && hi < 38.8 + 1e-9, "max pwp {hi}");
     // The most compressive pwp lies below the strongest suction.
     let most = points
         .iter()
