@@ -14,6 +14,7 @@
 //!
 //! [`cli`] is the only module that prints or exits. See ARCHITECTURE.md.
 
+pub mod calibrate;
 pub mod cli;
 pub mod formats;
 pub mod kernel;

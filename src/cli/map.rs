@@ -76,9 +76,12 @@ pub struct MapArgs {
     /// Kernel: cubic (paper Eq. 2), gaussian (Eq. 3, truncated at 3h) or wendland (C2).
     #[arg(long, default_value = "cubic")]
     pub kernel: String,
-    /// Smoothing length h in metres; default: the paper's spacing rule (h = 1.0·l cubic/Wendland, 0.8·l Gaussian, l = median nearest-node spacing).
-    #[arg(long, value_name = "METRES")]
-    pub h: Option<f64>,
+    /// Smoothing length: metres, or `auto` (leave-one-out calibration, paper Eq. 4); default: the paper's spacing rule (h = 1.0·l cubic/Wendland, 0.8·l Gaussian, l = median nearest-node spacing).
+    #[arg(long, value_name = "METRES|auto")]
+    pub h: Option<String>,
+    /// Seed of the calibration's annealer (with --h auto).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
     /// What to do with MPs that no FEM node reaches.
     #[arg(long, value_enum, default_value_t = OutsideArg::Error)]
     pub outside: OutsideArg,
@@ -265,6 +268,7 @@ pub struct MapReport {
     fem_spacing: f64,
     gaussian_truncated_mass: Option<f64>,
     stress_source: String,
+    calibration: Option<super::calibrate::Outcome>,
     material_separation: String,
     materials: Vec<MaterialCount>,
     fem_nodes: usize,
@@ -454,9 +458,29 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
         )
     })?;
     let spacing = mapper::median_spacing(&fem.nodes.positions, dim);
-    let (h, rule) = match args.h {
-        Some(h) if h > 0.0 && h.is_finite() => (h, "given with --h".to_string()),
-        Some(h) => bail!("--h {h}: the smoothing length must be a positive number of metres"),
+    let mut calibration = None;
+    let (h, rule) = match args.h.as_deref() {
+        Some("auto") => {
+            let fields: Vec<Quantity> = if stress_source_wants_fem(args, &fem.nodes) { fem.nodes.fields.iter().map(|(q, _)| *q).collect() } else { vec![Quantity::Pwp] };
+            let t = Instant::now();
+            let outcome = super::calibrate::run_calibration(&fem.nodes, &fields, kernel, args.seed, super::calibrate::NormArg::L1)?;
+            timings.push(("calibration".to_string(), t.elapsed().as_secs_f64() * 1e3));
+            let rule = format!(
+                "calibrated by leave-one-out (paper Eq. 4) on {}: h/l = {:.3}, LOO R² = {:.5}, seed {}{}",
+                outcome.fields.join(", "),
+                outcome.h_over_l,
+                outcome.stats.r2,
+                args.seed,
+                outcome.fallback.as_deref().map(|f| format!("; {f}")).unwrap_or_default()
+            );
+            let h = outcome.h;
+            calibration = Some(outcome);
+            (h, rule)
+        }
+        Some(text) => match text.parse::<f64>() {
+            Ok(h) if h > 0.0 && h.is_finite() => (h, "given with --h".to_string()),
+            _ => bail!("--h {text}: the smoothing length must be a positive number of metres, or auto"),
+        },
         None => {
             let factor = if matches!(kernel, KernelKind::Gaussian { .. }) {
                 0.8
@@ -471,6 +495,9 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
             )
         }
     };
+    fn stress_source_wants_fem(args: &MapArgs, nodes: &FemNodes) -> bool {
+        matches!(args.stress, StressArg::Fem) || (matches!(args.stress, StressArg::Auto) && nodes.has_total_stress())
+    }
     let stress_source = match args.stress {
         StressArg::Auto if fem.nodes.has_total_stress() => StressArg::Fem,
         StressArg::Auto => StressArg::Geostatic,
@@ -737,6 +764,7 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
             _ => None,
         },
         stress_source: format!("{stress_source:?}").to_lowercase(),
+        calibration,
         material_separation: separation,
         materials,
         fem_nodes: fem.nodes.len(),

@@ -3,7 +3,9 @@
 //! `anyhow::Error` and print as one chain (`error: {:#}`); see [`main`].
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
+pub mod calibrate;
 mod inspect;
+pub mod plot;
 pub mod map;
 pub mod output;
 
@@ -25,6 +27,8 @@ pub enum Command {
     Inspect(inspect::InspectArgs),
     /// Map FEM node results onto the MPs of an Anura3D model and write a ready-to-run project.
     Map(map::MapArgs),
+    /// Calibrate the smoothing length h by leave-one-out cross-validation (paper Eq. 4).
+    Calibrate(calibrate::CalibrateArgs),
 }
 
 /// An error that carries its own exit code (1 = a negative verdict).
@@ -67,5 +71,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
     match cli.command {
         Command::Inspect(args) => inspect::run(args),
         Command::Map(args) => map::run(args),
+        Command::Calibrate(args) => calibrate::run(args),
     }
 }

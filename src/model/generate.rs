@@ -256,3 +256,64 @@ pub fn single_material_model(mesh: Mesh, spec: &MaterialSpec, mps_per_element: u
         damping: None,
     }
 }
+
+/// Node layout of an unstructured triangle mesh of the square [0, size]², as a
+/// mesher would place them (the paper's §2.1 block): boundary nodes every `l`
+/// along the four sides, interior nodes by seeded dart throwing with a minimum
+/// distance of 0.75·l (a point is accepted when no node lies closer; the throw
+/// stops after 60 consecutive rejections per accepted node on average).
+pub fn unstructured_square_nodes(size: f64, l: f64, seed: u64) -> Vec<[f64; 3]> {
+    use rand::{RngExt, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
+    let n_side = (size / l).round().max(1.0) as usize;
+    let step = size / n_side as f64;
+    let mut nodes: Vec<[f64; 3]> = Vec::new();
+    for k in 0..n_side {
+        let t = k as f64 * step;
+        nodes.push([t, 0.0, 0.0]);
+        nodes.push([size, t, 0.0]);
+        nodes.push([size - t, size, 0.0]);
+        nodes.push([0.0, size - t, 0.0]);
+    }
+    let min_d = 0.75 * l;
+    let cell = min_d / std::f64::consts::SQRT_2;
+    let n_cells = (size / cell).ceil() as usize + 1;
+    let mut grid: Vec<Vec<u32>> = vec![Vec::new(); n_cells * n_cells];
+    let cell_of = |p: &[f64; 3]| (((p[0] / cell) as usize).min(n_cells - 1), ((p[1] / cell) as usize).min(n_cells - 1));
+    for (i, p) in nodes.iter().enumerate() {
+        let (cx, cy) = cell_of(p);
+        grid[cy * n_cells + cx].push(i as u32);
+    }
+    let target = ((size / l).powi(2) * 1.2) as usize + 10;
+    let mut misses = 0;
+    while misses < 60 * target.max(1) && nodes.len() < 4 * target {
+        let p = [rng.random_range(0.0..size), rng.random_range(0.0..size), 0.0];
+        let (cx, cy) = cell_of(&p);
+        let mut ok = p[0] > 0.5 * min_d && p[0] < size - 0.5 * min_d && p[1] > 0.5 * min_d && p[1] < size - 0.5 * min_d;
+        'scan: for gy in cy.saturating_sub(2)..=(cy + 2).min(n_cells - 1) {
+            for gx in cx.saturating_sub(2)..=(cx + 2).min(n_cells - 1) {
+                for &j in &grid[gy * n_cells + gx] {
+                    let q = nodes[j as usize];
+                    if (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2) < min_d * min_d {
+                        ok = false;
+                        break 'scan;
+                    }
+                }
+            }
+        }
+        if ok {
+            grid[cy * n_cells + cx].push(nodes.len() as u32);
+            nodes.push(p);
+        } else {
+            misses += 1;
+        }
+    }
+    nodes
+}
+
+/// Nodes of a structured quadrilateral mesh of [0, size]² with spacing l.
+pub fn structured_square_nodes(size: f64, l: f64) -> Vec<[f64; 3]> {
+    let n = (size / l).round().max(1.0) as usize;
+    let step = size / n as f64;
+    (0..=n).flat_map(|j| (0..=n).map(move |i| [i as f64 * step, j as f64 * step, 0.0])).collect()
+}
