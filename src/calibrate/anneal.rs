@@ -25,7 +25,11 @@ pub struct AnnealSettings {
 
 impl Default for AnnealSettings {
     fn default() -> AnnealSettings {
-        AnnealSettings { seed: 1, iterations: 150, cooling: 0.95 }
+        AnnealSettings {
+            seed: 1,
+            iterations: 150,
+            cooling: 0.95,
+        }
     }
 }
 
@@ -50,7 +54,11 @@ pub fn anneal(f: impl Fn(f64) -> f64, lo: f64, hi: f64, settings: &AnnealSetting
         })
         .collect();
     trace.extend(samples.iter().copied());
-    let (mut x, mut fx) = samples.iter().copied().fold((lo, f64::INFINITY), |best, s| if s.1 < best.1 { s } else { best });
+    let (mut x, mut fx) =
+        samples.iter().copied().fold(
+            (lo, f64::INFINITY),
+            |best, s| if s.1 < best.1 { s } else { best },
+        );
     let mean = samples.iter().map(|s| s.1).sum::<f64>() / 9.0;
     let sd = (samples.iter().map(|s| (s.1 - mean).powi(2)).sum::<f64>() / 9.0).sqrt();
     let t0 = if sd > 0.0 && sd.is_finite() { sd } else { 1.0 };
@@ -73,5 +81,10 @@ pub fn anneal(f: impl Fn(f64) -> f64, lo: f64, hi: f64, settings: &AnnealSetting
         }
         t *= settings.cooling;
     }
-    Annealed { x: best_x, value: best_f, final_step: width, trace }
+    Annealed {
+        x: best_x,
+        value: best_f,
+        final_step: width,
+        trace,
+    }
 }

@@ -23,13 +23,29 @@ pub struct Calibration {
 
 /// Minimises `f` on [lo, hi]: annealing, then golden section around the best
 /// point (± the annealer's final step, at least 2 % of the bracket).
-pub fn calibrate(f: impl Fn(f64) -> f64, lo: f64, hi: f64, settings: &AnnealSettings) -> Calibration {
+pub fn calibrate(
+    f: impl Fn(f64) -> f64,
+    lo: f64,
+    hi: f64,
+    settings: &AnnealSettings,
+) -> Calibration {
     let annealed = anneal(&f, lo, hi, settings);
     let delta = annealed.final_step.max(0.02 * (hi - lo));
     let (a, b) = ((annealed.x - delta).max(lo), (annealed.x + delta).min(hi));
     let refined = golden_section(&f, a, b, 1e-6 * (hi - lo), 60);
     let mut trace = annealed.trace;
     trace.extend(refined.trace.iter().copied());
-    let (h, value) = if refined.value <= annealed.value { (refined.x, refined.value) } else { (annealed.x, annealed.value) };
-    Calibration { h, value, seed: settings.seed, evaluations: trace.len(), trace, bracket: (lo, hi) }
+    let (h, value) = if refined.value <= annealed.value {
+        (refined.x, refined.value)
+    } else {
+        (annealed.x, annealed.value)
+    };
+    Calibration {
+        h,
+        value,
+        seed: settings.seed,
+        evaluations: trace.len(),
+        trace,
+        bracket: (lo, hi),
+    }
 }

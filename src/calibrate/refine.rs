@@ -11,7 +11,13 @@ pub struct Refined {
 /// Golden-section search for a minimum of `f` on [a, b], stopping when the
 /// bracket is narrower than `tol` or after `max_iter` steps. Returns the best
 /// point evaluated (including both ends).
-pub fn golden_section(f: impl Fn(f64) -> f64, a: f64, b: f64, tol: f64, max_iter: usize) -> Refined {
+pub fn golden_section(
+    f: impl Fn(f64) -> f64,
+    a: f64,
+    b: f64,
+    tol: f64,
+    max_iter: usize,
+) -> Refined {
     let ratio = (5f64.sqrt() - 1.0) / 2.0;
     let (mut a, mut b) = (a.min(b), a.max(b));
     let mut trace = Vec::new();
@@ -45,6 +51,10 @@ pub fn golden_section(f: impl Fn(f64) -> f64, a: f64, b: f64, tol: f64, max_iter
         }
     }
     let _ = (fa, fb);
-    let (x, value) = trace.iter().copied().fold((a, f64::INFINITY), |best, s| if s.1 < best.1 { s } else { best });
+    let (x, value) =
+        trace.iter().copied().fold(
+            (a, f64::INFINITY),
+            |best, s| if s.1 < best.1 { s } else { best },
+        );
     Refined { x, value, trace }
 }

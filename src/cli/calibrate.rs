@@ -74,15 +74,32 @@ pub fn select_fields(fem: &FemNodes, field: &str) -> anyhow::Result<Vec<Quantity
     if field == "all" {
         return Ok(fem.fields.iter().map(|(q, _)| *q).collect());
     }
-    let q = Quantity::from_name(field).ok_or_else(|| anyhow::anyhow!("--field {field}: expected pwp, sxx, syy, szz, sxy, syz, sxz, esxx, … or all"))?;
+    let q = Quantity::from_name(field).ok_or_else(|| {
+        anyhow::anyhow!(
+            "--field {field}: expected pwp, sxx, syy, szz, sxy, syz, sxz, esxx, … or all"
+        )
+    })?;
     if fem.field(q).is_none() {
-        bail!("--field {field}: the FEM file has no such column (it has: {})", fem.fields.iter().map(|(q, _)| q.name()).collect::<Vec<_>>().join(", "));
+        bail!(
+            "--field {field}: the FEM file has no such column (it has: {})",
+            fem.fields
+                .iter()
+                .map(|(q, _)| q.name())
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
     }
     Ok(vec![q])
 }
 
 /// Calibrates h on `fields` of `fem`.
-pub fn run_calibration(fem: &FemNodes, fields: &[Quantity], kernel: KernelKind, seed: u64, norm: NormArg) -> anyhow::Result<Outcome> {
+pub fn run_calibration(
+    fem: &FemNodes,
+    fields: &[Quantity],
+    kernel: KernelKind,
+    seed: u64,
+    norm: NormArg,
+) -> anyhow::Result<Outcome> {
     let n = fem.len();
     let nf = fields.len();
     let mut values = vec![0.0; n * nf];
@@ -93,22 +110,35 @@ pub fn run_calibration(fem: &FemNodes, fields: &[Quantity], kernel: KernelKind, 
     }
     let spacing = mapper::median_spacing(&fem.positions, fem.dim);
     let (lo, hi) = (0.3 * spacing, 2.5 * spacing);
-    let objective = LooObjective::new(&fem.positions, fem.dim, &values, nf, kernel, hi).map_err(|e| anyhow::anyhow!("calibration: {e}"))?;
+    let objective = LooObjective::new(&fem.positions, fem.dim, &values, nf, kernel, hi)
+        .map_err(|e| anyhow::anyhow!("calibration: {e}"))?;
     let norm_kind = match norm {
         NormArg::L1 => Norm::L1,
         NormArg::L2 => Norm::L2,
         NormArg::Relative => Norm::Relative,
     };
-    let settings = AnnealSettings { seed, ..AnnealSettings::default() };
+    let settings = AnnealSettings {
+        seed,
+        ..AnnealSettings::default()
+    };
     let f = |h: f64| objective.evaluate(h, norm_kind);
     let mut calibration = calibrate(f, lo, hi, &settings);
     let mut fallback = None;
     if objective.is_constant() {
-        let factor = if matches!(kernel, KernelKind::Gaussian { .. }) { 0.8 } else { 1.0 };
+        let factor = if matches!(kernel, KernelKind::Gaussian { .. }) {
+            0.8
+        } else {
+            1.0
+        };
         calibration.h = factor * spacing;
-        fallback = Some(format!("the field is constant, so every h predicts it exactly; h follows the spacing rule {factor}·l"));
+        fallback = Some(format!(
+            "the field is constant, so every h predicts it exactly; h follows the spacing rule {factor}·l"
+        ));
     }
-    let curve = (0..=120).map(|k| lo + (hi - lo) * k as f64 / 120.0).map(|h| (h, f(h))).collect();
+    let curve = (0..=120)
+        .map(|k| lo + (hi - lo) * k as f64 / 120.0)
+        .map(|h| (h, f(h)))
+        .collect();
     let stats = objective.stats(calibration.h);
     Ok(Outcome {
         h: calibration.h,
@@ -126,16 +156,38 @@ pub fn run_calibration(fem: &FemNodes, fields: &[Quantity], kernel: KernelKind, 
 
 /// Writes the objective-against-h plot with the optimum marked.
 pub fn plot_curve(path: &std::path::Path, outcome: &Outcome) -> anyhow::Result<()> {
-    let unit = if outcome.fields.len() == 1 { "kPa" } else { "normalised" };
+    let unit = if outcome.fields.len() == 1 {
+        "kPa"
+    } else {
+        "normalised"
+    };
     plot::line_chart(
         path,
-        &format!("Leave-one-out error, {} kernel (h = {:.4} m, h/l = {:.3})", outcome.kernel, outcome.h, outcome.h_over_l),
+        &format!(
+            "Leave-one-out error, {} kernel (h = {:.4} m, h/l = {:.3})",
+            outcome.kernel, outcome.h, outcome.h_over_l
+        ),
         "smoothing length h (m)",
         &format!("LOO objective Σ|e| ({unit})"),
         &[
-            Series { label: "objective", points: outcome.curve.clone(), color: RGBColor(31, 119, 180), markers: false },
-            Series { label: "annealer samples", points: outcome.calibration.trace.clone(), color: RGBColor(200, 200, 200), markers: true },
-            Series { label: "optimum", points: vec![(outcome.h, outcome.calibration.value)], color: RGBColor(214, 39, 40), markers: true },
+            Series {
+                label: "objective",
+                points: outcome.curve.clone(),
+                color: RGBColor(31, 119, 180),
+                markers: false,
+            },
+            Series {
+                label: "annealer samples",
+                points: outcome.calibration.trace.clone(),
+                color: RGBColor(200, 200, 200),
+                markers: true,
+            },
+            Series {
+                label: "optimum",
+                points: vec![(outcome.h, outcome.calibration.value)],
+                color: RGBColor(214, 39, 40),
+                markers: true,
+            },
         ],
         false,
     )
@@ -153,17 +205,41 @@ struct Check {
 pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
     let fem = load_fem(&args.fem)?;
     let fields = select_fields(&fem.nodes, &args.field)?;
-    let kernel = KernelKind::parse(&args.kernel, fem.nodes.dim).ok_or_else(|| anyhow::anyhow!("--kernel {}: expected cubic, gaussian or wendland", args.kernel))?;
+    let kernel = KernelKind::parse(&args.kernel, fem.nodes.dim).ok_or_else(|| {
+        anyhow::anyhow!(
+            "--kernel {}: expected cubic, gaussian or wendland",
+            args.kernel
+        )
+    })?;
     let outcome = run_calibration(&fem.nodes, &fields, kernel, args.seed, args.norm)?;
     let check = match &args.check {
         Some(path) => {
-            let other = load_fem(&FemArgs { fem: vec![path.clone()], ..args.fem.clone() })?;
+            let other = load_fem(&FemArgs {
+                fem: vec![path.clone()],
+                ..args.fem.clone()
+            })?;
             let q = fields[0];
-            let observed = other.nodes.field(q).ok_or_else(|| anyhow::anyhow!("{}: no {} column", path.display(), q.name()))?;
+            let observed = other
+                .nodes
+                .field(q)
+                .ok_or_else(|| anyhow::anyhow!("{}: no {} column", path.display(), q.name()))?;
             let values = fem.nodes.field(q).unwrap_or(&[]).to_vec();
-            let cloud = NodeCloud { positions: &fem.nodes.positions, dim: fem.nodes.dim, values: &values, n_fields: 1, group: None, node_volume: outcome.spacing.powi(fem.nodes.dim as i32) };
-            let settings = MapSettings { kernel, h: outcome.h, min_shepard: 0.0, outside: OutsidePolicy::Nearest };
-            let predicted = mapper::map_points(&cloud, &other.nodes.positions, None, &settings).map_err(|e| anyhow::anyhow!("{e}"))?;
+            let cloud = NodeCloud {
+                positions: &fem.nodes.positions,
+                dim: fem.nodes.dim,
+                values: &values,
+                n_fields: 1,
+                group: None,
+                node_volume: outcome.spacing.powi(fem.nodes.dim as i32),
+            };
+            let settings = MapSettings {
+                kernel,
+                h: outcome.h,
+                min_shepard: 0.0,
+                outside: OutsidePolicy::Nearest,
+            };
+            let predicted = mapper::map_points(&cloud, &other.nodes.positions, None, &settings)
+                .map_err(|e| anyhow::anyhow!("{e}"))?;
             let mean = observed.iter().sum::<f64>() / observed.len() as f64;
             let (mut sse, mut sst, mut mae, mut max_error) = (0.0, 0.0, 0.0, 0.0f64);
             for (o, p) in observed.iter().zip(&predicted.values) {
@@ -172,8 +248,21 @@ pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
                 mae += (o - p).abs();
                 max_error = max_error.max((o - p).abs());
             }
-            let pairs: Vec<(f64, f64)> = observed.iter().copied().zip(predicted.values.iter().copied()).collect();
-            Some((Check { file: path.clone(), nodes: observed.len(), r2: if sst > 0.0 { 1.0 - sse / sst } else { 1.0 }, mae: mae / observed.len() as f64, max_error }, pairs))
+            let pairs: Vec<(f64, f64)> = observed
+                .iter()
+                .copied()
+                .zip(predicted.values.iter().copied())
+                .collect();
+            Some((
+                Check {
+                    file: path.clone(),
+                    nodes: observed.len(),
+                    r2: if sst > 0.0 { 1.0 - sse / sst } else { 1.0 },
+                    mae: mae / observed.len() as f64,
+                    max_error,
+                },
+                pairs,
+            ))
         }
         None => None,
     };
@@ -181,7 +270,15 @@ pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
     let out = OutputDir::create(&args.out, args.force, &inputs)?;
     plot_curve(&out.path("calibration.svg"), &outcome)?;
     if let Some((_, pairs)) = &check {
-        plot::scatter_1to1(&out.path("check.svg"), &format!("Validation: {} predicted at the check nodes", fields[0].name()), "kPa", pairs)?;
+        plot::scatter_1to1(
+            &out.path("check.svg"),
+            &format!(
+                "Validation: {} predicted at the check nodes",
+                fields[0].name()
+            ),
+            "kPa",
+            pairs,
+        )?;
     }
     #[derive(Serialize)]
     struct Json<'a> {
@@ -189,19 +286,50 @@ pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
         outcome: &'a Outcome,
         check: Option<&'a Check>,
     }
-    let json = serde_json::to_string_pretty(&Json { outcome: &outcome, check: check.as_ref().map(|c| &c.0) })?;
+    let json = serde_json::to_string_pretty(&Json {
+        outcome: &outcome,
+        check: check.as_ref().map(|c| &c.0),
+    })?;
     out.write("calibration.json", |w| w.write_all(json.as_bytes()))?;
     let target = out.commit()?;
-    println!("h          {:.6} m ({} kernel, fields: {})", outcome.h, outcome.kernel, outcome.fields.join(", "));
-    println!("h/l        {:.4} (l = {:.6} m, median nearest-node spacing)", outcome.h_over_l, outcome.spacing);
-    println!("objective  {:.6e} ({:?} norm, seed {}, {} evaluations)", outcome.calibration.value, outcome.norm, outcome.calibration.seed, outcome.calibration.evaluations);
-    println!("LOO        R² = {:.6}, MAE = {:.6} kPa, max error = {:.6} kPa", outcome.stats.r2, outcome.stats.mae, outcome.stats.max_error);
+    println!(
+        "h          {:.6} m ({} kernel, fields: {})",
+        outcome.h,
+        outcome.kernel,
+        outcome.fields.join(", ")
+    );
+    println!(
+        "h/l        {:.4} (l = {:.6} m, median nearest-node spacing)",
+        outcome.h_over_l, outcome.spacing
+    );
+    println!(
+        "objective  {:.6e} ({:?} norm, seed {}, {} evaluations)",
+        outcome.calibration.value,
+        outcome.norm,
+        outcome.calibration.seed,
+        outcome.calibration.evaluations
+    );
+    println!(
+        "LOO        R² = {:.6}, MAE = {:.6} kPa, max error = {:.6} kPa",
+        outcome.stats.r2, outcome.stats.mae, outcome.stats.max_error
+    );
     if let Some(f) = &outcome.fallback {
         println!("note       {f}");
     }
     if let Some((c, _)) = &check {
-        println!("check      {} nodes of {}: R² = {:.6}, MAE = {:.6} kPa, max error = {:.6} kPa", c.nodes, c.file.display(), c.r2, c.mae, c.max_error);
+        println!(
+            "check      {} nodes of {}: R² = {:.6}, MAE = {:.6} kPa, max error = {:.6} kPa",
+            c.nodes,
+            c.file.display(),
+            c.r2,
+            c.mae,
+            c.max_error
+        );
     }
-    println!("wrote      {}/ (calibration.json, calibration.svg{})", target.display(), if check.is_some() { ", check.svg" } else { "" });
+    println!(
+        "wrote      {}/ (calibration.json, calibration.svg{})",
+        target.display(),
+        if check.is_some() { ", check.svg" } else { "" }
+    );
     Ok(())
 }

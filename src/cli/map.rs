@@ -461,9 +461,19 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
     let mut calibration = None;
     let (h, rule) = match args.h.as_deref() {
         Some("auto") => {
-            let fields: Vec<Quantity> = if stress_source_wants_fem(args, &fem.nodes) { fem.nodes.fields.iter().map(|(q, _)| *q).collect() } else { vec![Quantity::Pwp] };
+            let fields: Vec<Quantity> = if stress_source_wants_fem(args, &fem.nodes) {
+                fem.nodes.fields.iter().map(|(q, _)| *q).collect()
+            } else {
+                vec![Quantity::Pwp]
+            };
             let t = Instant::now();
-            let outcome = super::calibrate::run_calibration(&fem.nodes, &fields, kernel, args.seed, super::calibrate::NormArg::L1)?;
+            let outcome = super::calibrate::run_calibration(
+                &fem.nodes,
+                &fields,
+                kernel,
+                args.seed,
+                super::calibrate::NormArg::L1,
+            )?;
             timings.push(("calibration".to_string(), t.elapsed().as_secs_f64() * 1e3));
             let rule = format!(
                 "calibrated by leave-one-out (paper Eq. 4) on {}: h/l = {:.3}, LOO R² = {:.5}, seed {}{}",
@@ -471,7 +481,11 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
                 outcome.h_over_l,
                 outcome.stats.r2,
                 args.seed,
-                outcome.fallback.as_deref().map(|f| format!("; {f}")).unwrap_or_default()
+                outcome
+                    .fallback
+                    .as_deref()
+                    .map(|f| format!("; {f}"))
+                    .unwrap_or_default()
             );
             let h = outcome.h;
             calibration = Some(outcome);
@@ -479,7 +493,9 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
         }
         Some(text) => match text.parse::<f64>() {
             Ok(h) if h > 0.0 && h.is_finite() => (h, "given with --h".to_string()),
-            _ => bail!("--h {text}: the smoothing length must be a positive number of metres, or auto"),
+            _ => bail!(
+                "--h {text}: the smoothing length must be a positive number of metres, or auto"
+            ),
         },
         None => {
             let factor = if matches!(kernel, KernelKind::Gaussian { .. }) {
@@ -496,7 +512,8 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
         }
     };
     fn stress_source_wants_fem(args: &MapArgs, nodes: &FemNodes) -> bool {
-        matches!(args.stress, StressArg::Fem) || (matches!(args.stress, StressArg::Auto) && nodes.has_total_stress())
+        matches!(args.stress, StressArg::Fem)
+            || (matches!(args.stress, StressArg::Auto) && nodes.has_total_stress())
     }
     let stress_source = match args.stress {
         StressArg::Auto if fem.nodes.has_total_stress() => StressArg::Fem,

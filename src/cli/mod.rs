@@ -5,9 +5,9 @@
 
 pub mod calibrate;
 mod inspect;
-pub mod plot;
 pub mod map;
 pub mod output;
+pub mod plot;
 
 use std::process::ExitCode;
 

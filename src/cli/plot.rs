@@ -37,52 +37,131 @@ fn bounds(series: &[Series<'_>]) -> ((f64, f64), (f64, f64)) {
 }
 
 /// Writes a line chart to `path` (SVG, 900 × 560).
-pub fn line_chart(path: &Path, title: &str, x_label: &str, y_label: &str, series: &[Series<'_>], log_y: bool) -> anyhow::Result<()> {
+pub fn line_chart(
+    path: &Path,
+    title: &str,
+    x_label: &str,
+    y_label: &str,
+    series: &[Series<'_>],
+    log_y: bool,
+) -> anyhow::Result<()> {
     let ((x0, x1), (y0, y1)) = bounds(series);
     let root = SVGBackend::new(path, (900, 560)).into_drawing_area();
     root.fill(&WHITE).ok();
     let draw = || -> Result<(), Box<dyn std::error::Error + '_>> {
         let mut builder = ChartBuilder::on(&root);
-        builder.caption(title, ("sans-serif", 22)).margin(16).x_label_area_size(48).y_label_area_size(80);
+        builder
+            .caption(title, ("sans-serif", 22))
+            .margin(16)
+            .x_label_area_size(48)
+            .y_label_area_size(80);
         if log_y {
-            let lo = series.iter().flat_map(|s| s.points.iter().map(|p| p.1)).filter(|v| *v > 0.0).fold(f64::INFINITY, f64::min);
+            let lo = series
+                .iter()
+                .flat_map(|s| s.points.iter().map(|p| p.1))
+                .filter(|v| *v > 0.0)
+                .fold(f64::INFINITY, f64::min);
             let lo = if lo.is_finite() { lo * 0.8 } else { 1e-12 };
             let hi = y1.max(lo * 10.0) * 1.25;
             let mut chart = builder.build_cartesian_2d(x0..x1, (lo..hi).log_scale())?;
-            chart.configure_mesh().x_desc(x_label).y_desc(y_label).label_style(("sans-serif", 15)).draw()?;
+            chart
+                .configure_mesh()
+                .x_desc(x_label)
+                .y_desc(y_label)
+                .label_style(("sans-serif", 15))
+                .draw()?;
             for s in series {
                 let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(|p| p.1 > 0.0).collect();
                 let c = s.color;
                 if s.markers {
-                    chart.draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))?.label(s.label).legend(move |(x, y)| Circle::new((x + 10, y), 4, c.filled()));
+                    chart
+                        .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))?
+                        .label(s.label)
+                        .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.filled()));
                 } else {
-                    chart.draw_series(LineSeries::new(pts, c.stroke_width(2)))?.label(s.label).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
+                    chart
+                        .draw_series(LineSeries::new(pts, c.stroke_width(2)))?
+                        .label(s.label)
+                        .legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                        });
                 }
             }
-            chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).label_font(("sans-serif", 15)).draw()?;
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 15))
+                .draw()?;
         } else {
             let mut chart = builder.build_cartesian_2d(x0..x1, y0..y1)?;
-            chart.configure_mesh().x_desc(x_label).y_desc(y_label).label_style(("sans-serif", 15)).draw()?;
+            chart
+                .configure_mesh()
+                .x_desc(x_label)
+                .y_desc(y_label)
+                .label_style(("sans-serif", 15))
+                .draw()?;
             for s in series {
                 let c = s.color;
                 if s.markers {
-                    chart.draw_series(s.points.iter().map(|&p| Circle::new(p, 4, c.filled())))?.label(s.label).legend(move |(x, y)| Circle::new((x + 10, y), 4, c.filled()));
+                    chart
+                        .draw_series(s.points.iter().map(|&p| Circle::new(p, 4, c.filled())))?
+                        .label(s.label)
+                        .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.filled()));
                 } else {
-                    chart.draw_series(LineSeries::new(s.points.clone(), c.stroke_width(2)))?.label(s.label).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2)));
+                    chart
+                        .draw_series(LineSeries::new(s.points.clone(), c.stroke_width(2)))?
+                        .label(s.label)
+                        .legend(move |(x, y)| {
+                            PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                        });
                 }
             }
-            chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).label_font(("sans-serif", 15)).draw()?;
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 15))
+                .draw()?;
         }
         root.present()?;
         Ok(())
     };
-    draw().map_err(|e| anyhow::anyhow!("{e}")).with_context(|| format!("drawing {}", path.display()))
+    draw()
+        .map_err(|e| anyhow::anyhow!("{e}"))
+        .with_context(|| format!("drawing {}", path.display()))
 }
 
 /// Predicted against observed, with the 1:1 line.
-pub fn scatter_1to1(path: &Path, title: &str, unit: &str, pairs: &[(f64, f64)]) -> anyhow::Result<()> {
-    let (lo, hi) = pairs.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p.0.min(p.1)), b.max(p.0.max(p.1))));
-    let line = Series { label: "1:1", points: vec![(lo, lo), (hi, hi)], color: RGBColor(120, 120, 120), markers: false };
-    let dots = Series { label: "nodes", points: pairs.to_vec(), color: RGBColor(31, 119, 180), markers: true };
-    line_chart(path, title, &format!("observed ({unit})"), &format!("predicted ({unit})"), &[dots, line], false)
+pub fn scatter_1to1(
+    path: &Path,
+    title: &str,
+    unit: &str,
+    pairs: &[(f64, f64)],
+) -> anyhow::Result<()> {
+    let (lo, hi) = pairs
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(p.0.min(p.1)), b.max(p.0.max(p.1)))
+        });
+    let line = Series {
+        label: "1:1",
+        points: vec![(lo, lo), (hi, hi)],
+        color: RGBColor(120, 120, 120),
+        markers: false,
+    };
+    let dots = Series {
+        label: "nodes",
+        points: pairs.to_vec(),
+        color: RGBColor(31, 119, 180),
+        markers: true,
+    };
+    line_chart(
+        path,
+        title,
+        &format!("observed ({unit})"),
+        &format!("predicted ({unit})"),
+        &[dots, line],
+        false,
+    )
 }

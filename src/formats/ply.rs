@@ -68,11 +68,7 @@ pub fn read_ply_mesh(path: &Path) -> Result<PlyMesh, FormatError> {
     parse_ply(path, &bytes, true)
 }
 
-fn parse_ply(
-    path: &Path,
-    bytes: &[u8],
-    with_elements: bool,
-) -> Result<PlyMesh, FormatError> {
+fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, FormatError> {
     let at = |line: usize, col: usize, msg: String| -> FormatError {
         ParseError::at(path, line, col, msg).into()
     };

@@ -82,7 +82,10 @@ impl LooObjective {
             return Err(LooError::TooFewNodes(n));
         }
         if let Some((i, v)) = values.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-            return Err(LooError::NonFinite { node: i / n_fields.max(1) + 1, value: *v });
+            return Err(LooError::NonFinite {
+                node: i / n_fields.max(1) + 1,
+                value: *v,
+            });
         }
         let first = positions[0];
         if positions.iter().all(|p| p == &first) {
@@ -92,14 +95,21 @@ impl LooObjective {
         let mut scale = vec![1.0; n_fields];
         for k in 0..n_fields {
             let m = (0..n).map(|i| values[i * n_fields + k]).sum::<f64>() / n as f64;
-            let var = (0..n).map(|i| (values[i * n_fields + k] - m).powi(2)).sum::<f64>() / n as f64;
+            let var = (0..n)
+                .map(|i| (values[i * n_fields + k] - m).powi(2))
+                .sum::<f64>()
+                / n as f64;
             mean[k] = m;
             if n_fields > 1 && var > 0.0 {
                 scale[k] = var.sqrt();
             }
         }
         let constant = (0..n_fields).all(|k| (0..n).all(|i| values[i * n_fields + k] == values[k]));
-        let scaled: Vec<f64> = values.iter().enumerate().map(|(i, v)| v / scale[i % n_fields]).collect();
+        let scaled: Vec<f64> = values
+            .iter()
+            .enumerate()
+            .map(|(i, v)| v / scale[i % n_fields])
+            .collect();
         let mean: Vec<f64> = mean.iter().zip(&scale).map(|(m, s)| m / s).collect();
         let index = NeighbourIndex::new(positions, dim);
         let radius = kernel.support() * h_max;
@@ -114,7 +124,11 @@ impl LooObjective {
                     .map(|(k, p)| {
                         let i = (c * CHUNK + k) as u32;
                         index.within(*p, radius, &mut scratch);
-                        scratch.iter().copied().filter(|(j, _)| *j != i).collect::<Vec<_>>()
+                        scratch
+                            .iter()
+                            .copied()
+                            .filter(|(j, _)| *j != i)
+                            .collect::<Vec<_>>()
                     })
                     .collect::<Vec<_>>()
             })
@@ -126,7 +140,17 @@ impl LooObjective {
             neighbours.extend(l);
             offsets.push(neighbours.len());
         }
-        Ok(LooObjective { kernel, values: scaled, n_fields, scale, mean, offsets, neighbours, h_max, constant })
+        Ok(LooObjective {
+            kernel,
+            values: scaled,
+            n_fields,
+            scale,
+            mean,
+            offsets,
+            neighbours,
+            h_max,
+            constant,
+        })
     }
 
     /// True when every field is constant: every h predicts it exactly.
@@ -198,7 +222,9 @@ impl LooObjective {
                         s += match norm {
                             Norm::L1 => v.abs(),
                             Norm::L2 => v * v,
-                            Norm::Relative => v.abs() / self.values[j * nf + k].abs().max(1e-3 * range),
+                            Norm::Relative => {
+                                v.abs() / self.values[j * nf + k].abs().max(1e-3 * range)
+                            }
                         };
                     }
                 }
@@ -213,7 +239,12 @@ impl LooObjective {
     }
 
     fn range(&self) -> f64 {
-        let (lo, hi) = self.values.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(*v), b.max(*v)));
+        let (lo, hi) = self
+            .values
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                (a.min(*v), b.max(*v))
+            });
         (hi - lo).max(1e-300)
     }
 
@@ -246,7 +277,13 @@ impl LooObjective {
 }
 
 /// O(n²) oracle of [`LooObjective::evaluate`] for one field and the L1 norm.
-pub fn loo_brute_force(positions: &[[f64; 3]], dim: usize, values: &[f64], kernel: KernelKind, h: f64) -> f64 {
+pub fn loo_brute_force(
+    positions: &[[f64; 3]],
+    dim: usize,
+    values: &[f64],
+    kernel: KernelKind,
+    h: f64,
+) -> f64 {
     let n = positions.len();
     let mean = values.iter().sum::<f64>() / n as f64;
     let support = kernel.support() * h;
@@ -254,7 +291,15 @@ pub fn loo_brute_force(positions: &[[f64; 3]], dim: usize, values: &[f64], kerne
     for j in 0..n {
         let mut pairs: Vec<(f64, usize)> = (0..n)
             .filter(|&i| i != j)
-            .map(|i| ((0..dim).map(|k| (positions[i][k] - positions[j][k]).powi(2)).sum::<f64>().sqrt(), i))
+            .map(|i| {
+                (
+                    (0..dim)
+                        .map(|k| (positions[i][k] - positions[j][k]).powi(2))
+                        .sum::<f64>()
+                        .sqrt(),
+                    i,
+                )
+            })
             .filter(|(d, _)| *d < support)
             .collect();
         pairs.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
@@ -266,7 +311,11 @@ pub fn loo_brute_force(positions: &[[f64; 3]], dim: usize, values: &[f64], kerne
                 den += w;
             }
         }
-        total += if den > 0.0 { (values[j] - num / den).abs() } else { (values[j] - mean).abs() };
+        total += if den > 0.0 {
+            (values[j] - num / den).abs()
+        } else {
+            (values[j] - mean).abs()
+        };
     }
     total
 }

@@ -279,7 +279,12 @@ pub fn unstructured_square_nodes(size: f64, l: f64, seed: u64) -> Vec<[f64; 3]> 
     let cell = min_d / std::f64::consts::SQRT_2;
     let n_cells = (size / cell).ceil() as usize + 1;
     let mut grid: Vec<Vec<u32>> = vec![Vec::new(); n_cells * n_cells];
-    let cell_of = |p: &[f64; 3]| (((p[0] / cell) as usize).min(n_cells - 1), ((p[1] / cell) as usize).min(n_cells - 1));
+    let cell_of = |p: &[f64; 3]| {
+        (
+            ((p[0] / cell) as usize).min(n_cells - 1),
+            ((p[1] / cell) as usize).min(n_cells - 1),
+        )
+    };
     for (i, p) in nodes.iter().enumerate() {
         let (cx, cy) = cell_of(p);
         grid[cy * n_cells + cx].push(i as u32);
@@ -287,9 +292,16 @@ pub fn unstructured_square_nodes(size: f64, l: f64, seed: u64) -> Vec<[f64; 3]> 
     let target = ((size / l).powi(2) * 1.2) as usize + 10;
     let mut misses = 0;
     while misses < 60 * target.max(1) && nodes.len() < 4 * target {
-        let p = [rng.random_range(0.0..size), rng.random_range(0.0..size), 0.0];
+        let p = [
+            rng.random_range(0.0..size),
+            rng.random_range(0.0..size),
+            0.0,
+        ];
         let (cx, cy) = cell_of(&p);
-        let mut ok = p[0] > 0.5 * min_d && p[0] < size - 0.5 * min_d && p[1] > 0.5 * min_d && p[1] < size - 0.5 * min_d;
+        let mut ok = p[0] > 0.5 * min_d
+            && p[0] < size - 0.5 * min_d
+            && p[1] > 0.5 * min_d
+            && p[1] < size - 0.5 * min_d;
         'scan: for gy in cy.saturating_sub(2)..=(cy + 2).min(n_cells - 1) {
             for gx in cx.saturating_sub(2)..=(cx + 2).min(n_cells - 1) {
                 for &j in &grid[gy * n_cells + gx] {
@@ -315,5 +327,7 @@ pub fn unstructured_square_nodes(size: f64, l: f64, seed: u64) -> Vec<[f64; 3]> 
 pub fn structured_square_nodes(size: f64, l: f64) -> Vec<[f64; 3]> {
     let n = (size / l).round().max(1.0) as usize;
     let step = size / n as f64;
-    (0..=n).flat_map(|j| (0..=n).map(move |i| [i as f64 * step, j as f64 * step, 0.0])).collect()
+    (0..=n)
+        .flat_map(|j| (0..=n).map(move |i| [i as f64 * step, j as f64 * step, 0.0]))
+        .collect()
 }
