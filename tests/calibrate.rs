@@ -10,7 +10,8 @@ use rand_chacha::ChaCha8Rng;
 
 #[test]
 fn annealer_finds_known_minima() {
-    let cases: Vec<(&str, Box<dyn Fn(f64) -> f64>, f64, f64, f64)> = vec![
+    type Case = (&'static str, Box<dyn Fn(f64) -> f64>, f64, f64, f64);
+    let cases: Vec<Case> = vec![
         (
             "parabola",
             Box::new(|x: f64| (x - 2.7).powi(2)),
