@@ -133,6 +133,12 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
     let Some(model) = &args.model else {
         anyhow::bail!("give a model (GOM, CPS or folder) or --fem FILE");
     };
+    if model
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gsz"))
+    {
+        return inspect_gsz(model, args.json);
+    }
     let p = load_project(model)?;
     let g = p
         .cps
@@ -327,5 +333,80 @@ fn inspect_fem(args: &InspectArgs) -> anyhow::Result<()> {
         "spacing    median nearest-node distance l = {:.6} m",
         crate::kernel::mapper::median_spacing(&nodes.positions, nodes.dim)
     )?;
+    Ok(())
+}
+
+fn inspect_gsz(path: &std::path::Path, json: bool) -> anyhow::Result<()> {
+    let project = crate::formats::gsz::read_project(path)?;
+    let mut out = std::io::stdout().lock();
+    if json {
+        serde_json::to_writer_pretty(&mut out, &project)?;
+        writeln!(out)?;
+        return Ok(());
+    }
+    let (length, pressure) = if project.unit_system.eq_ignore_ascii_case("Imperial") {
+        ("ft", "psf")
+    } else {
+        ("m", "kPa")
+    };
+    writeln!(out, "project    {} ({})", path.display(), project.xml_name)?;
+    writeln!(
+        out,
+        "units      {} base units: length {length}, pressure {pressure}, time s",
+        project.unit_system
+    )?;
+    for a in &project.analyses {
+        writeln!(
+            out,
+            "analysis   {} `{}`: {} {}, folder `{}`, mesh {}",
+            a.index,
+            a.name,
+            a.kind,
+            a.method,
+            a.folder,
+            if a.has_mesh { "yes" } else { "no" }
+        )?;
+        let times: Vec<String> = a
+            .steps
+            .iter()
+            .map(|s| {
+                format!(
+                    "{}{}",
+                    s.folder,
+                    s.time.map(|t| format!(" (t = {t} s)")).unwrap_or_default()
+                )
+            })
+            .collect();
+        writeln!(
+            out,
+            "  saved steps ({}): {}",
+            a.steps.len(),
+            times.join(", ")
+        )?;
+        if let Some(last) = a.steps.last() {
+            let step = crate::formats::gsz::StepChoice::Number(last.number);
+            match crate::formats::gsz::read_step(
+                path,
+                Some(&a.index.to_string()),
+                &step,
+                &Default::default(),
+            ) {
+                Ok((nodes, _, _)) => writeln!(
+                    out,
+                    "  step {}: {} nodes ({}D), fields: {}",
+                    last.folder,
+                    nodes.len(),
+                    nodes.dim,
+                    nodes
+                        .fields
+                        .iter()
+                        .map(|(q, _)| q.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )?,
+                Err(e) => writeln!(out, "  step {}: unreadable: {e}", last.folder)?,
+            }
+        }
+    }
     Ok(())
 }

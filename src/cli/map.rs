@@ -64,6 +64,12 @@ pub struct FemArgs {
     /// GeoStudio mesh (`Mesh.ply`) giving the coordinates of a `node.csv` without X, Y columns.
     #[arg(long, value_name = "PLY")]
     pub fem_mesh: Option<PathBuf>,
+    /// Analysis of a `.gsz` project: its name or 1-based index (needed when there are several).
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub analysis: Option<String>,
+    /// Saved step of a `.gsz` analysis: a step number, `last`, or `time=<seconds>`.
+    #[arg(long, default_value = "last", value_name = "k|last|time=T")]
+    pub step: String,
 }
 
 #[derive(Debug, clap::Args)]
@@ -141,6 +147,20 @@ pub fn load_fem(args: &FemArgs) -> anyhow::Result<LoadedFem> {
         .map(crate::formats::ply::read_ply_nodes)
         .transpose()?;
     for path in &args.fem {
+        if path
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("gsz"))
+        {
+            let step: crate::formats::gsz::StepChoice = args
+                .step
+                .parse()
+                .map_err(|e| anyhow::anyhow!("--step {e}"))?;
+            let (nodes, report, _) =
+                crate::formats::gsz::read_step(path, args.analysis.as_deref(), &step, &options)?;
+            parts.push(nodes);
+            reports.push(report);
+            continue;
+        }
         let (mut nodes, report) = fem_csv::read_csv(path, &options)?;
         if !report.has_coordinates {
             match &mesh {

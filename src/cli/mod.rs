@@ -3,6 +3,7 @@
 //! `anyhow::Error` and print as one chain (`error: {:#}`); see [`main`].
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
+mod bench;
 pub mod calibrate;
 mod inspect;
 pub mod map;
@@ -29,6 +30,8 @@ pub enum Command {
     Map(map::MapArgs),
     /// Calibrate the smoothing length h by leave-one-out cross-validation (paper Eq. 4).
     Calibrate(calibrate::CalibrateArgs),
+    /// Print speed figures of the hot paths on generated data.
+    Bench(bench::BenchArgs),
 }
 
 /// An error that carries its own exit code (1 = a negative verdict).
@@ -72,5 +75,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Inspect(args) => inspect::run(args),
         Command::Map(args) => map::run(args),
         Command::Calibrate(args) => calibrate::run(args),
+        Command::Bench(args) => bench::run(args),
     }
 }

@@ -8,6 +8,7 @@ pub use error::{FormatError, ParseError, Position};
 pub mod cps;
 pub mod fem_csv;
 pub mod gom;
+pub mod gsz;
 pub mod keyword_doc;
 pub mod lex;
 pub mod mapf;

@@ -216,23 +216,27 @@ fn run(
     }
     let nf = nodes.n_fields;
     let chunk = 512;
-    let work = |(c, pts): (usize, &[[f64; 3]])| {
+    // Queries run in Morton (Z-curve) order of the points for cache locality in
+    // the tree; results are scattered back to the input order. The order depends
+    // only on the coordinates, so the output is the same for any thread count.
+    let order = morton_order(points, nodes.dim);
+    let work = |idx: &[u32]| {
         let mut scratch = Vec::with_capacity(128);
-        let mut values = vec![0.0; pts.len() * nf];
-        let mut meta = Vec::with_capacity(pts.len());
-        for (k, p) in pts.iter().enumerate() {
-            let i = c * chunk + k;
+        let mut values = vec![0.0; idx.len() * nf];
+        let mut meta = Vec::with_capacity(idx.len());
+        for (k, &i) in idx.iter().enumerate() {
+            let i = i as usize;
             let g = if grouped {
                 point_group.map_or(u32::MAX, |gs| gs[i])
             } else {
                 u32::MAX
             };
-            let idx = lookup(g).unwrap_or(&indices[0]);
+            let ix = lookup(g).unwrap_or(&indices[0]);
             meta.push(map_one(
                 nodes,
-                idx,
+                ix,
                 settings,
-                *p,
+                points[i],
                 &mut scratch,
                 &mut values[k * nf..(k + 1) * nf],
             ));
@@ -240,22 +244,23 @@ fn run(
         (values, meta)
     };
     let parts: Vec<ChunkResult> = if parallel {
-        points.par_chunks(chunk).enumerate().map(work).collect()
+        order.par_chunks(chunk).map(work).collect()
     } else {
-        points.chunks(chunk).enumerate().map(work).collect()
+        order.chunks(chunk).map(work).collect()
     };
     let mut result = MapResult {
-        values: Vec::with_capacity(points.len() * nf),
-        n_neighbours: Vec::with_capacity(points.len()),
-        shepard: Vec::with_capacity(points.len()),
-        status: Vec::with_capacity(points.len()),
+        values: vec![0.0; points.len() * nf],
+        n_neighbours: vec![0; points.len()],
+        shepard: vec![0.0; points.len()],
+        status: vec![PointStatus::Mapped; points.len()],
     };
-    for (values, meta) in parts {
-        result.values.extend(values);
-        for (n, r, s) in meta {
-            result.n_neighbours.push(n);
-            result.shepard.push(r);
-            result.status.push(s);
+    for (c, (values, meta)) in parts.into_iter().enumerate() {
+        for (k, (n, r, st)) in meta.into_iter().enumerate() {
+            let i = order[c * chunk + k] as usize;
+            result.values[i * nf..(i + 1) * nf].copy_from_slice(&values[k * nf..(k + 1) * nf]);
+            result.n_neighbours[i] = n;
+            result.shepard[i] = r;
+            result.status[i] = st;
         }
     }
     if settings.outside == OutsidePolicy::Error {
@@ -345,4 +350,43 @@ fn bounds(positions: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
         }
     }
     (lo, hi)
+}
+
+/// Indices of `points` sorted along a Morton (Z-order) curve of their bounding box.
+fn morton_order(points: &[[f64; 3]], dim: usize) -> Vec<u32> {
+    let (lo, hi) = bounds(points);
+    let bits = if dim == 3 { 21 } else { 31 };
+    let scale: Vec<f64> = (0..3)
+        .map(|k| {
+            let span = hi[k] - lo[k];
+            if span > 0.0 {
+                ((1u64 << bits) - 1) as f64 / span
+            } else {
+                0.0
+            }
+        })
+        .collect();
+    let spread = |mut v: u64| -> u64 {
+        // Interleave the bits of v with (dim − 1) zeros between them.
+        let mut out = 0u64;
+        for b in 0..bits {
+            out |= (v & 1) << (b * dim);
+            v >>= 1;
+        }
+        out
+    };
+    let mut keyed: Vec<(u64, u32)> = points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let mut key = 0u64;
+            for k in 0..dim {
+                let q = (((p[k] - lo[k]) * scale[k]).max(0.0) as u64).min((1u64 << bits) - 1);
+                key |= spread(q) << k;
+            }
+            (key, i as u32)
+        })
+        .collect();
+    keyed.sort_unstable();
+    keyed.into_iter().map(|(_, i)| i).collect()
 }

@@ -1,0 +1,149 @@
+//! `a3d-init bench`: speed figures of the hot paths on generated data, printed
+//! as numbers (no timing assertions anywhere in the tests). For whole-process
+//! figures such as peak memory, time the command with `/usr/bin/time -v`.
+
+use std::path::Path;
+use std::time::Instant;
+
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+use crate::formats::gom::GomDocument;
+use crate::formats::gom::write::model_to_text;
+use crate::kernel::KernelKind;
+use crate::kernel::mapper::{self, MapSettings, NodeCloud, OutsidePolicy};
+use crate::model::generate::{self, MaterialSpec};
+
+#[derive(Debug, clap::Args)]
+pub struct BenchArgs {
+    /// What to measure.
+    #[arg(value_enum)]
+    pub what: BenchWhat,
+    /// Spatial dimension for `map` (2 or 3).
+    #[arg(long, default_value_t = 3)]
+    pub dim: usize,
+    /// FEM nodes (`map`).
+    #[arg(long, default_value_t = 1_000_000)]
+    pub nodes: usize,
+    /// Query points / MPs (`map`).
+    #[arg(long, default_value_t = 1_000_000)]
+    pub points: usize,
+    /// Mean number of nodes inside the kernel support (`map`).
+    #[arg(long, default_value_t = 50.0)]
+    pub neighbours: f64,
+    /// Elements of the generated GOM (`gom`).
+    #[arg(long, default_value_t = 1_000_000)]
+    pub elements: usize,
+    /// Repetitions; the best is reported.
+    #[arg(long, default_value_t = 3)]
+    pub repeat: usize,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum BenchWhat {
+    /// Kernel mapping throughput (queries/s), cubic kernel, uniform random clouds.
+    Map,
+    /// GOM parsing throughput (MB/s) on a generated TRI3 model.
+    Gom,
+}
+
+pub fn run(args: BenchArgs) -> anyhow::Result<()> {
+    let threads = rayon::current_num_threads();
+    match args.what {
+        BenchWhat::Map => {
+            let mut rng = ChaCha8Rng::seed_from_u64(1);
+            let dim = args.dim.clamp(2, 3);
+            let mut cloud = |n: usize| -> Vec<[f64; 3]> {
+                (0..n)
+                    .map(|_| {
+                        [
+                            rng.random_range(0.0..1.0),
+                            rng.random_range(0.0..1.0),
+                            if dim == 3 {
+                                rng.random_range(0.0..1.0)
+                            } else {
+                                0.0
+                            },
+                        ]
+                    })
+                    .collect()
+            };
+            let nodes = cloud(args.nodes);
+            let points = cloud(args.points);
+            let values: Vec<f64> = nodes.iter().map(|p| p[0] + 2.0 * p[1]).collect();
+            // Support radius 2h holding `neighbours` nodes on average.
+            let support = if dim == 3 {
+                (args.neighbours / (args.nodes as f64 * 4.0 / 3.0 * std::f64::consts::PI)).cbrt()
+            } else {
+                (args.neighbours / (args.nodes as f64 * std::f64::consts::PI)).sqrt()
+            };
+            let h = support / 2.0;
+            let cloud = NodeCloud {
+                positions: &nodes,
+                dim,
+                values: &values,
+                n_fields: 1,
+                group: None,
+                node_volume: 1.0 / args.nodes as f64,
+            };
+            let settings = MapSettings {
+                kernel: KernelKind::Cubic,
+                h,
+                min_shepard: 0.0,
+                outside: OutsidePolicy::Nearest,
+            };
+            let mut best = f64::INFINITY;
+            let mut mean_neighbours = 0.0;
+            for _ in 0..args.repeat.max(1) {
+                let t = Instant::now();
+                let r = mapper::map_points(&cloud, &points, None, &settings)
+                    .map_err(|e| anyhow::anyhow!("{e}"))?;
+                best = best.min(t.elapsed().as_secs_f64());
+                mean_neighbours =
+                    r.n_neighbours.iter().map(|&n| n as f64).sum::<f64>() / points.len() as f64;
+            }
+            println!(
+                "map {dim}D: {} nodes → {} points, cubic, h = {h:.5}, {mean_neighbours:.1} neighbours/query, {threads} thread(s): {:.3} s (tree build included) = {:.3e} queries/s ({:.3e} per thread)",
+                args.nodes,
+                args.points,
+                best,
+                args.points as f64 / best,
+                args.points as f64 / best / threads as f64
+            );
+        }
+        BenchWhat::Gom => {
+            let nx = ((args.elements as f64 / 2.0).sqrt().round() as usize).max(1);
+            let ny = (args.elements / (2 * nx)).max(1);
+            let mesh = generate::structured_tri_mesh(0.0, 0.0, nx as f64, ny as f64, nx, ny);
+            let spec = MaterialSpec {
+                name: "soil".into(),
+                porosity: 0.4,
+                density_solid: 2650.0,
+                density_liquid: None,
+                k0: 0.5,
+                young_modulus: 1e4,
+                poisson_ratio: 0.3,
+                mohr_coulomb: Some((30.0, 1.0, 0.0)),
+                retention: None,
+                permeability: 0.0,
+            };
+            let text = model_to_text(&generate::single_material_model(mesh, &spec, 3), "2023");
+            let mb = text.len() as f64 / 1e6;
+            let mut best = f64::INFINITY;
+            for _ in 0..args.repeat.max(1) {
+                let copy = text.clone();
+                let t = Instant::now();
+                let doc = GomDocument::parse(Path::new("bench.GOM"), copy)?;
+                let (model, _) = doc.model()?;
+                best = best.min(t.elapsed().as_secs_f64());
+                std::hint::black_box(model);
+            }
+            println!(
+                "gom: {} elements, {mb:.1} MB, {threads} thread(s): {best:.3} s = {:.0} MB/s (lossless document + typed view)",
+                2 * nx * ny,
+                mb / best
+            );
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,373 @@
+//! GeoStudio project archives (`.gsz`) read directly. Spec: `formats/gsz.md`.
+//!
+//! A `.gsz` is a zip holding the project XML, one folder per analysis (a `/` in
+//! the analysis name is written `&3`), one subfolder per saved time step (`000`
+//! = initial conditions, then the step numbers) with `node.csv`, and the mesh as
+//! binary PLY (`Mesh.ply` in the analysis folder). `node.csv` row `Node = k` is PLY
+//! node k − 1. Values are in the project's base units: metric (m, kPa) or
+//! imperial (ft, psf), read from the XML's `UnitSystem`.
+
+use std::io::Read;
+use std::path::Path;
+
+use super::error::FormatError;
+use super::fem_csv::{self, CsvOptions, FemReadReport, UnitOverride};
+use super::ply;
+use crate::model::FemNodes;
+
+/// One saved step of an analysis.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct SavedStep {
+    /// The folder number (`010` → 10).
+    pub number: u32,
+    pub folder: String,
+    /// Elapsed time in s when known (time.csv or the XML).
+    pub time: Option<f64>,
+}
+
+/// One analysis of the project.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Analysis {
+    /// 1-based position in the XML.
+    pub index: usize,
+    pub name: String,
+    pub kind: String,
+    pub method: String,
+    /// Folder in the archive (`/` written as `&3`).
+    pub folder: String,
+    pub steps: Vec<SavedStep>,
+    pub has_mesh: bool,
+}
+
+/// What a `.gsz` holds.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct GszProject {
+    pub xml_name: String,
+    /// `Metric` or `Imperial`.
+    pub unit_system: String,
+    pub analyses: Vec<Analysis>,
+}
+
+fn archive(path: &Path) -> Result<zip::ZipArchive<std::fs::File>, FormatError> {
+    let file = std::fs::File::open(path).map_err(|e| FormatError::io(path, e))?;
+    zip::ZipArchive::new(file)
+        .map_err(|e| FormatError::file(path, format!("not a readable .gsz (zip) archive: {e}")))
+}
+
+fn read_entry(
+    zip: &mut zip::ZipArchive<std::fs::File>,
+    path: &Path,
+    name: &str,
+) -> Result<Vec<u8>, FormatError> {
+    let mut entry = zip
+        .by_name(name)
+        .map_err(|_| FormatError::file(path, format!("the archive has no `{name}`")))?;
+    let mut bytes = Vec::with_capacity(entry.size() as usize);
+    entry.read_to_end(&mut bytes).map_err(|e| {
+        FormatError::file(
+            path,
+            format!("`{name}` cannot be read (truncated or corrupt archive?): {e}"),
+        )
+    })?;
+    Ok(bytes)
+}
+
+/// The text of the first `<tag>…</tag>` in `s`.
+fn tag<'a>(s: &'a str, name: &str) -> Option<&'a str> {
+    let open = format!("<{name}>");
+    let close = format!("</{name}>");
+    let a = s.find(&open)? + open.len();
+    let b = a + s[a..].find(&close)?;
+    Some(s[a..b].trim())
+}
+
+/// The value of attribute `attr` in the first element `<elem …>` of `s`.
+fn attribute<'a>(s: &'a str, attr: &str) -> Option<&'a str> {
+    let key = format!("{attr}=\"");
+    let a = s.find(&key)? + key.len();
+    let b = a + s[a..].find('"')?;
+    Some(&s[a..b])
+}
+
+/// Reads the project's table of contents.
+pub fn read_project(path: &Path) -> Result<GszProject, FormatError> {
+    let mut zip = archive(path)?;
+    let names: Vec<String> = zip
+        .file_names()
+        .map(|n| n.map(|n| n.into_owned()))
+        .collect::<Result<_, _>>()
+        .map_err(|e| FormatError::file(path, format!("corrupt archive directory: {e}")))?;
+    let xml_name = names
+        .iter()
+        .find(|n| !n.contains('/') && n.to_ascii_lowercase().ends_with(".xml"))
+        .cloned()
+        .ok_or_else(|| FormatError::file(path, "no project XML at the top of the archive"))?;
+    let xml_bytes = read_entry(&mut zip, path, &xml_name)?;
+    let xml = String::from_utf8_lossy(&xml_bytes).into_owned();
+    let unit_system = attribute(&xml, "UnitSystem")
+        .unwrap_or("Metric")
+        .to_string();
+    let analyses_xml = xml.find("<Analyses").map_or("", |i| &xml[i..]);
+    let mut analyses = Vec::new();
+    for (k, block) in analyses_xml.split("<Analysis>").skip(1).enumerate() {
+        let block = block.split("</Analysis>").next().unwrap_or("");
+        let name = tag(block, "Name").unwrap_or("").to_string();
+        let folder = name.replace('/', "&3");
+        let mut steps: Vec<SavedStep> = names
+            .iter()
+            .filter_map(|n| {
+                let rest = n.strip_prefix(&format!("{folder}/"))?;
+                let (step, file) = rest.split_once('/')?;
+                (file == "node.csv").then(|| {
+                    step.parse::<u32>().ok().map(|num| SavedStep {
+                        number: num,
+                        folder: step.to_string(),
+                        time: None,
+                    })
+                })?
+            })
+            .collect();
+        steps.sort_by_key(|s| s.number);
+        // Times: time.csv (Step → Time) when present, else the XML's time steps.
+        let xml_times: Vec<f64> = block
+            .split("<TimeStep ")
+            .skip(1)
+            .filter_map(|t| attribute(t, "ElapsedTime").and_then(|v| v.parse().ok()))
+            .collect();
+        let csv_times: Vec<(u32, f64)> =
+            match read_entry(&mut zip, path, &format!("{folder}/time.csv")) {
+                Ok(bytes) => String::from_utf8_lossy(&bytes)
+                    .lines()
+                    .skip(1)
+                    .filter_map(|l| {
+                        let f: Vec<&str> = l.split(',').collect();
+                        Some((
+                            f.get(1)?.trim().parse().ok()?,
+                            f.get(3)?.trim().parse().ok()?,
+                        ))
+                    })
+                    .collect(),
+                Err(_) => Vec::new(),
+            };
+        for s in &mut steps {
+            s.time = csv_times
+                .iter()
+                .find(|(n, _)| *n == s.number)
+                .map(|(_, t)| *t)
+                .or_else(|| {
+                    if s.number == 0 {
+                        Some(0.0)
+                    } else {
+                        xml_times.get(s.number as usize - 1).copied()
+                    }
+                });
+        }
+        analyses.push(Analysis {
+            index: k + 1,
+            name,
+            kind: tag(block, "Kind").unwrap_or("").to_string(),
+            method: tag(block, "Method").unwrap_or("").to_string(),
+            has_mesh: names.iter().any(|n| *n == format!("{folder}/Mesh.ply")),
+            folder,
+            steps,
+        });
+    }
+    if analyses.is_empty() {
+        return Err(FormatError::file(
+            path,
+            format!("{xml_name} lists no analyses"),
+        ));
+    }
+    Ok(GszProject {
+        xml_name,
+        unit_system,
+        analyses,
+    })
+}
+
+/// Which step to read: a folder number, the last saved step, or a time (s).
+#[derive(Clone, Debug, PartialEq)]
+pub enum StepChoice {
+    Number(u32),
+    Last,
+    Time(f64),
+}
+
+impl std::str::FromStr for StepChoice {
+    type Err = String;
+    fn from_str(s: &str) -> Result<StepChoice, String> {
+        if s == "last" {
+            return Ok(StepChoice::Last);
+        }
+        if let Some(t) = s.strip_prefix("time=") {
+            return t
+                .parse()
+                .map(StepChoice::Time)
+                .map_err(|_| format!("`{s}`: expected time=<seconds>"));
+        }
+        s.parse()
+            .map(StepChoice::Number)
+            .map_err(|_| format!("`{s}`: expected a step number, last, or time=<seconds>"))
+    }
+}
+
+/// Reads the nodes of one analysis step, with coordinates from the analysis mesh
+/// and units from the project. Returns what was converted in the report.
+pub fn read_step(
+    path: &Path,
+    analysis: Option<&str>,
+    step: &StepChoice,
+    options: &CsvOptions,
+) -> Result<(FemNodes, FemReadReport, String), FormatError> {
+    let project = read_project(path)?;
+    let chosen = match analysis {
+        None if project.analyses.len() == 1 => &project.analyses[0],
+        None => {
+            return Err(FormatError::file(
+                path,
+                format!(
+                    "{} analyses; choose one with --analysis: {}",
+                    project.analyses.len(),
+                    project
+                        .analyses
+                        .iter()
+                        .map(|a| format!("{} `{}`", a.index, a.name))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ),
+            ));
+        }
+        Some(key) => project
+            .analyses
+            .iter()
+            .find(|a| a.name == key || key.parse::<usize>().ok() == Some(a.index))
+            .ok_or_else(|| {
+                FormatError::file(
+                    path,
+                    format!(
+                        "no analysis `{key}` (analyses: {})",
+                        project
+                            .analyses
+                            .iter()
+                            .map(|a| format!("{} `{}`", a.index, a.name))
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ),
+                )
+            })?,
+    };
+    if chosen.steps.is_empty() {
+        return Err(FormatError::file(
+            path,
+            format!(
+                "analysis `{}` has no saved results (no node.csv)",
+                chosen.name
+            ),
+        ));
+    }
+    let saved = match step {
+        StepChoice::Last => chosen.steps.last(),
+        StepChoice::Number(n) => chosen.steps.iter().find(|s| s.number == *n),
+        StepChoice::Time(t) => chosen
+            .steps
+            .iter()
+            .filter(|s| s.time.is_some())
+            .min_by(|a, b| {
+                (a.time.unwrap_or(0.0) - t)
+                    .abs()
+                    .total_cmp(&(b.time.unwrap_or(0.0) - t).abs())
+            }),
+    }
+    .ok_or_else(|| {
+        FormatError::file(
+            path,
+            format!(
+                "analysis `{}` has no saved step {step:?} (saved: {})",
+                chosen.name,
+                chosen
+                    .steps
+                    .iter()
+                    .map(|s| s.folder.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+        )
+    })?;
+    if let StepChoice::Time(t) = step {
+        let got = saved.time.unwrap_or(0.0);
+        if (got - t).abs() > 1e-6 * t.abs().max(1.0) {
+            return Err(FormatError::file(
+                path,
+                format!(
+                    "no saved step at time {t} s; the nearest is step {} at {got} s",
+                    saved.folder
+                ),
+            ));
+        }
+    }
+    let mut zip = archive(path)?;
+    let csv_name = format!("{}/{}/node.csv", chosen.folder, saved.folder);
+    let csv = read_entry(&mut zip, path, &csv_name)?;
+    let mesh_name = format!("{}/Mesh.ply", chosen.folder);
+    let ply_bytes = read_entry(&mut zip, path, &mesh_name)?;
+    let label = path.join(&mesh_name);
+    let mesh = ply::parse_ply_nodes(&label, &ply_bytes)?;
+    let (length, pressure) = if project.unit_system.eq_ignore_ascii_case("Imperial") {
+        ("ft", "psf")
+    } else {
+        ("m", "kPa")
+    };
+    let options = CsvOptions {
+        units: UnitOverride {
+            length: Some(length.into()),
+            pressure: Some(pressure.into()),
+        },
+        ..options.clone()
+    };
+    let csv_label = path.join(&csv_name);
+    let (mut nodes, mut report) = fem_csv::parse_csv(&csv_label, &csv, &options)?;
+    if nodes.len() != mesh.len() {
+        return Err(FormatError::file(
+            &csv_label,
+            format!(
+                "{} nodes, but {mesh_name} has {}: node count mismatch",
+                nodes.len(),
+                mesh.len()
+            ),
+        ));
+    }
+    fem_csv::attach_mesh(&mut nodes, &csv_label, &mesh)?;
+    if length == "ft" {
+        for p in &mut nodes.positions {
+            for v in p.iter_mut() {
+                *v *= 0.3048;
+            }
+        }
+    }
+    report.dim = nodes.dim;
+    report.has_coordinates = true;
+    report
+        .warnings
+        .retain(|w| !w.starts_with("no coordinate columns"));
+    let note = format!(
+        "{}: analysis {} `{}` ({} {}), step {}{}; unit system {} ({length}, {pressure}{})",
+        path.display(),
+        chosen.index,
+        chosen.name,
+        chosen.kind,
+        chosen.method,
+        saved.folder,
+        saved
+            .time
+            .map(|t| format!(" at t = {t} s"))
+            .unwrap_or_default(),
+        project.unit_system,
+        if length == "ft" {
+            "; converted to m and kPa"
+        } else {
+            ""
+        }
+    );
+    report.warnings.push(note.clone());
+    Ok((nodes, report, note))
+}

@@ -1,0 +1,307 @@
+//! GeoStudio `.gsz` projects read directly: the shipped sample end to end, a
+//! hand-made archive in imperial units, and corrupted archives (exit code 2).
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use a3d_init::formats::fem_csv::CsvOptions;
+use a3d_init::formats::gom::write::model_to_text;
+use a3d_init::formats::gsz::{StepChoice, read_project, read_step};
+use a3d_init::model::Quantity;
+use a3d_init::model::generate::{self, MaterialSpec};
+
+fn fixture(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures")
+        .join(rel)
+}
+
+fn run(args: &[&str]) -> (i32, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_a3d-init"))
+        .args(args)
+        .output()
+        .unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+fn ply_bytes(nodes: &[[f64; 3]], header_override: Option<&str>) -> Vec<u8> {
+    let header = header_override.map(str::to_string).unwrap_or_else(|| {
+        format!("ply\nformat binary_little_endian 1.0\nelement version 1\nproperty ushort major\nproperty ushort minor\nelement node {}\nproperty double x\nproperty double y\nproperty double z\nend_header\n", nodes.len())
+    });
+    let mut b = header.into_bytes();
+    b.extend_from_slice(&[1, 0, 0, 0]);
+    for p in nodes {
+        for v in p {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    b
+}
+
+/// A one-analysis project: `files` are (name in the archive, bytes).
+fn make_gsz(path: &Path, unit_system: &str, files: &[(&str, Vec<u8>)]) {
+    let file = std::fs::File::create(path).unwrap();
+    let mut zip = zip::ZipWriter::new(file);
+    let options = zip::write::SimpleFileOptions::default();
+    let xml = format!(
+        "<?xml version=\"1.0\"?><GSIData><EngCoords UnitSystem=\"{unit_system}\" /><Analyses Len=\"1\"><Analysis><ID>1</ID><Name>SEEP/W Drawdown</Name><Kind>SEEP/W</Kind><Method>SteadyState</Method></Analysis></Analyses></GSIData>"
+    );
+    zip.start_file("project.xml", options).unwrap();
+    zip.write_all(xml.as_bytes()).unwrap();
+    for (name, bytes) in files {
+        zip.start_file(*name, options).unwrap();
+        zip.write_all(bytes).unwrap();
+    }
+    zip.finish().unwrap();
+}
+
+#[test]
+fn shipped_sample_reads_step_010_like_the_extracted_csv() {
+    let gsz = fixture("geostudio-gsz-internal/1d-unsaturated-column/1D_unsaturated_column.gsz");
+    let project = read_project(&gsz).unwrap();
+    assert_eq!(project.analyses.len(), 1);
+    let a = &project.analyses[0];
+    assert_eq!(
+        (
+            a.name.as_str(),
+            a.kind.as_str(),
+            a.method.as_str(),
+            a.folder.as_str()
+        ),
+        ("SEEP/W Analysis", "SEEP/W", "Transient", "SEEP&3W Analysis")
+    );
+    assert_eq!(a.steps.len(), 51);
+    assert_eq!(a.steps[5].time, Some(12960.0));
+    let (nodes, _, note) =
+        read_step(&gsz, None, &StepChoice::Number(10), &CsvOptions::default()).unwrap();
+    assert!(note.contains("step 010 at t = 12960 s"), "{note}");
+    assert_eq!(nodes.len(), 306);
+    let extracted = std::fs::read_to_string(fixture(
+        "geostudio-gsz-internal/1d-unsaturated-column/seepw-analysis_010_node.csv",
+    ))
+    .unwrap();
+    let pwp = nodes.field(Quantity::Pwp).unwrap();
+    for (line, got) in extracted.lines().skip(1).zip(pwp) {
+        let v: f64 = line.split(',').nth(1).unwrap().trim().parse().unwrap();
+        assert_eq!(*got, -v, "GeoStudio sign flipped into Anura3D's");
+    }
+    let (by_time, _, _) = read_step(
+        &gsz,
+        Some("1"),
+        &StepChoice::Time(12960.0),
+        &CsvOptions::default(),
+    )
+    .unwrap();
+    assert_eq!(by_time.field(Quantity::Pwp), nodes.field(Quantity::Pwp));
+}
+
+#[test]
+fn shipped_sample_maps_end_to_end() {
+    let tmp = tempfile::tempdir().unwrap();
+    let gsz = fixture("geostudio-gsz-internal/1d-unsaturated-column/1D_unsaturated_column.gsz");
+    let (nodes, _, _) = read_step(&gsz, None, &StepChoice::Last, &CsvOptions::default()).unwrap();
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in &nodes.positions {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
+    let mesh = generate::structured_tri_mesh(lo[0], lo[1], w, h, 2, 20);
+    let spec = MaterialSpec {
+        name: "soil".into(),
+        porosity: 0.4,
+        density_solid: 2650.0,
+        density_liquid: Some(1000.0),
+        k0: 0.5,
+        young_modulus: 1e4,
+        poisson_ratio: 0.3,
+        mohr_coulomb: None,
+        retention: None,
+        permeability: 1e-11,
+    };
+    let gom = tmp.path().join("column.GOM");
+    std::fs::write(
+        &gom,
+        model_to_text(&generate::single_material_model(mesh, &spec, 3), "2023"),
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    let (code, stderr) = run(&[
+        "map",
+        "--fem",
+        gsz.to_str().unwrap(),
+        "--step",
+        "10",
+        "--mpm",
+        gom.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--outside",
+        "nearest",
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["fem_nodes"], 306);
+    assert_eq!(report["material_points"], 2 * 20 * 2 * 3);
+    let (code, stdout) = {
+        let o = Command::new(env!("CARGO_BIN_EXE_a3d-init"))
+            .args(["inspect", gsz.to_str().unwrap()])
+            .output()
+            .unwrap();
+        (
+            o.status.code().unwrap(),
+            String::from_utf8_lossy(&o.stdout).into_owned(),
+        )
+    };
+    assert_eq!(code, 0);
+    assert!(
+        stdout.contains("analysis   1 `SEEP/W Analysis`: SEEP/W Transient")
+            && stdout.contains("306 nodes (2D), fields: pwp"),
+        "{stdout}"
+    );
+}
+
+#[test]
+fn imperial_project_is_converted() {
+    let tmp = tempfile::tempdir().unwrap();
+    let path = tmp.path().join("imperial.gsz");
+    let nodes = [
+        [0.0, 0.0, 0.0],
+        [10.0, 0.0, 0.0],
+        [0.0, 10.0, 0.0],
+        [10.0, 10.0, 0.0],
+    ];
+    make_gsz(
+        &path,
+        "Imperial",
+        &[
+            ("SEEP&3W Drawdown/Mesh.ply", ply_bytes(&nodes, None)),
+            (
+                "SEEP&3W Drawdown/001/node.csv",
+                b"Node,PoreWaterPressure\r\n1,624\r\n2,624\r\n3,0\r\n4,0\r\n".to_vec(),
+            ),
+        ],
+    );
+    let (fem, report, note) = read_step(
+        &path,
+        Some("SEEP/W Drawdown"),
+        &StepChoice::Last,
+        &CsvOptions::default(),
+    )
+    .unwrap();
+    assert!(
+        note.contains("Imperial (ft, psf; converted to m and kPa)"),
+        "{note}"
+    );
+    assert!(
+        (fem.positions[1][0] - 3.048).abs() < 1e-12 && (fem.positions[2][1] - 3.048).abs() < 1e-12
+    );
+    let pwp = fem.field(Quantity::Pwp).unwrap();
+    assert!(
+        (pwp[0] + 624.0 * 0.047880258980335).abs() < 1e-9,
+        "{}",
+        pwp[0]
+    );
+    assert_eq!(report.columns[1].unit.as_deref(), Some("psf"));
+}
+
+#[test]
+fn corrupted_archives_exit_2() {
+    let tmp = tempfile::tempdir().unwrap();
+    let gom = fixture("anura3d-mini/TwoMat.GOM");
+    let nodes = [
+        [0.0, 0.0, 0.0],
+        [2.0, 0.0, 0.0],
+        [0.0, 1.0, 0.0],
+        [2.0, 1.0, 0.0],
+    ];
+    let csv = b"Node,PoreWaterPressure\n1,1\n2,1\n3,0\n4,0\n".to_vec();
+    let cases: Vec<(&str, Vec<(&str, Vec<u8>)>, &str)> = vec![
+        (
+            "missing_ply",
+            vec![("SEEP&3W Drawdown/001/node.csv", csv.clone())],
+            "the archive has no `SEEP&3W Drawdown/Mesh.ply`",
+        ),
+        (
+            "bad_ply_header",
+            vec![
+                (
+                    "SEEP&3W Drawdown/Mesh.ply",
+                    ply_bytes(
+                        &nodes,
+                        Some("ply\nformat ascii 1.0\nelement node 4\nend_header\n"),
+                    ),
+                ),
+                ("SEEP&3W Drawdown/001/node.csv", csv.clone()),
+            ],
+            "unsupported PLY format `ascii`",
+        ),
+        (
+            "node_count_mismatch",
+            vec![
+                ("SEEP&3W Drawdown/Mesh.ply", ply_bytes(&nodes[..3], None)),
+                ("SEEP&3W Drawdown/001/node.csv", csv.clone()),
+            ],
+            "4 nodes, but SEEP&3W Drawdown/Mesh.ply has 3: node count mismatch",
+        ),
+        (
+            "no_results",
+            vec![("SEEP&3W Drawdown/Mesh.ply", ply_bytes(&nodes, None))],
+            "has no saved results",
+        ),
+    ];
+    for (name, files, expected) in cases {
+        let path = tmp.path().join(format!("{name}.gsz"));
+        make_gsz(&path, "Metric", &files);
+        let out = tmp.path().join(format!("{name}-out"));
+        let (code, stderr) = run(&[
+            "map",
+            "--fem",
+            path.to_str().unwrap(),
+            "--mpm",
+            gom.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(code, 2, "{name}: {stderr}");
+        assert!(
+            stderr.contains(expected),
+            "{name}: expected `{expected}` in {stderr}"
+        );
+        assert!(!out.exists());
+    }
+    // A truncated zip.
+    let good = tmp.path().join("good.gsz");
+    make_gsz(
+        &good,
+        "Metric",
+        &[
+            ("SEEP&3W Drawdown/Mesh.ply", ply_bytes(&nodes, None)),
+            ("SEEP&3W Drawdown/001/node.csv", csv),
+        ],
+    );
+    let bytes = std::fs::read(&good).unwrap();
+    let truncated = tmp.path().join("truncated.gsz");
+    std::fs::write(&truncated, &bytes[..bytes.len() / 2]).unwrap();
+    let (code, stderr) = run(&[
+        "map",
+        "--fem",
+        truncated.to_str().unwrap(),
+        "--mpm",
+        gom.to_str().unwrap(),
+        "--out",
+        tmp.path().join("t-out").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(
+        stderr.contains("not a readable .gsz (zip) archive"),
+        "{stderr}"
+    );
+}
