@@ -223,7 +223,8 @@ fn corrupted_archives_exit_2() {
         [2.0, 1.0, 0.0],
     ];
     let csv = b"Node,PoreWaterPressure\n1,1\n2,1\n3,0\n4,0\n".to_vec();
-    let cases: Vec<(&str, Vec<(&str, Vec<u8>)>, &str)> = vec![
+    type Files = Vec<(&'static str, Vec<u8>)>;
+    let cases: Vec<(&str, Files, &str)> = vec![
         (
             "missing_ply",
             vec![("SEEP&3W Drawdown/001/node.csv", csv.clone())],
