@@ -5,6 +5,7 @@
 
 mod bench;
 pub mod calibrate;
+mod diff;
 mod inspect;
 pub mod map;
 pub mod output;
@@ -32,6 +33,8 @@ pub enum Command {
     Calibrate(calibrate::CalibrateArgs),
     /// Print speed figures of the hot paths on generated data.
     Bench(bench::BenchArgs),
+    /// Compare two Anura3D projects or files (GOM, CPS, MAPF, mps.csv) within tolerances.
+    Diff(diff::DiffArgs),
 }
 
 /// An error that carries its own exit code (1 = a negative verdict).
@@ -76,5 +79,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Map(args) => map::run(args),
         Command::Calibrate(args) => calibrate::run(args),
         Command::Bench(args) => bench::run(args),
+        Command::Diff(args) => diff::run(args),
     }
 }
