@@ -141,12 +141,10 @@ fn diff_documents(
             let mut line_differs = tx.len() != ty.len();
             for (p, q) in tx.iter().zip(&ty) {
                 match (lex::parse_real(p), lex::parse_real(q)) {
-                    (Some(u), Some(v)) => {
-                        if !close(u, v, args.rtol, args.atol) {
-                            num_changes += 1;
-                            worst = worst.max((u - v).abs());
-                            line_differs = true;
-                        }
+                    (Some(u), Some(v)) if !close(u, v, args.rtol, args.atol) => {
+                        num_changes += 1;
+                        worst = worst.max((u - v).abs());
+                        line_differs = true;
                     }
                     _ if p != q => {
                         text_changes += 1;
@@ -328,18 +326,17 @@ fn diff_files(a: &Path, b: &Path, args: &DiffArgs) -> anyhow::Result<FileDiff> {
         "gom" => {
             let (da, db) = (GomDocument::read(a)?, GomDocument::read(b)?);
             // Counts first: a mesh change is summarised, not dumped.
-            if let (Ok((ma, _)), Ok((mb, _))) = (da.model(), db.model()) {
-                if ma.mesh.n_nodes() != mb.mesh.n_nodes()
-                    || ma.mesh.n_elements() != mb.mesh.n_elements()
-                {
-                    out.findings.push(format!(
-                        "mesh: {} nodes / {} elements → {} nodes / {} elements",
-                        ma.mesh.n_nodes(),
-                        ma.mesh.n_elements(),
-                        mb.mesh.n_nodes(),
-                        mb.mesh.n_elements()
-                    ));
-                }
+            if let (Ok((ma, _)), Ok((mb, _))) = (da.model(), db.model())
+                && (ma.mesh.n_nodes() != mb.mesh.n_nodes()
+                    || ma.mesh.n_elements() != mb.mesh.n_elements())
+            {
+                out.findings.push(format!(
+                    "mesh: {} nodes / {} elements → {} nodes / {} elements",
+                    ma.mesh.n_nodes(),
+                    ma.mesh.n_elements(),
+                    mb.mesh.n_nodes(),
+                    mb.mesh.n_elements()
+                ));
             }
             diff_documents(da.document(), db.document(), false, args, &mut out);
         }
