@@ -146,6 +146,8 @@ fn diff_documents(
                         worst = worst.max((u - v).abs());
                         line_differs = true;
                     }
+                    // Numbers within tolerance are equal, however they are written.
+                    (Some(_), Some(_)) => {}
                     _ if p != q => {
                         text_changes += 1;
                         line_differs = true;
