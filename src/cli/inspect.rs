@@ -14,7 +14,7 @@ use crate::model::{AnuraModel, MaterialPoint};
 
 #[derive(Debug, clap::Args)]
 pub struct InspectArgs {
-    /// Anura3D model: a .GOM, .GOM_stage<k>, -2.dat, .CPS_<nnn> or a project directory.
+    /// Anura3D model: a `.GOM`, `.GOM_stage<k>`, `-2.dat`, `.CPS_<nnn>` or a project directory.
     pub model: Option<PathBuf>,
     /// Inspect FEM node file(s) instead: how each column was understood.
     #[command(flatten)]

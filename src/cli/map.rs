@@ -76,7 +76,7 @@ pub struct FemArgs {
 pub struct MapArgs {
     #[command(flatten)]
     pub fem: FemArgs,
-    /// Anura3D model: .GOM, .GOM_stage<k>, -2.dat, .CPS_<nnn> or a project folder.
+    /// Anura3D model: `.GOM`, `.GOM_stage<k>`, `-2.dat`, `.CPS_<nnn>` or a project folder.
     #[arg(long, value_name = "MODEL")]
     pub mpm: PathBuf,
     /// Kernel: cubic (paper Eq. 2), gaussian (Eq. 3, truncated at 3h) or wendland (C2).
