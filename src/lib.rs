@@ -19,5 +19,6 @@ pub mod cli;
 pub mod formats;
 pub mod kernel;
 pub mod model;
+pub mod mpm;
 pub mod place;
 pub mod state;

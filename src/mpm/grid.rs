@@ -1,0 +1,341 @@
+//! The background grid of the MPM check: the Anura3D mesh itself, fixed in
+//! space, reduced to what the solver needs.
+//!
+//! Only the corner nodes of each element carry degrees of freedom (the six
+//! mid-edge nodes of `tetrahedral_old` never enter the shape functions), so the
+//! grid renumbers the corner nodes compactly in order of first appearance and
+//! keeps the map back to mesh node indices. Per element it stores the compact
+//! corner indices, the affine shape functions ([`Simplex`]) and the neighbour
+//! across each face; a uniform spatial hash over element bounding boxes backs
+//! up the neighbour walk when a material point has to be located from scratch.
+//! This file does no physics and no I/O.
+
+// Numerical kernels index several small arrays with one loop counter.
+#![allow(clippy::needless_range_loop)]
+
+use std::collections::HashMap;
+
+use super::MpmError;
+use super::shape::Simplex;
+use crate::model::Mesh;
+
+/// Marker for "no neighbour" (a boundary face).
+pub const NO_ELEMENT: u32 = u32::MAX;
+
+/// Barycentric tolerance for "inside an element": a point whose smallest shape
+/// function value is ≥ −1e-10 belongs to the element.
+pub const INSIDE_TOLERANCE: f64 = 1e-10;
+
+/// One element of the grid.
+#[derive(Clone, Copy, Debug)]
+pub struct GridElement<const D: usize, const NC: usize> {
+    /// Compact node indices of the corners.
+    pub corners: [u32; NC],
+    pub shape: Simplex<D, NC>,
+}
+
+/// The background grid: elements, compact nodes, fixities, neighbours and a
+/// spatial hash for point location.
+#[derive(Clone, Debug)]
+pub struct Grid<const D: usize, const NC: usize> {
+    pub elements: Vec<GridElement<D, NC>>,
+    /// Mesh node index (0-based) of every compact node.
+    pub mesh_node: Vec<u32>,
+    /// Per compact node: directions fixed for the solid phase.
+    pub fixed: Vec<[bool; D]>,
+    /// Per element: the element across the face opposite each corner.
+    pub neighbours: Vec<[u32; NC]>,
+    hash: SpatialHash<D>,
+}
+
+impl<const D: usize, const NC: usize> Grid<D, NC> {
+    /// Builds the grid from a mesh whose elements have `NC` corners in `D`
+    /// dimensions. `fixity` is the per-mesh-node solid fixity.
+    pub fn new(mesh: &Mesh, fixity: &[[bool; 3]]) -> Result<Grid<D, NC>, MpmError> {
+        let n_elements = mesh.n_elements();
+        let n_mesh_nodes = mesh.n_nodes();
+        if n_elements == 0 {
+            return Err(MpmError::InvalidMesh("the mesh has no elements".into()));
+        }
+        if mesh.element_type.n_corners() != NC || mesh.element_type.n_dim() != D {
+            return Err(MpmError::InvalidMesh(format!(
+                "element type {} does not have {NC} corners in {D}D",
+                mesh.element_type.gom_name()
+            )));
+        }
+        if fixity.len() != n_mesh_nodes {
+            return Err(MpmError::InvalidMesh(format!(
+                "{} fixity entries for {n_mesh_nodes} nodes",
+                fixity.len()
+            )));
+        }
+        let mut compact = vec![NO_ELEMENT; n_mesh_nodes];
+        let mut mesh_node = Vec::new();
+        let mut elements = Vec::with_capacity(n_elements);
+        for e in 0..n_elements {
+            let ids = mesh.element_nodes(e);
+            if let Some(&bad) = ids.iter().find(|&&n| n as usize >= n_mesh_nodes) {
+                return Err(MpmError::InvalidMesh(format!(
+                    "element {} refers to node {} but the mesh has {n_mesh_nodes} nodes",
+                    e + 1,
+                    bad as u64 + 1
+                )));
+            }
+            let mut corners = [0u32; NC];
+            let mut coords = [[0.0; D]; NC];
+            for k in 0..NC {
+                let node = ids[k] as usize;
+                if compact[node] == NO_ELEMENT {
+                    compact[node] = mesh_node.len() as u32;
+                    mesh_node.push(node as u32);
+                }
+                corners[k] = compact[node];
+                for d in 0..D {
+                    coords[k][d] = mesh.nodes[node][d];
+                }
+            }
+            let shape = Simplex::from_corners(&coords).ok_or(MpmError::DegenerateElement {
+                element: e as u64 + 1,
+            })?;
+            elements.push(GridElement { corners, shape });
+        }
+        let fixed = mesh_node
+            .iter()
+            .map(|&n| {
+                let mut f = [false; D];
+                f.copy_from_slice(&fixity[n as usize][..D]);
+                f
+            })
+            .collect();
+        let neighbours = face_neighbours(&elements);
+        let hash = SpatialHash::new(mesh, &elements, &mesh_node);
+        Ok(Grid {
+            elements,
+            mesh_node,
+            fixed,
+            neighbours,
+            hash,
+        })
+    }
+
+    pub fn n_nodes(&self) -> usize {
+        self.mesh_node.len()
+    }
+
+    /// Smallest element altitude: the characteristic length of the time step.
+    pub fn min_altitude(&self) -> f64 {
+        self.elements
+            .iter()
+            .map(|e| e.shape.min_altitude())
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    /// True when `x` lies in element `e` (within [`INSIDE_TOLERANCE`]).
+    #[inline]
+    pub fn contains(&self, e: u32, x: &[f64; D]) -> bool {
+        let n = self.elements[e as usize].shape.values(x);
+        n.iter().all(|&v| v >= -INSIDE_TOLERANCE)
+    }
+
+    /// Finds the element containing `x`, starting from element `start`: walk
+    /// towards the face with the most negative shape function, then fall back
+    /// to the spatial hash. `None` when `x` is outside the mesh.
+    pub fn locate(&self, x: &[f64; D], start: u32) -> Option<u32> {
+        let mut e = start;
+        if (e as usize) < self.elements.len() {
+            for _ in 0..64 {
+                let n = self.elements[e as usize].shape.values(x);
+                let mut worst = 0;
+                for k in 1..NC {
+                    if n[k] < n[worst] {
+                        worst = k;
+                    }
+                }
+                if n[worst] >= -INSIDE_TOLERANCE {
+                    return Some(e);
+                }
+                let next = self.neighbours[e as usize][worst];
+                if next == NO_ELEMENT {
+                    break;
+                }
+                e = next;
+            }
+        }
+        self.search(x)
+    }
+
+    /// Point location through the spatial hash: among the elements listed in
+    /// the cell of `x`, the first one with the largest smallest shape
+    /// function, if that is inside.
+    pub fn search(&self, x: &[f64; D]) -> Option<u32> {
+        let cell = self.hash.cell_of(x)?;
+        let mut best: Option<(u32, f64)> = None;
+        for &e in self.hash.items_in(cell) {
+            let n = self.elements[e as usize].shape.values(x);
+            let low = n.iter().copied().fold(f64::INFINITY, f64::min);
+            if best.is_none_or(|(_, b)| low > b) {
+                best = Some((e, low));
+            }
+        }
+        match best {
+            Some((e, low)) if low >= -INSIDE_TOLERANCE => Some(e),
+            _ => None,
+        }
+    }
+}
+
+/// For every element and corner k, the element sharing the face opposite k.
+fn face_neighbours<const D: usize, const NC: usize>(
+    elements: &[GridElement<D, NC>],
+) -> Vec<[u32; NC]> {
+    let mut faces: HashMap<[u32; D], (u32, usize)> = HashMap::with_capacity(elements.len() * NC);
+    let mut neighbours = vec![[NO_ELEMENT; NC]; elements.len()];
+    for (e, element) in elements.iter().enumerate() {
+        for k in 0..NC {
+            let mut face = [0u32; D];
+            let mut slot = 0;
+            for j in 0..NC {
+                if j != k {
+                    face[slot] = element.corners[j];
+                    slot += 1;
+                }
+            }
+            face.sort_unstable();
+            match faces.remove(&face) {
+                Some((other, other_k)) => {
+                    neighbours[e][k] = other;
+                    neighbours[other as usize][other_k] = e as u32;
+                }
+                None => {
+                    faces.insert(face, (e as u32, k));
+                }
+            }
+        }
+    }
+    neighbours
+}
+
+/// A uniform grid of cells over the mesh bounding box; each cell lists the
+/// elements whose bounding box overlaps it (compressed row storage).
+#[derive(Clone, Debug)]
+struct SpatialHash<const D: usize> {
+    low: [f64; D],
+    cell_size: f64,
+    cells: [usize; D],
+    start: Vec<u32>,
+    items: Vec<u32>,
+}
+
+impl<const D: usize> SpatialHash<D> {
+    fn new<const NC: usize>(
+        mesh: &Mesh,
+        elements: &[GridElement<D, NC>],
+        mesh_node: &[u32],
+    ) -> Self {
+        let mut low = [f64::INFINITY; D];
+        let mut high = [f64::NEG_INFINITY; D];
+        for &n in mesh_node {
+            for d in 0..D {
+                low[d] = low[d].min(mesh.nodes[n as usize][d]);
+                high[d] = high[d].max(mesh.nodes[n as usize][d]);
+            }
+        }
+        // Cells about the size of an average element, at most ~2 per element.
+        let mut extent = 1.0;
+        for d in 0..D {
+            extent *= (high[d] - low[d]).max(f64::MIN_POSITIVE);
+        }
+        let mut cell_size = (extent / elements.len() as f64).powf(1.0 / D as f64);
+        let largest_side = (0..D).map(|d| high[d] - low[d]).fold(0.0, f64::max);
+        if !(cell_size > 0.0 && cell_size.is_finite()) {
+            cell_size = largest_side.max(1.0);
+        }
+        // Guard against very flat boxes: never more than 8·n cells along an axis.
+        cell_size = cell_size.max(largest_side / (8.0 * elements.len() as f64));
+        let mut cells = [1usize; D];
+        for d in 0..D {
+            cells[d] = (((high[d] - low[d]) / cell_size).floor() as usize + 1).max(1);
+        }
+        let n_cells: usize = cells.iter().product();
+        let bounds = |element: &GridElement<D, NC>| {
+            let mut lo = [usize::MAX; D];
+            let mut hi = [0usize; D];
+            for &c in &element.corners {
+                let p = mesh.nodes[mesh_node[c as usize] as usize];
+                for d in 0..D {
+                    let i =
+                        (((p[d] - low[d]) / cell_size).floor().max(0.0) as usize).min(cells[d] - 1);
+                    lo[d] = lo[d].min(i);
+                    hi[d] = hi[d].max(i);
+                }
+            }
+            (lo, hi)
+        };
+        let for_each_cell = |lo: [usize; D], hi: [usize; D], f: &mut dyn FnMut(usize)| {
+            let mut idx = lo;
+            loop {
+                let mut flat = 0;
+                for d in (0..D).rev() {
+                    flat = flat * cells[d] + idx[d];
+                }
+                f(flat);
+                let mut d = 0;
+                loop {
+                    if d == D {
+                        return;
+                    }
+                    if idx[d] < hi[d] {
+                        idx[d] += 1;
+                        break;
+                    }
+                    idx[d] = lo[d];
+                    d += 1;
+                }
+            }
+        };
+        let mut count = vec![0u32; n_cells + 1];
+        for element in elements {
+            let (lo, hi) = bounds(element);
+            for_each_cell(lo, hi, &mut |c| count[c + 1] += 1);
+        }
+        for c in 0..n_cells {
+            count[c + 1] += count[c];
+        }
+        let start = count.clone();
+        let mut fill = count;
+        let mut items = vec![0u32; start[n_cells] as usize];
+        for (e, element) in elements.iter().enumerate() {
+            let (lo, hi) = bounds(element);
+            for_each_cell(lo, hi, &mut |c| {
+                items[fill[c] as usize] = e as u32;
+                fill[c] += 1;
+            });
+        }
+        SpatialHash {
+            low,
+            cell_size,
+            cells,
+            start,
+            items,
+        }
+    }
+
+    fn cell_of(&self, x: &[f64; D]) -> Option<usize> {
+        let mut flat = 0;
+        for d in (0..D).rev() {
+            let f = (x[d] - self.low[d]) / self.cell_size;
+            // Points a hair outside the box still map to the border cell.
+            let slack = 1e-9;
+            if !(f >= -slack && f < self.cells[d] as f64 + slack) {
+                return None;
+            }
+            let i = (f.floor().max(0.0) as usize).min(self.cells[d] - 1);
+            flat = flat * self.cells[d] + i;
+        }
+        Some(flat)
+    }
+
+    fn items_in(&self, cell: usize) -> &[u32] {
+        &self.items[self.start[cell] as usize..self.start[cell + 1] as usize]
+    }
+}

@@ -1,0 +1,184 @@
+//! Explicit MPM check: is a mapped initial state in equilibrium under gravity?
+//!
+//! The solver runs on the Anura3D background mesh itself (fixed in space, no
+//! moving mesh): linear shape functions on TRI3 in plane strain and on the four
+//! corners of `tetrahedral_old` in 3D, lumped nodal masses, gravity along −y,
+//! nodal fixities from the GOM, local (Cundall) damping as Anura3D applies it,
+//! and a MUSL update ([`step`] documents the scheme). Material points carry the
+//! effective stress σ′; the pore pressure p and the saturation S are frozen
+//! (drained analysis) and enter the internal force through Bishop's total stress
+//! σ = σ′ + S·p on the normal components. Materials are linear elastic or
+//! Mohr–Coulomb ([`material`]).
+//!
+//! Entry points: [`verify`] runs a damped simulation until the state settles (or
+//! a step/time limit) and returns a [`RunReport`] with a [`Verdict`]; [`run`]
+//! runs the same solver and can also return [`Snapshot`]s; [`Simulation`] gives
+//! step-by-step control. The module is pure: it consumes [`crate::model`] data,
+//! does no I/O and prints nothing; it knows nothing about file formats or the
+//! mapping kernels.
+
+pub mod grid;
+pub mod material;
+pub mod run;
+pub mod shape;
+pub mod step;
+#[doc(hidden)]
+pub mod testing;
+
+pub use material::{Elasticity, MohrCoulomb, ReturnKind, SolidModel};
+pub use run::{
+    ElementScore, Reason, RunOutput, RunReport, Snapshot, StepRecord, StopReason, Verdict, run,
+    verify,
+};
+pub use step::{Simulation, StepOutcome};
+
+/// Everything that can stop the MPM check before it runs.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[non_exhaustive]
+pub enum MpmError {
+    #[error("the MPM check does not support {0}")]
+    Unsupported(String),
+    #[error("invalid mesh: {0}")]
+    InvalidMesh(String),
+    #[error("element {element} is degenerate (zero area or volume)")]
+    DegenerateElement { element: u64 },
+    #[error("material {material}: missing property {property}")]
+    MissingProperty {
+        material: u32,
+        property: &'static str,
+    },
+    #[error("material {material}: {reason}")]
+    InvalidProperty { material: u32, reason: String },
+    #[error("material {material}: model `{model}` is not supported by the MPM check")]
+    UnsupportedMaterialModel { material: u32, model: String },
+    #[error("material point {id}: {reason}")]
+    InvalidPoint { id: u32, reason: String },
+    #[error("{points} material points but {states} states")]
+    LengthMismatch { points: usize, states: usize },
+    #[error("the model has no material points")]
+    NoMaterialPoints,
+    #[error("invalid run settings: {0}")]
+    InvalidSettings(String),
+    #[error("the simulation became unstable (non-finite values) at step {step}")]
+    Unstable { step: usize },
+}
+
+/// Limits of the equilibrium verdict. A state is reported in equilibrium only
+/// when every limit holds; see [`Verdict`].
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Thresholds {
+    /// Largest accepted out-of-balance force ratio ‖f_ext + f_int‖/‖f_ext‖
+    /// over free DOFs, both at the first step (the mapped state itself) and
+    /// at the last one (the run has settled). Default 1e-2, Anura3D's default
+    /// `$$TOLERATED_ERROR_SOLID` force tolerance.
+    pub residual_ratio: f64,
+    /// Largest accepted MP displacement as a fraction of the model height.
+    /// Default 1e-3: a state that moves more than 0.1 % of its height to find
+    /// equilibrium was not in equilibrium in any practical sense.
+    pub displacement_fraction: f64,
+    /// Largest accepted fraction of MPs that start outside the yield surface,
+    /// and, separately, of MPs that yield during the run. Default 1e-2: a few
+    /// points right at the yield surface (e.g. cohesionless MPs near a free
+    /// surface) may yield under tiny disturbances without any real plastic
+    /// flow; a growing plastic zone soon exceeds 1 %.
+    pub plastic_fraction: f64,
+}
+
+impl Default for Thresholds {
+    fn default() -> Self {
+        Thresholds {
+            residual_ratio: 1e-2,
+            displacement_fraction: 1e-3,
+            plastic_fraction: 1e-2,
+        }
+    }
+}
+
+/// Settings of an MPM run.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct RunSettings {
+    /// Gravitational acceleration g (m/s²), acting along −y.
+    pub gravity: f64,
+    /// Local damping factor α in [0, 1) (CPS `$$HOMOGENEOUS_LOCAL_DAMPING 1 α`).
+    pub damping: f64,
+    /// Courant number in (0, 1] (CPS `$$COURANT_NUMBER`).
+    pub courant: f64,
+    /// Hard cap on the number of steps.
+    pub max_steps: usize,
+    /// Stop once this simulated time (s) is reached.
+    pub end_time: Option<f64>,
+    /// Earliest time (s) at which [`RunSettings::stop_at_equilibrium`] may
+    /// stop the run; `None` = two estimated fundamental periods 2·(4H/c).
+    pub min_time: Option<f64>,
+    /// Record a [`StepRecord`] every this many steps (the first and the last
+    /// step are always recorded).
+    pub record_every: usize,
+    /// Stop as soon as the residual ratio has stayed below
+    /// [`Thresholds::residual_ratio`] for one estimated fundamental period
+    /// (4H/c) after `min_time`.
+    pub stop_at_equilibrium: bool,
+    /// Times (s) at which [`run`] takes a [`Snapshot`] (at the first step that
+    /// reaches each time).
+    pub snapshot_times: Vec<f64>,
+    pub thresholds: Thresholds,
+}
+
+impl RunSettings {
+    /// Settings for the equilibrium check: α = 0.75, Courant 0.9, g = 9.81,
+    /// at most 10 000 steps, stop when settled.
+    pub fn verify() -> RunSettings {
+        RunSettings {
+            gravity: crate::model::DEFAULT_GRAVITY,
+            damping: 0.75,
+            courant: 0.9,
+            max_steps: 10_000,
+            end_time: None,
+            min_time: None,
+            record_every: 100,
+            stop_at_equilibrium: true,
+            snapshot_times: Vec::new(),
+            thresholds: Thresholds::default(),
+        }
+    }
+
+    /// Settings for an undamped dynamic run that goes to `end_time`.
+    pub fn dynamic(end_time: f64) -> RunSettings {
+        RunSettings {
+            damping: 0.0,
+            end_time: Some(end_time),
+            max_steps: usize::MAX,
+            stop_at_equilibrium: false,
+            ..RunSettings::verify()
+        }
+    }
+
+    pub(crate) fn validate(&self) -> Result<(), MpmError> {
+        let bad = |s: String| Err(MpmError::InvalidSettings(s));
+        if !(self.gravity >= 0.0 && self.gravity.is_finite()) {
+            return bad(format!("gravity {} must be finite and ≥ 0", self.gravity));
+        }
+        if !(0.0..1.0).contains(&self.damping) {
+            return bad(format!("damping {} must be in [0, 1)", self.damping));
+        }
+        if !(self.courant > 0.0 && self.courant <= 1.0) {
+            return bad(format!("Courant number {} must be in (0, 1]", self.courant));
+        }
+        if self.max_steps == 0 || self.record_every == 0 {
+            return bad("max_steps and record_every must be ≥ 1".into());
+        }
+        if self.end_time.is_some_and(|t| t.is_nan() || t <= 0.0) {
+            return bad("end_time must be > 0".into());
+        }
+        let t = &self.thresholds;
+        if !(t.residual_ratio > 0.0 && t.displacement_fraction > 0.0 && t.plastic_fraction >= 0.0) {
+            return bad("thresholds must be positive".into());
+        }
+        Ok(())
+    }
+}
+
+impl Default for RunSettings {
+    fn default() -> Self {
+        RunSettings::verify()
+    }
+}

@@ -1,0 +1,653 @@
+//! One explicit MPM time step (MUSL) on the fixed Anura3D background grid, and
+//! the [`Simulation`] that owns the state between steps.
+//!
+//! Scheme (Modified Update Stress Last, Sulsky et al. 1995):
+//!
+//! 1. P2G: lumped nodal mass, momentum and internal force
+//!    f_int = −Σ V_p σ_p ∇N (total stress σ = σ′ + S·p on the normals).
+//!    Gravity enters as f_ext = m_I·g, which equals Σ N m_p g.
+//! 2. Nodes: unbalanced force f = f_ext + f_int, local (Cundall) damping
+//!    f_d = f − α·|f|·sign(v) per component, a = f_d / m; fixed directions and
+//!    nodes lighter than a tiny floor get zero acceleration and velocity.
+//! 3. G2P: MP velocity += Δt Σ N a, position += Δt Σ N v_new.
+//! 4. MUSL: nodal velocities are rebuilt from the updated MP momenta (fixities
+//!    applied again) and give the strain increment Δε = Δt·sym(Σ v ⊗ ∇N), which
+//!    the constitutive model turns into the new effective stress; volumes follow
+//!    the volumetric strain. MUSL rather than USL because it keeps nodes of
+//!    nearly empty elements from producing spurious strain.
+//! 5. Every MP that left its element is located again (neighbour walk, then a
+//!    spatial hash); one that left the mesh is frozen and counted as lost.
+//!
+//! Determinism: every per-MP computation runs in parallel (rayon) into per-MP
+//! buffers, and all sums over MPs (scatter to nodes, energies, counts) run
+//! serially in MP order, so results are bit-identical for any thread count.
+//! The pore pressure and saturation are frozen (drained analysis).
+
+// Numerical kernels index several small arrays with one loop counter.
+#![allow(clippy::needless_range_loop)]
+
+use rayon::prelude::*;
+
+use super::grid::Grid;
+use super::material::SolidModel;
+use super::{MpmError, RunSettings};
+use crate::model::{AnuraModel, Dimension, ElementType, MaterialPoint, MpState};
+
+/// MPs per rayon task: large enough that scheduling costs stay negligible.
+const MIN_CHUNK: usize = 1024;
+
+/// The state of one material point.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Particle<const D: usize, const NC: usize> {
+    pub position: [f64; D],
+    pub displacement: [f64; D],
+    pub velocity: [f64; D],
+    /// Shape function values at the start of the step (set in P2G).
+    pub shape: [f64; NC],
+    /// Effective stress σ′ (kPa).
+    pub stress: [f64; 6],
+    /// Mass (t, or t per metre in plane strain).
+    pub mass: f64,
+    /// Current volume (m³, or m² per metre).
+    pub volume: f64,
+    /// S·p: added to the normal components to get the total stress (kPa).
+    pub pore_term: f64,
+    pub element: u32,
+    /// Index into the solver's material models.
+    pub model: u32,
+    /// Yielded in the last step.
+    pub yielded: bool,
+    /// Yielded in any step so far.
+    pub plastic: bool,
+    /// Left the mesh; frozen since.
+    pub lost: bool,
+}
+
+/// Per-corner P2G contribution of one MP.
+#[derive(Clone, Copy, Debug)]
+struct Contribution<const D: usize> {
+    mass: f64,
+    momentum: [f64; D],
+    force: [f64; D],
+}
+
+impl<const D: usize> Contribution<D> {
+    const ZERO: Contribution<D> = Contribution {
+        mass: 0.0,
+        momentum: [0.0; D],
+        force: [0.0; D],
+    };
+}
+
+/// What one step measured.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct StepOutcome {
+    /// ‖f_ext + f_int‖ / ‖f_ext‖ over free DOFs at the start of the step.
+    pub residual_ratio: f64,
+    /// Kinetic energy of the MPs after the step (kJ, or kJ/m in plane strain).
+    pub kinetic_energy: f64,
+    /// MPs whose stress update was plastic in this step.
+    pub yielded: usize,
+    /// MPs that have yielded in any step so far.
+    pub plastic: usize,
+}
+
+/// The explicit solver for one dimension: `D` coordinates, `NC` corners.
+pub(crate) struct Solver<const D: usize, const NC: usize> {
+    pub grid: Grid<D, NC>,
+    pub models: Vec<SolidModel>,
+    pub particles: Vec<Particle<D, NC>>,
+    /// Initial stress outside the yield surface, per MP.
+    pub inadmissible: Vec<bool>,
+    node_mass: Vec<f64>,
+    node_momentum: Vec<[f64; D]>,
+    node_force: Vec<[f64; D]>,
+    node_acceleration: Vec<[f64; D]>,
+    node_velocity: Vec<[f64; D]>,
+    /// |f_ext + f_int| over the free directions of each node, last step.
+    pub node_residual: Vec<f64>,
+    p2g: Vec<[Contribution<D>; NC]>,
+    remap: Vec<[[f64; D]; NC]>,
+    gravity: [f64; D],
+    damping: f64,
+    pub dt: f64,
+    pub time: f64,
+    pub steps: usize,
+    mass_floor: f64,
+    plane_strain: bool,
+    pub wave_speed: f64,
+    pub min_altitude: f64,
+}
+
+impl<const D: usize, const NC: usize> Solver<D, NC> {
+    pub fn new(
+        model: &AnuraModel,
+        points: &[MaterialPoint],
+        states: &[MpState],
+        settings: &RunSettings,
+    ) -> Result<Self, MpmError> {
+        let grid = Grid::<D, NC>::new(&model.mesh, &model.solid_fixity)?;
+        // Material models are built for the materials MPs actually use, so an
+        // unused material with an unsupported model does not stop the check.
+        let mut slots: Vec<Option<u32>> = vec![None; model.materials.len()];
+        let mut models: Vec<SolidModel> = Vec::new();
+        let mut particles = Vec::with_capacity(points.len());
+        let mut inadmissible = Vec::with_capacity(points.len());
+        let mut wave_speed = 0.0_f64;
+        for (point, state) in points.iter().zip(states) {
+            let bad = |reason: String| MpmError::InvalidPoint {
+                id: point.id,
+                reason,
+            };
+            let material_index = point.material as usize;
+            let material = material_index
+                .checked_sub(1)
+                .and_then(|i| model.materials.get(i))
+                .ok_or_else(|| bad(format!("material {} does not exist", point.material)))?;
+            let slot = match slots[material_index - 1] {
+                Some(slot) => slot,
+                None => {
+                    models.push(SolidModel::from_material(material)?);
+                    let slot = (models.len() - 1) as u32;
+                    slots[material_index - 1] = Some(slot);
+                    slot
+                }
+            };
+            let solid = models[slot as usize];
+            let mut position = [0.0; D];
+            position.copy_from_slice(&point.position[..D]);
+            let finite = position.iter().all(|v| v.is_finite())
+                && state.total.iter().all(|v| v.is_finite())
+                && state.pwp.is_finite()
+                && state.saturation.is_finite();
+            if !finite {
+                return Err(bad("non-finite position or state".into()));
+            }
+            if !(point.volume > 0.0 && point.volume.is_finite()) {
+                return Err(bad(format!("volume {} is not positive", point.volume)));
+            }
+            let element = grid
+                .locate(&position, point.element)
+                .ok_or_else(|| bad(format!("position {:?} is outside the mesh", point.position)))?;
+            // ρ = (1 − n)ρs + n·S·ρw in t/m³: the unit weight (kN/m³) at g = 1 m/s².
+            let density = material.gamma_at_saturation(state.saturation, 1.0);
+            if !(density > 0.0 && density.is_finite()) {
+                return Err(bad(format!(
+                    "material {} gives density {density} t/m³; check porosity and densities",
+                    point.material
+                )));
+            }
+            let mut stress = state.effective();
+            if D == 2 {
+                // Plane strain: no out-of-plane shear.
+                stress[4] = 0.0;
+                stress[5] = 0.0;
+            }
+            inadmissible.push(!solid.is_admissible(&stress, D == 2));
+            wave_speed = wave_speed.max((solid.elasticity.p_wave_modulus() / density).sqrt());
+            particles.push(Particle {
+                position,
+                displacement: [0.0; D],
+                velocity: [0.0; D],
+                shape: [0.0; NC],
+                stress,
+                mass: density * point.volume,
+                volume: point.volume,
+                pore_term: state.saturation * state.pwp,
+                element,
+                model: slot,
+                yielded: false,
+                plastic: false,
+                lost: false,
+            });
+        }
+        let min_altitude = grid.min_altitude();
+        let dt = settings.courant * min_altitude / wave_speed;
+        if !(dt > 0.0 && dt.is_finite()) {
+            return Err(MpmError::InvalidSettings(format!(
+                "time step {dt} s from Courant {} × length {min_altitude} m / wave speed {wave_speed} m/s",
+                settings.courant
+            )));
+        }
+        let max_mass = particles.iter().map(|p| p.mass).fold(0.0, f64::max);
+        let n_nodes = grid.n_nodes();
+        let n_points = particles.len();
+        let mut gravity = [0.0; D];
+        gravity[1] = -settings.gravity;
+        Ok(Solver {
+            grid,
+            models,
+            particles,
+            inadmissible,
+            node_mass: vec![0.0; n_nodes],
+            node_momentum: vec![[0.0; D]; n_nodes],
+            node_force: vec![[0.0; D]; n_nodes],
+            node_acceleration: vec![[0.0; D]; n_nodes],
+            node_velocity: vec![[0.0; D]; n_nodes],
+            node_residual: vec![0.0; n_nodes],
+            p2g: vec![[Contribution::ZERO; NC]; n_points],
+            remap: vec![[[0.0; D]; NC]; n_points],
+            gravity,
+            damping: settings.damping,
+            dt,
+            time: 0.0,
+            steps: 0,
+            mass_floor: 1e-10 * max_mass,
+            plane_strain: D == 2,
+            wave_speed,
+            min_altitude,
+        })
+    }
+
+    /// Advances the state by one time step and reports what it measured.
+    pub fn step(&mut self) -> StepOutcome {
+        let dt = self.dt;
+        let grid = &self.grid;
+
+        // 1. P2G contributions, per MP in parallel.
+        self.particles
+            .par_iter_mut()
+            .zip(self.p2g.par_iter_mut())
+            .with_min_len(MIN_CHUNK)
+            .for_each(|(p, out)| {
+                if p.lost {
+                    *out = [Contribution::ZERO; NC];
+                    return;
+                }
+                let element = &grid.elements[p.element as usize];
+                let n = element.shape.values(&p.position);
+                p.shape = n;
+                let mut total = p.stress;
+                for k in 0..3 {
+                    total[k] += p.pore_term;
+                }
+                for i in 0..NC {
+                    let g = &element.shape.grad[i];
+                    let force = internal_force::<D>(&total, g, p.volume);
+                    let weight = p.mass * n[i];
+                    let mut momentum = [0.0; D];
+                    for d in 0..D {
+                        momentum[d] = weight * p.velocity[d];
+                    }
+                    out[i] = Contribution {
+                        mass: weight,
+                        momentum,
+                        force,
+                    };
+                }
+            });
+
+        // Scatter serially in MP order (deterministic sums).
+        self.node_mass.fill(0.0);
+        self.node_momentum.fill([0.0; D]);
+        self.node_force.fill([0.0; D]);
+        for (p, out) in self.particles.iter().zip(&self.p2g) {
+            let corners = &grid.elements[p.element as usize].corners;
+            for i in 0..NC {
+                let node = corners[i] as usize;
+                self.node_mass[node] += out[i].mass;
+                for d in 0..D {
+                    self.node_momentum[node][d] += out[i].momentum[d];
+                    self.node_force[node][d] += out[i].force[d];
+                }
+            }
+        }
+
+        // 2. Nodal accelerations with local damping and fixities.
+        let mut residual_sq = 0.0;
+        let mut external_sq = 0.0;
+        for node in 0..grid.n_nodes() {
+            let m = self.node_mass[node];
+            if m <= self.mass_floor {
+                self.node_acceleration[node] = [0.0; D];
+                self.node_velocity[node] = [0.0; D];
+                self.node_residual[node] = 0.0;
+                continue;
+            }
+            let mut node_sq = 0.0;
+            for d in 0..D {
+                if grid.fixed[node][d] {
+                    self.node_acceleration[node][d] = 0.0;
+                    self.node_velocity[node][d] = 0.0;
+                    continue;
+                }
+                let external = m * self.gravity[d];
+                let unbalanced = external + self.node_force[node][d];
+                node_sq += unbalanced * unbalanced;
+                external_sq += external * external;
+                let velocity = self.node_momentum[node][d] / m;
+                let damped = unbalanced - self.damping * unbalanced.abs() * sign(velocity);
+                let acceleration = damped / m;
+                self.node_acceleration[node][d] = acceleration;
+                self.node_velocity[node][d] = velocity + acceleration * dt;
+            }
+            residual_sq += node_sq;
+            self.node_residual[node] = node_sq.sqrt();
+        }
+        let residual_ratio = ratio(residual_sq.sqrt(), external_sq.sqrt());
+
+        // 3. G2P: MP velocity and position, and the momenta for the MUSL remap.
+        let acceleration = &self.node_acceleration;
+        let node_velocity = &self.node_velocity;
+        self.particles
+            .par_iter_mut()
+            .zip(self.remap.par_iter_mut())
+            .with_min_len(MIN_CHUNK)
+            .for_each(|(p, out)| {
+                if p.lost {
+                    *out = [[0.0; D]; NC];
+                    return;
+                }
+                let corners = &grid.elements[p.element as usize].corners;
+                let n = p.shape;
+                let mut a = [0.0; D];
+                let mut v = [0.0; D];
+                for i in 0..NC {
+                    let node = corners[i] as usize;
+                    for d in 0..D {
+                        a[d] += n[i] * acceleration[node][d];
+                        v[d] += n[i] * node_velocity[node][d];
+                    }
+                }
+                for d in 0..D {
+                    p.velocity[d] += dt * a[d];
+                    let dx = dt * v[d];
+                    p.position[d] += dx;
+                    p.displacement[d] += dx;
+                }
+                for i in 0..NC {
+                    let w = p.mass * n[i];
+                    for d in 0..D {
+                        out[i][d] = w * p.velocity[d];
+                    }
+                }
+            });
+
+        // 4. MUSL: nodal velocities from the updated MP momenta.
+        self.node_momentum.fill([0.0; D]);
+        for (p, out) in self.particles.iter().zip(&self.remap) {
+            let corners = &grid.elements[p.element as usize].corners;
+            for i in 0..NC {
+                let node = corners[i] as usize;
+                for d in 0..D {
+                    self.node_momentum[node][d] += out[i][d];
+                }
+            }
+        }
+        for node in 0..grid.n_nodes() {
+            let m = self.node_mass[node];
+            for d in 0..D {
+                self.node_velocity[node][d] = if m <= self.mass_floor || grid.fixed[node][d] {
+                    0.0
+                } else {
+                    self.node_momentum[node][d] / m
+                };
+            }
+        }
+
+        // Strain increment, stress update, volume, relocation: per MP.
+        let node_velocity = &self.node_velocity;
+        let models = &self.models;
+        let plane_strain = self.plane_strain;
+        self.particles
+            .par_iter_mut()
+            .with_min_len(MIN_CHUNK)
+            .for_each(|p| {
+                if p.lost {
+                    p.yielded = false;
+                    return;
+                }
+                let element = &grid.elements[p.element as usize];
+                let strain = strain_increment::<D, NC>(element, node_velocity, dt);
+                let kind = models[p.model as usize].update(&mut p.stress, &strain, plane_strain);
+                p.yielded = kind.is_plastic();
+                p.plastic |= p.yielded;
+                p.volume *= 1.0 + strain[0] + strain[1] + strain[2];
+                if !grid.contains(p.element, &p.position) {
+                    match grid.locate(&p.position, p.element) {
+                        Some(e) => p.element = e,
+                        None => {
+                            p.lost = true;
+                            p.velocity = [0.0; D];
+                        }
+                    }
+                }
+            });
+
+        self.time += dt;
+        self.steps += 1;
+        let mut kinetic_energy = 0.0;
+        let mut yielded = 0;
+        let mut plastic = 0;
+        for p in &self.particles {
+            let v2: f64 = p.velocity.iter().map(|v| v * v).sum();
+            kinetic_energy += 0.5 * p.mass * v2;
+            yielded += p.yielded as usize;
+            plastic += p.plastic as usize;
+        }
+        StepOutcome {
+            residual_ratio,
+            kinetic_energy,
+            yielded,
+            plastic,
+        }
+    }
+
+    /// Largest and mean displacement magnitude over the MPs still in the mesh.
+    pub fn displacement_stats(&self) -> (f64, f64) {
+        let mut max = 0.0_f64;
+        let mut sum = 0.0;
+        let mut count = 0usize;
+        for p in self.particles.iter().filter(|p| !p.lost) {
+            let u = p.displacement.iter().map(|v| v * v).sum::<f64>().sqrt();
+            max = max.max(u);
+            sum += u;
+            count += 1;
+        }
+        (max, if count > 0 { sum / count as f64 } else { 0.0 })
+    }
+}
+
+/// −V σ·∇N for one corner, in D components.
+#[inline]
+fn internal_force<const D: usize>(s: &[f64; 6], g: &[f64; D], volume: f64) -> [f64; D] {
+    let mut f = [0.0; D];
+    if D == 2 {
+        f[0] = -volume * (s[0] * g[0] + s[3] * g[1]);
+        f[1] = -volume * (s[3] * g[0] + s[1] * g[1]);
+    } else {
+        // xx yy zz xy yz xz
+        f[0] = -volume * (s[0] * g[0] + s[3] * g[1] + s[5] * g[D - 1]);
+        f[1] = -volume * (s[3] * g[0] + s[1] * g[1] + s[4] * g[D - 1]);
+        f[D - 1] = -volume * (s[5] * g[0] + s[4] * g[1] + s[2] * g[D - 1]);
+    }
+    f
+}
+
+/// Δε = Δt·sym(Σ v_I ⊗ ∇N_I) with engineering shear, as a 6-vector.
+#[inline]
+fn strain_increment<const D: usize, const NC: usize>(
+    element: &super::grid::GridElement<D, NC>,
+    node_velocity: &[[f64; D]],
+    dt: f64,
+) -> [f64; 6] {
+    // Velocity gradient L[a][b] = ∂v_a/∂x_b.
+    let mut l = [[0.0; D]; D];
+    for i in 0..NC {
+        let v = &node_velocity[element.corners[i] as usize];
+        let g = &element.shape.grad[i];
+        for a in 0..D {
+            for b in 0..D {
+                l[a][b] += v[a] * g[b];
+            }
+        }
+    }
+    let mut e = [0.0; 6];
+    e[0] = dt * l[0][0];
+    e[1] = dt * l[1][1];
+    e[3] = dt * (l[0][1] + l[1][0]);
+    if D == 3 {
+        let z = D - 1;
+        e[2] = dt * l[z][z];
+        e[4] = dt * (l[1][z] + l[z][1]);
+        e[5] = dt * (l[0][z] + l[z][0]);
+    }
+    e
+}
+
+#[inline]
+fn sign(v: f64) -> f64 {
+    if v > 0.0 {
+        1.0
+    } else if v < 0.0 {
+        -1.0
+    } else {
+        0.0
+    }
+}
+
+/// a / b with 0/0 = 0 and x/0 = ∞.
+pub(crate) fn ratio(a: f64, b: f64) -> f64 {
+    if b > 0.0 {
+        a / b
+    } else if a == 0.0 {
+        0.0
+    } else {
+        f64::INFINITY
+    }
+}
+
+/// A running explicit MPM simulation of an Anura3D model: the state between
+/// steps, for either a plane-strain TRI3 model or a 3D `tetrahedral_old` one.
+pub struct Simulation {
+    pub(crate) inner: Inner,
+}
+
+pub(crate) enum Inner {
+    Plane(Box<Solver<2, 3>>),
+    Solid(Box<Solver<3, 4>>),
+}
+
+/// Runs `$body` with `$s` bound to the solver of either dimension.
+macro_rules! with_solver {
+    ($sim:expr, $s:ident => $body:expr) => {
+        match $sim {
+            Inner::Plane($s) => $body,
+            Inner::Solid($s) => $body,
+        }
+    };
+}
+pub(crate) use with_solver;
+
+impl Simulation {
+    /// Sets up the solver: checks the model, locates every MP, builds masses,
+    /// effective stresses and the time step. Fails on unsupported dimensions or
+    /// element types, unknown material models, MPs outside the mesh and
+    /// inconsistent inputs.
+    pub fn new(
+        model: &AnuraModel,
+        points: &[MaterialPoint],
+        states: &[MpState],
+        settings: &RunSettings,
+    ) -> Result<Simulation, MpmError> {
+        settings.validate()?;
+        if points.len() != states.len() {
+            return Err(MpmError::LengthMismatch {
+                points: points.len(),
+                states: states.len(),
+            });
+        }
+        if points.is_empty() {
+            return Err(MpmError::NoMaterialPoints);
+        }
+        let mesh = &model.mesh;
+        let inner = match (mesh.dimension, mesh.element_type) {
+            (Dimension::PlaneStrain, ElementType::Tri3) => {
+                Inner::Plane(Box::new(Solver::new(model, points, states, settings)?))
+            }
+            (Dimension::Cartesian3D, ElementType::TetOld) => {
+                Inner::Solid(Box::new(Solver::new(model, points, states, settings)?))
+            }
+            (dimension, element_type) => {
+                return Err(MpmError::Unsupported(format!(
+                    "{} with {} elements (supported: 2D-plane_strain with triangular_3-noded, \
+                     3D-cartesian with tetrahedral_old)",
+                    dimension.gom_name(),
+                    element_type.gom_name()
+                )));
+            }
+        };
+        Ok(Simulation { inner })
+    }
+
+    /// Advances by one explicit time step.
+    pub fn step(&mut self) -> StepOutcome {
+        with_solver!(&mut self.inner, s => s.step())
+    }
+
+    /// The time step Δt (s).
+    pub fn time_step(&self) -> f64 {
+        with_solver!(&self.inner, s => s.dt)
+    }
+
+    /// Simulated time so far (s).
+    pub fn time(&self) -> f64 {
+        with_solver!(&self.inner, s => s.time)
+    }
+
+    /// Steps taken so far.
+    pub fn steps(&self) -> usize {
+        with_solver!(&self.inner, s => s.steps)
+    }
+
+    /// Number of material points.
+    pub fn n_points(&self) -> usize {
+        with_solver!(&self.inner, s => s.particles.len())
+    }
+
+    /// Largest P-wave speed √((K + 4G/3)/ρ) over the MPs (m/s).
+    pub fn wave_speed(&self) -> f64 {
+        with_solver!(&self.inner, s => s.wave_speed)
+    }
+
+    /// Smallest element altitude (m), the length behind the time step.
+    pub fn min_element_size(&self) -> f64 {
+        with_solver!(&self.inner, s => s.min_altitude)
+    }
+
+    /// Largest and mean MP displacement magnitude (m).
+    pub fn displacement_stats(&self) -> (f64, f64) {
+        with_solver!(&self.inner, s => s.displacement_stats())
+    }
+
+    /// MP positions (z = 0 in 2D).
+    pub fn positions(&self) -> Vec<[f64; 3]> {
+        with_solver!(&self.inner, s => s.particles.iter().map(|p| widen(&p.position)).collect())
+    }
+
+    /// MP displacements (z = 0 in 2D).
+    pub fn displacements(&self) -> Vec<[f64; 3]> {
+        with_solver!(&self.inner, s => s.particles.iter().map(|p| widen(&p.displacement)).collect())
+    }
+
+    /// MP effective stresses σ′ (xx, yy, zz, xy, yz, xz; kPa).
+    pub fn effective_stresses(&self) -> Vec<[f64; 6]> {
+        with_solver!(&self.inner, s => s.particles.iter().map(|p| p.stress).collect())
+    }
+
+    /// Per MP: yielded in any step so far.
+    pub fn plastic_flags(&self) -> Vec<bool> {
+        with_solver!(&self.inner, s => s.particles.iter().map(|p| p.plastic).collect())
+    }
+
+    /// Per MP: the 0-based element it is in now.
+    pub fn elements(&self) -> Vec<u32> {
+        with_solver!(&self.inner, s => s.particles.iter().map(|p| p.element).collect())
+    }
+}
+
+fn widen<const D: usize>(v: &[f64; D]) -> [f64; 3] {
+    let mut out = [0.0; 3];
+    out[..D].copy_from_slice(v);
+    out
+}
