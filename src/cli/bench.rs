@@ -45,6 +45,8 @@ pub enum BenchWhat {
     Map,
     /// GOM parsing throughput (MB/s) on a generated TRI3 model.
     Gom,
+    /// Leave-one-out objective at one h and a full calibration (`--nodes`, 2D hydrostatic field).
+    Loo,
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
@@ -109,6 +111,54 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
                 best,
                 args.points as f64 / best,
                 args.points as f64 / best / threads as f64
+            );
+        }
+        BenchWhat::Loo => {
+            let mut rng = ChaCha8Rng::seed_from_u64(2);
+            let nodes: Vec<[f64; 3]> = (0..args.nodes)
+                .map(|_| {
+                    [
+                        rng.random_range(0.0..100.0),
+                        rng.random_range(0.0..100.0),
+                        0.0,
+                    ]
+                })
+                .collect();
+            let values: Vec<f64> = nodes.iter().map(|p| 9.81 * (100.0 - p[1])).collect();
+            let l = mapper::median_spacing(&nodes, 2);
+            let t = Instant::now();
+            let obj = crate::kernel::loo::LooObjective::new(
+                &nodes,
+                2,
+                &values,
+                1,
+                KernelKind::Cubic,
+                2.5 * l,
+            )
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+            let build = t.elapsed().as_secs_f64();
+            let mut best = f64::INFINITY;
+            for _ in 0..args.repeat.max(1) {
+                let t = Instant::now();
+                std::hint::black_box(obj.evaluate(l, crate::kernel::loo::Norm::L1));
+                best = best.min(t.elapsed().as_secs_f64());
+            }
+            let t = Instant::now();
+            let c = crate::calibrate::calibrate(
+                |h| obj.evaluate(h, crate::kernel::loo::Norm::L1),
+                0.3 * l,
+                2.5 * l,
+                &Default::default(),
+            );
+            let full = t.elapsed().as_secs_f64() + build;
+            println!(
+                "loo: {} nodes, {threads} thread(s): neighbour lists {:.3} s, one objective {:.2} ms, full calibration {:.3} s ({} evaluations, h/l = {:.3})",
+                args.nodes,
+                build,
+                best * 1e3,
+                full,
+                c.evaluations,
+                c.h / l
             );
         }
         BenchWhat::Gom => {

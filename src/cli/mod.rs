@@ -10,6 +10,7 @@ mod inspect;
 pub mod map;
 pub mod output;
 pub mod plot;
+mod verify;
 
 use std::process::ExitCode;
 
@@ -35,6 +36,10 @@ pub enum Command {
     Bench(bench::BenchArgs),
     /// Compare two Anura3D projects or files (GOM, CPS, MAPF, mps.csv) within tolerances.
     Diff(diff::DiffArgs),
+    /// Check with the built-in explicit MPM solver that a mapped state is in equilibrium under gravity.
+    Verify(verify::VerifyArgs),
+    /// Keep the explicit MPM solver going for a given time, with snapshots (run-out demonstration).
+    Run(verify::RunArgs),
 }
 
 /// An error that carries its own exit code (1 = a negative verdict).
@@ -80,5 +85,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Calibrate(args) => calibrate::run(args),
         Command::Bench(args) => bench::run(args),
         Command::Diff(args) => diff::run(args),
+        Command::Verify(args) => verify::run_verify(args),
+        Command::Run(args) => verify::run_run(args),
     }
 }

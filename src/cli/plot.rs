@@ -56,22 +56,38 @@ pub fn line_chart(
             .x_label_area_size(48)
             .y_label_area_size(80);
         if log_y {
-            let lo = series
+            // Log scale drawn as log10 of the values on a linear axis, labelled 1e±n.
+            let logged: Vec<Vec<(f64, f64)>> = series
                 .iter()
-                .flat_map(|s| s.points.iter().map(|p| p.1))
-                .filter(|v| *v > 0.0)
-                .fold(f64::INFINITY, f64::min);
-            let lo = if lo.is_finite() { lo * 0.8 } else { 1e-12 };
-            let hi = y1.max(lo * 10.0) * 1.25;
-            let mut chart = builder.build_cartesian_2d(x0..x1, (lo..hi).log_scale())?;
+                .map(|s| {
+                    s.points
+                        .iter()
+                        .filter(|p| p.1 > 0.0)
+                        .map(|p| (p.0, p.1.log10()))
+                        .collect()
+                })
+                .collect();
+            let (lo, hi) = logged
+                .iter()
+                .flatten()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+                    (a.min(p.1), b.max(p.1))
+                });
+            let (lo, hi) = if lo.is_finite() {
+                (lo.floor(), hi.ceil().max(lo.floor() + 1.0))
+            } else {
+                (-1.0, 1.0)
+            };
+            let mut chart = builder.build_cartesian_2d(x0..x1, lo..hi)?;
             chart
                 .configure_mesh()
                 .x_desc(x_label)
                 .y_desc(y_label)
+                .y_labels(((hi - lo) as usize + 1).min(12))
+                .y_label_formatter(&|v| format!("1e{:.0}", v))
                 .label_style(("sans-serif", 15))
                 .draw()?;
-            for s in series {
-                let pts: Vec<(f64, f64)> = s.points.iter().copied().filter(|p| p.1 > 0.0).collect();
+            for (s, pts) in series.iter().zip(logged) {
                 let c = s.color;
                 if s.markers {
                     chart
