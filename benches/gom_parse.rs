@@ -10,18 +10,7 @@ use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 
 fn big_gom() -> String {
     let mesh = generate::structured_tri_mesh(0.0, 0.0, 1000.0, 500.0, 1000, 500);
-    let spec = MaterialSpec {
-        name: "soil".into(),
-        porosity: 0.4,
-        density_solid: 2650.0,
-        density_liquid: None,
-        k0: 0.5,
-        young_modulus: 1e4,
-        poisson_ratio: 0.3,
-        mohr_coulomb: Some((30.0, 1.0, 0.0)),
-        retention: None,
-        permeability: 0.0,
-    };
+    let spec = MaterialSpec::dry_soil("soil");
     model_to_text(&generate::single_material_model(mesh, &spec, 3), "2023")
 }
 

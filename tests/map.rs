@@ -394,32 +394,26 @@ fn conflicting_joins_are_errors() {
     let a = tmp.path().join("a.csv");
     let b = tmp.path().join("b.csv");
     std::fs::write(&a, "Node,X,Y,PWP\n1,0,0,1\n2,1,0,2\n3,0,1,3\n").unwrap();
+    let out = tmp.path().join("o");
+    let join = || {
+        run(&[
+            "map",
+            "--fem",
+            a.to_str().unwrap(),
+            "--fem",
+            b.to_str().unwrap(),
+            "--mpm",
+            gom.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+    };
     std::fs::write(&b, "Node,X,Y,PWP\n1,0,0,1\n2,1,0,5\n3,0,1,3\n").unwrap();
-    let (code, stderr) = run(&[
-        "map",
-        "--fem",
-        a.to_str().unwrap(),
-        "--fem",
-        b.to_str().unwrap(),
-        "--mpm",
-        gom.to_str().unwrap(),
-        "--out",
-        tmp.path().join("o").to_str().unwrap(),
-    ]);
+    let (code, stderr) = join();
     assert_eq!(code, 2);
     assert!(stderr.contains("pwp of node 2 is -5 but -2"), "{stderr}");
     std::fs::write(&b, "Node,X,Y,PWP\n1,0,0,1\n2,1,0,2\n4,0,1,3\n").unwrap();
-    let (code, stderr) = run(&[
-        "map",
-        "--fem",
-        a.to_str().unwrap(),
-        "--fem",
-        b.to_str().unwrap(),
-        "--mpm",
-        gom.to_str().unwrap(),
-        "--out",
-        tmp.path().join("o").to_str().unwrap(),
-    ]);
+    let (code, stderr) = join();
     assert_eq!(code, 2);
     assert!(stderr.contains("node 3 of"), "{stderr}");
     assert!(!tmp.path().join("o").exists());

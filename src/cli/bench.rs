@@ -165,18 +165,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             let nx = ((args.elements as f64 / 2.0).sqrt().round() as usize).max(1);
             let ny = (args.elements / (2 * nx)).max(1);
             let mesh = generate::structured_tri_mesh(0.0, 0.0, nx as f64, ny as f64, nx, ny);
-            let spec = MaterialSpec {
-                name: "soil".into(),
-                porosity: 0.4,
-                density_solid: 2650.0,
-                density_liquid: None,
-                k0: 0.5,
-                young_modulus: 1e4,
-                poisson_ratio: 0.3,
-                mohr_coulomb: Some((30.0, 1.0, 0.0)),
-                retention: None,
-                permeability: 0.0,
-            };
+            let spec = MaterialSpec::dry_soil("soil");
             let text = model_to_text(&generate::single_material_model(mesh, &spec, 3), "2023");
             let mb = text.len() as f64 / 1e6;
             let mut best = f64::INFINITY;

@@ -164,6 +164,25 @@ pub struct MaterialSpec {
     pub permeability: f64,
 }
 
+impl MaterialSpec {
+    /// A dry Mohr–Coulomb soil (n = 0.4, ρs = 2650, E = 10⁴ kPa, ν = 0.3, φ' = 30°,
+    /// c' = 1 kPa): the material of generated benchmark models.
+    pub fn dry_soil(name: &str) -> MaterialSpec {
+        MaterialSpec {
+            name: name.into(),
+            porosity: 0.4,
+            density_solid: 2650.0,
+            density_liquid: None,
+            k0: 0.5,
+            young_modulus: 1e4,
+            poisson_ratio: 0.3,
+            mohr_coulomb: Some((30.0, 1.0, 0.0)),
+            retention: None,
+            permeability: 0.0,
+        }
+    }
+}
+
 /// Builds a [`Material`] with its verbatim positional properties.
 pub fn material(index: u32, spec: &MaterialSpec) -> Material {
     let mut props: Vec<(String, String)> = Vec::new();

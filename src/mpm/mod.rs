@@ -11,7 +11,7 @@
 //! Mohr–Coulomb ([`material`]).
 //!
 //! Entry points: [`verify`] runs a damped simulation until the state settles (or
-//! a step/time limit) and returns a [`RunReport`] with a [`Verdict`]; [`run`]
+//! a step/time limit) and returns a [`RunReport`] with a [`Verdict`]; [`run()`]
 //! runs the same solver and can also return [`Snapshot`]s; [`Simulation`] gives
 //! step-by-step control. The module is pure: it consumes [`crate::model`] data,
 //! does no I/O and prints nothing; it knows nothing about file formats or the
@@ -117,7 +117,7 @@ pub struct RunSettings {
     /// [`Thresholds::residual_ratio`] for one estimated fundamental period
     /// (4H/c) after `min_time`.
     pub stop_at_equilibrium: bool,
-    /// Times (s) at which [`run`] takes a [`Snapshot`] (at the first step that
+    /// Times (s) at which [`run()`] takes a [`Snapshot`] (at the first step that
     /// reaches each time).
     pub snapshot_times: Vec<f64>,
     pub thresholds: Thresholds,
