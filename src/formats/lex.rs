@@ -62,6 +62,35 @@ pub fn tokens(line: &str) -> impl Iterator<Item = (usize, &str)> {
     })
 }
 
+/// The hot-path twin of [`tokens`] for the big data blocks: the same
+/// separators, scanned byte by byte (a test checks both agree).
+struct FastTokens<'a> {
+    line: &'a str,
+    pos: usize,
+}
+
+impl<'a> Iterator for FastTokens<'a> {
+    type Item = (usize, &'a str);
+    #[inline]
+    fn next(&mut self) -> Option<(usize, &'a str)> {
+        let b = self.line.as_bytes();
+        let mut i = self.pos;
+        while i < b.len() && matches!(b[i], b' ' | b'\t' | b',') {
+            i += 1;
+        }
+        if i >= b.len() {
+            self.pos = i;
+            return None;
+        }
+        let start = i;
+        while i < b.len() && !matches!(b[i], b' ' | b'\t' | b',') {
+            i += 1;
+        }
+        self.pos = i;
+        Some((start, &self.line[start..i]))
+    }
+}
+
 /// Parses a whole token as a real number.
 pub fn parse_real(tok: &str) -> Option<f64> {
     // Fast path: plain decimal tokens go straight to the standard parser, which
@@ -115,7 +144,7 @@ pub fn parse_int(tok: &str) -> Option<i64> {
 /// Fortran list-directed input. On failure returns the offending token, or
 /// `None` when the line has fewer than `n` tokens.
 pub fn reals<'a>(line: &'a str, out: &mut [f64]) -> Result<(), Option<BadToken<'a>>> {
-    let mut it = tokens(line);
+    let mut it = FastTokens { line, pos: 0 };
     for slot in out.iter_mut() {
         let (offset, text) = it.next().ok_or(None)?;
         *slot = parse_real(text).ok_or(Some(BadToken { offset, text }))?;
@@ -125,7 +154,7 @@ pub fn reals<'a>(line: &'a str, out: &mut [f64]) -> Result<(), Option<BadToken<'
 
 /// Reads `n` unsigned integers from the start of `line`, like [`reals`].
 pub fn uints<'a>(line: &'a str, out: &mut [u64]) -> Result<(), Option<BadToken<'a>>> {
-    let mut it = tokens(line);
+    let mut it = FastTokens { line, pos: 0 };
     for slot in out.iter_mut() {
         let (offset, text) = it.next().ok_or(None)?;
         *slot = parse_uint(text).ok_or(Some(BadToken { offset, text }))?;
@@ -174,6 +203,18 @@ mod tests {
 
     #[test]
     fn tokens_split_on_blanks_tabs_and_commas() {
+        for line in [
+            "  1\t2,3 ,4  ",
+            "",
+            "   ",
+            "a",
+            ",,x,, y\t\tz",
+            "1.0 2.0 3.0",
+        ] {
+            let nom: Vec<_> = tokens(line).collect();
+            let fast: Vec<_> = FastTokens { line, pos: 0 }.collect();
+            assert_eq!(nom, fast, "{line:?}");
+        }
         let toks: Vec<_> = tokens("  1\t2,3 ,4  ").collect();
         assert_eq!(toks, vec![(2, "1"), (4, "2"), (6, "3"), (9, "4")]);
     }
