@@ -325,6 +325,71 @@ fn saturated_column_with_hydrostatic_pore_pressure_is_in_equilibrium() {
     assert!(!report.verdict.is_equilibrium());
 }
 
+#[test]
+fn unsupported_block_falls_freely_and_leaves_the_mesh() {
+    // Nothing fixed and no stress: every node accelerates at g. With the
+    // symplectic Euler update, u_n = −g·Δt²·n(n+1)/2 = −½·g·t(t + Δt) exactly,
+    // while MPs cross element boundaries. Once they pass y = 0 they are lost.
+    // The block fills the upper half of the mesh and falls through the
+    // empty lower half.
+    let mut model = column_tri3(1.0, 2.0, 2, 4, elastic());
+    for f in &mut model.solid_fixity {
+        *f = [false; 3];
+    }
+    for e in 0..model.mesh.n_elements() {
+        if model
+            .mesh
+            .corner_coords(e)
+            .iter()
+            .take(3)
+            .all(|c| c[1] <= 1.0)
+        {
+            model.element_material[e] = 0;
+        }
+    }
+    let points = place_points(&model);
+    let states = zero_states(&points);
+    let mut simulation =
+        Simulation::new(&model, &points, &states, &RunSettings::dynamic(1.0)).expect("valid");
+    let dt = simulation.time_step();
+    let start = simulation.elements();
+    while simulation.time() < 0.25 {
+        simulation.step();
+    }
+    let t = simulation.time();
+    let expected = -0.5 * G * t * (t + dt);
+    for u in simulation.displacements() {
+        assert!(u[0].abs() < 1e-12);
+        assert!(
+            (u[1] - expected).abs() < 1e-9 * expected.abs(),
+            "{} vs {expected}",
+            u[1]
+        );
+    }
+    let moved = simulation
+        .elements()
+        .iter()
+        .zip(&start)
+        .filter(|(a, b)| a != b)
+        .count();
+    assert!(
+        moved > 0,
+        "some MPs must have changed element after {expected} m"
+    );
+    // A full run: the block falls out of the mesh within 1 s.
+    let report = verify(&model, &points, &states, &RunSettings::dynamic(1.0)).expect("valid");
+    assert_eq!(report.lost_points, points.len());
+    let Verdict::NotInEquilibrium { reasons } = &report.verdict else {
+        panic!("a falling block is not in equilibrium");
+    };
+    assert!(
+        reasons
+            .iter()
+            .any(|r| matches!(r, Reason::LostPoints { .. })),
+        "{reasons:?}"
+    );
+}
+
 /// A 2 m wide, 3 m high block of cohesionless Mohr–Coulomb soil (φ = 30°)
 /// standing on the left of a 6 m wide mesh, the rest of the mesh empty; only
 /// the left side is on rollers, so the right face of the block is free.
@@ -709,6 +774,57 @@ proptest! {
         }
     }
 
+    /// Rotation covariance: for σ = R·diag(p)·Rᵀ the 3D return equals
+    /// R·diag(return of sorted p)·Rᵀ. Principal triples include exactly
+    /// repeated values (states on the edges' axes, as geostatic K0 states with
+    /// σxx = σzz are), which take the Jacobi path.
+    #[test]
+    fn three_d_return_is_rotation_covariant(
+        p in proptest::array::uniform3(-150.0f64..40.0),
+        repeat in 0usize..3,
+        q in proptest::array::uniform4(-1.0f64..1.0),
+        mc in material_strategy(),
+    ) {
+        let mut p = p;
+        match repeat {
+            1 => p[1] = p[0],
+            2 => p[2] = p[1],
+            _ => {}
+        }
+        let norm = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+        prop_assume!(norm > 0.1);
+        let [w, x, y, z] = q.map(|v| v / norm);
+        let r = [
+            [1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - w * z), 2.0 * (x * z + w * y)],
+            [2.0 * (x * y + w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - w * x)],
+            [2.0 * (x * z - w * y), 2.0 * (y * z + w * x), 1.0 - 2.0 * (x * x + y * y)],
+        ];
+        let rotate = |d: [f64; 3]| -> [f64; 6] {
+            let m = |i: usize, j: usize| (0..3).map(|k| r[i][k] * d[k] * r[j][k]).sum::<f64>();
+            [m(0, 0), m(1, 1), m(2, 2), m(0, 1), m(1, 2), m(0, 2)]
+        };
+        let e = elasticity();
+        let mut full = rotate(p);
+        mc.return_stress(&e, &mut full, false);
+        let (principal, _) = mc.return_principal(&e, &sorted(p));
+        // Map the sorted result back to the slots of p (ties: same value).
+        let order = {
+            let mut idx = [0usize, 1, 2];
+            idx.sort_by(|&a, &b| p[b].total_cmp(&p[a]));
+            idx
+        };
+        let mut back = [0.0; 3];
+        for (slot, &o) in order.iter().enumerate() {
+            back[o] = principal[slot];
+        }
+        let expected = rotate(back);
+        let scale = p.iter().fold(1.0_f64, |m, v| m.max(v.abs()));
+        for k in 0..6 {
+            prop_assert!((full[k] - expected[k]).abs() < 1e-8 * scale, "{:?} vs {:?}", full, expected);
+        }
+        prop_assert!(mc.yield_value(&full, false) <= 1e-9 * scale);
+    }
+
     /// The plane-strain path (2×2 eigen-solution plus σzz) and the general 3D
     /// path (Jacobi) return the same stress.
     #[test]
@@ -732,7 +848,7 @@ proptest! {
 fn material_models_are_built_from_gom_materials() {
     let m = mohr_coulomb_material(1e4, 0.3, RHO_S, POROSITY, 30.0, 5.0, 0.0);
     let model = SolidModel::from_material(&m).expect("valid");
-    let mc = model.plasticity.expect("plastic");
+    let mc = model.plasticity.expect("plastic").criterion;
     assert!((mc.sin_phi - 0.5).abs() < 1e-15);
     assert!(mc.tension == 0.0 && mc.apex() == 0.0);
     let mut bad = m.clone();
@@ -753,6 +869,7 @@ fn material_models_are_built_from_gom_materials() {
     let mc = SolidModel::from_material(&softening)
         .expect("valid")
         .plasticity
-        .expect("plastic");
+        .expect("plastic")
+        .criterion;
     assert!((mc.cohesion - 7.5).abs() < 1e-15);
 }

@@ -339,3 +339,97 @@ impl<const D: usize> SpatialHash<D> {
         &self.items[self.start[cell] as usize..self.start[cell + 1] as usize]
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mpm::testing::{column_tet, column_tri3, elastic_material};
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Brute force: every element that contains `x`.
+    fn containing<const D: usize, const NC: usize>(grid: &Grid<D, NC>, x: &[f64; D]) -> Vec<u32> {
+        (0..grid.elements.len() as u32)
+            .filter(|&e| grid.contains(e, x))
+            .collect()
+    }
+
+    fn check_locate<const D: usize, const NC: usize>(
+        grid: &Grid<D, NC>,
+        low: [f64; D],
+        high: [f64; D],
+        seed: u64,
+    ) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        for _ in 0..2000 {
+            let mut x = [0.0; D];
+            for d in 0..D {
+                // Up to 10 % outside the box on each side.
+                let span = high[d] - low[d];
+                x[d] = low[d] - 0.1 * span + 1.2 * span * rng.random::<f64>();
+            }
+            let start = rng.random_range(0..grid.elements.len() as u32);
+            let truth = containing(grid, &x);
+            match grid.locate(&x, start) {
+                Some(e) => assert!(
+                    truth.contains(&e),
+                    "seed {seed}: {x:?} located in {e}, truth {truth:?}"
+                ),
+                None => assert!(
+                    truth.is_empty(),
+                    "seed {seed}: {x:?} not located, truth {truth:?}"
+                ),
+            }
+            match grid.search(&x) {
+                Some(e) => assert!(truth.contains(&e)),
+                None => assert!(truth.is_empty()),
+            }
+        }
+    }
+
+    #[test]
+    fn locate_agrees_with_brute_force_2d() {
+        let model = column_tri3(3.0, 2.0, 6, 4, elastic_material(1e4, 0.3, 2650.0, 0.3));
+        let grid = Grid::<2, 3>::new(&model.mesh, &model.solid_fixity).expect("valid mesh");
+        check_locate(&grid, [0.0, 0.0], [3.0, 2.0], 7);
+    }
+
+    #[test]
+    fn locate_agrees_with_brute_force_3d() {
+        let model = column_tet(
+            1.0,
+            2.0,
+            1.5,
+            2,
+            4,
+            3,
+            elastic_material(1e4, 0.3, 2650.0, 0.3),
+        );
+        let grid = Grid::<3, 4>::new(&model.mesh, &model.solid_fixity).expect("valid mesh");
+        check_locate(&grid, [0.0, 0.0, 0.0], [1.0, 2.0, 1.5], 11);
+        // Only the 4 corners of each 10-node element carry degrees of freedom.
+        let corner_nodes = (3 * 5 * 4) as usize;
+        assert_eq!(grid.n_nodes(), corner_nodes);
+        // Interior faces have a neighbour on each side, consistently.
+        for (e, neighbours) in grid.neighbours.iter().enumerate() {
+            for &n in neighbours.iter().filter(|&&n| n != NO_ELEMENT) {
+                assert!(grid.neighbours[n as usize].contains(&(e as u32)));
+            }
+        }
+    }
+
+    #[test]
+    fn out_of_range_nodes_and_degenerate_elements_are_errors() {
+        let mut model = column_tri3(1.0, 1.0, 1, 1, elastic_material(1e4, 0.3, 2650.0, 0.3));
+        model.mesh.connectivity[2] = 99;
+        assert!(matches!(
+            Grid::<2, 3>::new(&model.mesh, &model.solid_fixity),
+            Err(MpmError::InvalidMesh(_))
+        ));
+        model.mesh.connectivity[2] = model.mesh.connectivity[1];
+        assert!(matches!(
+            Grid::<2, 3>::new(&model.mesh, &model.solid_fixity),
+            Err(MpmError::DegenerateElement { element: 1 })
+        ));
+    }
+}

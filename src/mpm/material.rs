@@ -133,7 +133,7 @@ pub struct MohrCoulomb {
 
 /// One linear yield surface in sorted principal space: f = a·σ − b, with the
 /// flow direction n (∂g/∂σ).
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Debug)]
 struct Surface {
     a: [f64; 3],
     b: f64,
@@ -260,110 +260,26 @@ impl MohrCoulomb {
 
     /// Returns sorted principal trial stresses (σ1 ≥ σ2 ≥ σ3) to the yield
     /// surface; returns them unchanged with [`ReturnKind::Elastic`] when
-    /// admissible.
+    /// admissible. Builds a [`ReturnMap`] for the call; keep one per material
+    /// instead where speed matters.
     pub fn return_principal(
         &self,
         elastic: &Elasticity,
         trial: &[f64; 3],
     ) -> ([f64; 3], ReturnKind) {
-        let scale = trial
-            .iter()
-            .fold(self.cohesion, |m, v| m.max(v.abs()))
-            .max(1e-6);
-        let tol = 1e-12 * scale;
-        if self.yield_value_principal(trial) <= tol {
-            return (*trial, ReturnKind::Elastic);
-        }
-        let surfaces = self.surfaces();
-        let has_cutoff = self.tension.is_finite();
-        let lame = elastic.lame();
-        let two_g = 2.0 * elastic.shear;
-        // D·n for every surface (principal space, isotropic elasticity).
-        let mut dn = [[0.0; 3]; N_SURFACES];
-        for (k, s) in surfaces.iter().enumerate() {
-            let tr = s.n[0] + s.n[1] + s.n[2];
-            for i in 0..3 {
-                dn[k][i] = lame * tr + two_g * s.n[i];
-            }
-        }
-        let value = |k: usize, s: &[f64; 3]| -> f64 {
-            let f = &surfaces[k];
-            f.a[0] * s[0] + f.a[1] * s[1] + f.a[2] * s[2] - f.b
-        };
-        // Try every independent set of one, two, then three surfaces in a fixed
-        // order. Where more than three surfaces meet (e.g. σ1 = σ2 = σt on the
-        // Mohr–Coulomb plane: F1, F2, T1, T2), the return direction lies in the
-        // cone of all their flow vectors, and by Carathéodory's theorem in the
-        // cone of three of them, so the enumeration still finds it.
-        let try_set = |set: &[usize]| -> Option<[f64; 3]> {
-            if !has_cutoff && set.iter().any(|&k| k >= FIRST_CUTOFF) {
-                return None;
-            }
-            let m = set.len();
-            let mut matrix = [[0.0; 3]; 3];
-            let mut rhs = [0.0; 3];
-            for (i, &ki) in set.iter().enumerate() {
-                rhs[i] = value(ki, trial);
-                let a = &surfaces[ki].a;
-                for (j, &kj) in set.iter().enumerate() {
-                    matrix[i][j] = a[0] * dn[kj][0] + a[1] * dn[kj][1] + a[2] * dn[kj][2];
-                }
-            }
-            let lambda = solve_small(&matrix, &rhs, m)?;
-            let largest = lambda[..m].iter().fold(0.0_f64, |acc, v| acc.max(v.abs()));
-            if lambda[..m].iter().any(|&l| l < -1e-10 * largest) {
-                return None;
-            }
-            let mut s = *trial;
-            for (j, &kj) in set.iter().enumerate() {
-                for i in 0..3 {
-                    s[i] -= lambda[j] * dn[kj][i];
-                }
-            }
-            let ordered = s[0] >= s[1] - tol && s[1] >= s[2] - tol;
-            (ordered && self.yield_value_principal(&sort_desc(s).0) <= tol).then_some(s)
-        };
-        let accept = |s: [f64; 3]| (s, self.classify(&s, 1e3 * tol));
-        for i in 0..N_SURFACES {
-            if let Some(s) = try_set(&[i]) {
-                return accept(s);
-            }
-        }
-        for i in 0..N_SURFACES {
-            for j in i + 1..N_SURFACES {
-                if let Some(s) = try_set(&[i, j]) {
-                    return accept(s);
-                }
-            }
-        }
-        for i in 0..N_SURFACES {
-            for j in i + 1..N_SURFACES {
-                for k in j + 1..N_SURFACES {
-                    if let Some(s) = try_set(&[i, j, k]) {
-                        return accept(s);
-                    }
-                }
-            }
-        }
-        // The vertex. Where the cut-off meets the Mohr–Coulomb apex (e.g. c = 0
-        // with σt = 0) more than three surfaces are active there and no subset
-        // of three has non-negative multipliers; when nothing above fits, the
-        // vertex is the return (for φ = 0 without cut-off, whose "vertex" is at
-        // infinity, the hydrostatic part of the trial stress is kept).
-        let apex = self.apex();
-        if apex.is_finite() {
-            let kind = if self.tension.is_finite() {
-                ReturnKind::TensionApex
-            } else {
-                ReturnKind::Apex
-            };
-            ([apex; 3], kind)
-        } else {
-            (
-                [(trial[0] + trial[1] + trial[2]) / 3.0; 3],
-                ReturnKind::Apex,
-            )
-        }
+        ReturnMap::new(*self, *elastic).return_principal(trial)
+    }
+
+    /// Returns a full trial stress (6 components) onto the yield surface in
+    /// place, rotating back with the trial's principal directions. Builds a
+    /// [`ReturnMap`] for the call.
+    pub fn return_stress(
+        &self,
+        elastic: &Elasticity,
+        stress: &mut [f64; 6],
+        plane_strain: bool,
+    ) -> ReturnKind {
+        ReturnMap::new(*self, *elastic).return_stress(stress, plane_strain)
     }
 
     /// Names the part of the surface a returned (sorted) principal stress lies on.
@@ -389,20 +305,195 @@ impl MohrCoulomb {
             _ => ReturnKind::TensionPlane,
         }
     }
+}
+
+/// One independent set of active surfaces with the inverse of its matrix
+/// A_ij = a_i·D·n_j (the multipliers are Δλ = A⁻¹ f_trial).
+#[derive(Clone, Copy, Debug)]
+struct ActiveSet {
+    members: [usize; 3],
+    len: usize,
+    inverse: [[f64; 3]; 3],
+}
+
+/// Largest number of active sets: 6 + 15 + 20 subsets of one to three surfaces.
+const MAX_SETS: usize = 41;
+
+/// The Mohr–Coulomb return of one material, with everything that depends
+/// only on the material precomputed: D·n of every surface and the inverse
+/// matrix of every independent set of up to three surfaces.
+#[derive(Clone, Debug)]
+pub struct ReturnMap {
+    pub criterion: MohrCoulomb,
+    pub elasticity: Elasticity,
+    surfaces: [Surface; N_SURFACES],
+    dn: [[f64; 3]; N_SURFACES],
+    sets: [ActiveSet; MAX_SETS],
+    n_sets: usize,
+}
+
+impl ReturnMap {
+    pub fn new(criterion: MohrCoulomb, elasticity: Elasticity) -> ReturnMap {
+        let surfaces = criterion.surfaces();
+        let lame = elasticity.lame();
+        let two_g = 2.0 * elasticity.shear;
+        let mut dn = [[0.0; 3]; N_SURFACES];
+        for (k, s) in surfaces.iter().enumerate() {
+            let tr = s.n[0] + s.n[1] + s.n[2];
+            for i in 0..3 {
+                dn[k][i] = lame * tr + two_g * s.n[i];
+            }
+        }
+        // Every set of one, two, then three surfaces, in a fixed order; sets
+        // with cut-off planes only when there is a cut-off; singular sets out.
+        let n_active = if criterion.tension.is_finite() {
+            N_SURFACES
+        } else {
+            FIRST_CUTOFF
+        };
+        let mut candidates: Vec<([usize; 3], usize)> = Vec::with_capacity(MAX_SETS);
+        for i in 0..n_active {
+            candidates.push(([i, 0, 0], 1));
+        }
+        for i in 0..n_active {
+            for j in i + 1..n_active {
+                candidates.push(([i, j, 0], 2));
+            }
+        }
+        for i in 0..n_active {
+            for j in i + 1..n_active {
+                for k in j + 1..n_active {
+                    candidates.push(([i, j, k], 3));
+                }
+            }
+        }
+        let empty = ActiveSet {
+            members: [0; 3],
+            len: 0,
+            inverse: [[0.0; 3]; 3],
+        };
+        let mut sets = [empty; MAX_SETS];
+        let mut n_sets = 0;
+        for (members, len) in candidates {
+            let mut matrix = [[0.0; 3]; 3];
+            for i in 0..len {
+                let a = &surfaces[members[i]].a;
+                for j in 0..len {
+                    let d = &dn[members[j]];
+                    matrix[i][j] = a[0] * d[0] + a[1] * d[1] + a[2] * d[2];
+                }
+            }
+            let mut inverse = [[0.0; 3]; 3];
+            let mut regular = true;
+            for col in 0..len {
+                let mut unit = [0.0; 3];
+                unit[col] = 1.0;
+                match solve_small(&matrix, &unit, len) {
+                    Some(x) => {
+                        for row in 0..len {
+                            inverse[row][col] = x[row];
+                        }
+                    }
+                    None => regular = false,
+                }
+            }
+            if regular {
+                sets[n_sets] = ActiveSet {
+                    members,
+                    len,
+                    inverse,
+                };
+                n_sets += 1;
+            }
+        }
+        ReturnMap {
+            criterion,
+            elasticity,
+            surfaces,
+            dn,
+            sets,
+            n_sets,
+        }
+    }
+
+    /// Returns sorted principal trial stresses (σ1 ≥ σ2 ≥ σ3) to the yield
+    /// surface; unchanged with [`ReturnKind::Elastic`] when admissible.
+    pub fn return_principal(&self, trial: &[f64; 3]) -> ([f64; 3], ReturnKind) {
+        let mc = &self.criterion;
+        let scale = trial
+            .iter()
+            .fold(mc.cohesion, |m, v| m.max(v.abs()))
+            .max(1e-6);
+        let tol = 1e-12 * scale;
+        if mc.yield_value_principal(trial) <= tol {
+            return (*trial, ReturnKind::Elastic);
+        }
+        let mut values = [0.0; N_SURFACES];
+        for (k, f) in self.surfaces.iter().enumerate() {
+            values[k] = f.a[0] * trial[0] + f.a[1] * trial[1] + f.a[2] * trial[2] - f.b;
+        }
+        // The first set whose multipliers are non-negative and whose result is
+        // ordered and admissible. Where more than three surfaces meet (e.g.
+        // σ1 = σ2 = σt on the Mohr–Coulomb plane: F1, F2, T1, T2), the return
+        // direction lies in the cone of all their flow vectors and, by
+        // Carathéodory's theorem, in the cone of three of them, so the
+        // enumeration still finds it.
+        for set in &self.sets[..self.n_sets] {
+            let m = set.len;
+            let mut lambda = [0.0; 3];
+            let mut largest = 0.0_f64;
+            for i in 0..m {
+                let mut l = 0.0;
+                for j in 0..m {
+                    l += set.inverse[i][j] * values[set.members[j]];
+                }
+                lambda[i] = l;
+                largest = largest.max(l.abs());
+            }
+            if lambda[..m].iter().any(|&l| l < -1e-10 * largest) {
+                continue;
+            }
+            let mut s = *trial;
+            for j in 0..m {
+                let d = &self.dn[set.members[j]];
+                for i in 0..3 {
+                    s[i] -= lambda[j] * d[i];
+                }
+            }
+            let ordered = s[0] >= s[1] - tol && s[1] >= s[2] - tol;
+            if ordered && mc.yield_value_principal(&sort_desc(s).0) <= tol {
+                return (s, mc.classify(&s, 1e3 * tol));
+            }
+        }
+        // The vertex. Where the cut-off meets the Mohr–Coulomb apex (e.g. c = 0
+        // with σt = 0) more than three surfaces are active there and no subset
+        // of three has non-negative multipliers; when nothing above fits, the
+        // vertex is the return (for φ = 0 without cut-off, whose "vertex" is at
+        // infinity, the hydrostatic part of the trial stress is kept).
+        let apex = mc.apex();
+        if apex.is_finite() {
+            let kind = if mc.tension.is_finite() {
+                ReturnKind::TensionApex
+            } else {
+                ReturnKind::Apex
+            };
+            ([apex; 3], kind)
+        } else {
+            (
+                [(trial[0] + trial[1] + trial[2]) / 3.0; 3],
+                ReturnKind::Apex,
+            )
+        }
+    }
 
     /// Returns a full trial stress (6 components) onto the yield surface in
     /// place, rotating back with the trial's principal directions.
-    pub fn return_stress(
-        &self,
-        elastic: &Elasticity,
-        stress: &mut [f64; 6],
-        plane_strain: bool,
-    ) -> ReturnKind {
+    pub fn return_stress(&self, stress: &mut [f64; 6], plane_strain: bool) -> ReturnKind {
+        let mc = &self.criterion;
         if plane_strain {
             let frame = principal_plane(stress);
-            // Cheap admissibility check before any rebuilding.
             let (sorted, order) = sort_desc(frame.values);
-            let (returned, kind) = self.return_principal(elastic, &sorted);
+            let (returned, kind) = self.return_principal(&sorted);
             if kind == ReturnKind::Elastic {
                 return kind;
             }
@@ -413,38 +504,119 @@ impl MohrCoulomb {
             frame.rebuild(stress, &values);
             kind
         } else {
-            let quick = sort_desc(principal_values_3d(stress)).0;
+            // Trigonometric eigenvalues, already in descending order.
+            let quick = principal_values_3d(stress);
             let scale = quick
                 .iter()
-                .fold(self.cohesion, |m, v| m.max(v.abs()))
+                .fold(mc.cohesion, |m, v| m.max(v.abs()))
                 .max(1e-6);
-            // The trigonometric eigenvalues err by up to ≈ √ε·|σ| near repeated
-            // eigenvalues; a margin of 1e-6·|σ| keeps every possibly plastic
-            // state for the exact (Jacobi) path.
-            if self.yield_value_principal(&quick) < -1e-6 * scale {
+            // They err by up to ≈ √ε·|σ| near repeated eigenvalues; a margin of
+            // 1e-6·|σ| keeps every possibly plastic state for the exact path.
+            if mc.yield_value_principal(&quick) < -1e-6 * scale {
                 return ReturnKind::Elastic;
             }
-            let (values, vectors) = symmetric_eigen_3d(stress);
-            let (sorted, order) = sort_desc(values);
-            let (returned, kind) = self.return_principal(elastic, &sorted);
+            let gap = (quick[0] - quick[1]).min(quick[1] - quick[2]);
+            let (sorted, vectors) = match well_separated_frame(stress, &quick, gap, scale) {
+                Some(vectors) => (quick, vectors),
+                None => {
+                    // Close eigenvalues: Jacobi, robust for any spectrum.
+                    let (values, vectors) = symmetric_eigen_3d(stress);
+                    let (sorted, order) = sort_desc(values);
+                    let mut ordered = [[0.0; 3]; 3];
+                    for row in 0..3 {
+                        for (slot, &o) in order.iter().enumerate() {
+                            ordered[row][slot] = vectors[row][o];
+                        }
+                    }
+                    (sorted, ordered)
+                }
+            };
+            let (returned, kind) = self.return_principal(&sorted);
             if kind == ReturnKind::Elastic {
                 return kind;
             }
-            let mut new_values = [0.0; 3];
-            for (slot, &o) in order.iter().enumerate() {
-                new_values[o] = returned[slot];
-            }
-            *stress = rebuild_3d(&new_values, &vectors);
+            *stress = rebuild_3d(&returned, &vectors);
             kind
         }
     }
 }
 
+/// Eigenvectors (as columns, in the order of `values`, which must be the
+/// descending eigenvalues) from cross products of the rows of σ − λI, when
+/// the eigenvalues are at least 1e-3·|σ| apart; the error is then about
+/// ε·|σ|/gap ≤ 1e-12. `None` for closer eigenvalues.
+#[inline]
+fn well_separated_frame(
+    s: &[f64; 6],
+    values: &[f64; 3],
+    gap: f64,
+    scale: f64,
+) -> Option<[[f64; 3]; 3]> {
+    if !(gap > 1e-3 * scale) {
+        return None;
+    }
+    let v1 = null_vector(s, values[0])?;
+    let mut v3 = null_vector(s, values[2])?;
+    // Re-orthogonalise against v1, then complete the right-handed frame.
+    let d = dot(&v1, &v3);
+    for k in 0..3 {
+        v3[k] -= d * v1[k];
+    }
+    let v3 = normalised(v3)?;
+    let v2 = cross(&v3, &v1);
+    Some([
+        [v1[0], v2[0], v3[0]],
+        [v1[1], v2[1], v3[1]],
+        [v1[2], v2[2], v3[2]],
+    ])
+}
+
+/// Unit vector spanning the null space of σ − λI for a simple eigenvalue λ:
+/// the largest cross product of two rows.
+#[inline]
+fn null_vector(s: &[f64; 6], lambda: f64) -> Option<[f64; 3]> {
+    let r0 = [s[0] - lambda, s[3], s[5]];
+    let r1 = [s[3], s[1] - lambda, s[4]];
+    let r2 = [s[5], s[4], s[2] - lambda];
+    let candidates = [cross(&r0, &r1), cross(&r0, &r2), cross(&r1, &r2)];
+    let mut best = candidates[0];
+    let mut best_norm = dot(&best, &best);
+    for c in &candidates[1..] {
+        let n = dot(c, c);
+        if n > best_norm {
+            best = *c;
+            best_norm = n;
+        }
+    }
+    normalised(best)
+}
+
+#[inline]
+fn cross(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+#[inline]
+fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+#[inline]
+fn normalised(v: [f64; 3]) -> Option<[f64; 3]> {
+    let n = dot(&v, &v).sqrt();
+    (n > 0.0 && n.is_finite()).then(|| [v[0] / n, v[1] / n, v[2] / n])
+}
+
 /// The constitutive model of one material.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct SolidModel {
     pub elasticity: Elasticity,
-    pub plasticity: Option<MohrCoulomb>,
+    /// The Mohr–Coulomb return (criterion and precomputed sets), if plastic.
+    pub plasticity: Option<ReturnMap>,
 }
 
 impl SolidModel {
@@ -478,13 +650,9 @@ impl SolidModel {
                     .ok_or_else(|| missing("FRICTION_ANGLE"))?;
                 let c = material.cohesion.ok_or_else(|| missing("COHESION"))?;
                 let psi = material.dilatancy_angle.unwrap_or(0.0);
-                Some(mohr_coulomb_or_error(
-                    material.index,
-                    phi,
-                    c,
-                    psi,
-                    material.tensile_strength,
-                )?)
+                let criterion =
+                    mohr_coulomb_or_error(material.index, phi, c, psi, material.tensile_strength)?;
+                Some(ReturnMap::new(criterion, elasticity))
             }
             "strain_softening_mohr_coulomb" => {
                 let phi = property(material, "PEAK_FRICTION_ANGLE")
@@ -492,7 +660,10 @@ impl SolidModel {
                 let c =
                     property(material, "PEAK_COHESION").ok_or_else(|| missing("PEAK_COHESION"))?;
                 let psi = property(material, "PEAK_DILATANCY_ANGLE").unwrap_or(0.0);
-                Some(mohr_coulomb_or_error(material.index, phi, c, psi, None)?)
+                Some(ReturnMap::new(
+                    mohr_coulomb_or_error(material.index, phi, c, psi, None)?,
+                    elasticity,
+                ))
             }
             other => {
                 return Err(MpmError::UnsupportedMaterialModel {
@@ -518,7 +689,7 @@ impl SolidModel {
         self.elasticity.add_increment(stress, strain);
         match &self.plasticity {
             None => ReturnKind::Elastic,
-            Some(mc) => mc.return_stress(&self.elasticity, stress, plane_strain),
+            Some(map) => map.return_stress(stress, plane_strain),
         }
     }
 
@@ -527,7 +698,8 @@ impl SolidModel {
     pub fn is_admissible(&self, stress: &[f64; 6], plane_strain: bool) -> bool {
         match &self.plasticity {
             None => true,
-            Some(mc) => {
+            Some(map) => {
+                let mc = &map.criterion;
                 let scale = stress
                     .iter()
                     .fold(mc.cohesion, |m, v| m.max(v.abs()))
@@ -637,7 +809,7 @@ struct PlaneFrame {
 fn principal_plane(s: &[f64; 6]) -> PlaneFrame {
     let centre = 0.5 * (s[0] + s[1]);
     let half = 0.5 * (s[0] - s[1]);
-    let radius = half.hypot(s[3]);
+    let radius = (half * half + s[3] * s[3]).sqrt();
     let (cos2, sin2) = if radius > 0.0 {
         (half / radius, s[3] / radius)
     } else {
@@ -763,6 +935,39 @@ mod tests {
         for k in 0..6 {
             assert!((rebuilt[k] - s[k]).abs() < 1e-10, "{rebuilt:?} vs {s:?}");
         }
+    }
+
+    #[test]
+    fn cross_product_frame_matches_jacobi() {
+        let stresses = [
+            [-12.0, -30.0, -7.5, 4.0, -3.0, 6.5],
+            [-100.0, -40.0, -60.0, 0.0, 0.0, 0.0],
+            [5.0, -80.0, -20.0, 30.0, 1.0, -2.0],
+        ];
+        for s in stresses {
+            let values = principal_values_3d(&s);
+            let scale = values.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+            let gap = (values[0] - values[1]).min(values[1] - values[2]);
+            let frame = well_separated_frame(&s, &values, gap, scale).expect("separated");
+            let rebuilt = rebuild_3d(&values, &frame);
+            for k in 0..6 {
+                assert!(
+                    (rebuilt[k] - s[k]).abs() < 1e-11 * scale,
+                    "{rebuilt:?} vs {s:?}"
+                );
+            }
+            // Orthonormal columns.
+            for a in 0..3 {
+                for b in 0..3 {
+                    let d: f64 = (0..3).map(|r| frame[r][a] * frame[r][b]).sum();
+                    assert!((d - if a == b { 1.0 } else { 0.0 }).abs() < 1e-12);
+                }
+            }
+        }
+        // Repeated eigenvalues are left to Jacobi.
+        let s = [-40.0, -100.0, -40.0, 0.0, 0.0, 0.0];
+        let values = principal_values_3d(&s);
+        assert!(well_separated_frame(&s, &values, 0.0, 100.0).is_none());
     }
 
     #[test]

@@ -25,7 +25,7 @@ pub mod step;
 #[doc(hidden)]
 pub mod testing;
 
-pub use material::{Elasticity, MohrCoulomb, ReturnKind, SolidModel};
+pub use material::{Elasticity, MohrCoulomb, ReturnKind, ReturnMap, SolidModel};
 pub use run::{
     ElementScore, Reason, RunOutput, RunReport, Snapshot, StepRecord, StopReason, Verdict, run,
     verify,

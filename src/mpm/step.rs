@@ -153,7 +153,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                     slot
                 }
             };
-            let solid = models[slot as usize];
+            let solid = &models[slot as usize];
             let mut position = [0.0; D];
             position.copy_from_slice(&point.position[..D]);
             let finite = position.iter().all(|v| v.is_finite())
