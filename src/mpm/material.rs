@@ -552,7 +552,7 @@ fn well_separated_frame(
     gap: f64,
     scale: f64,
 ) -> Option<[[f64; 3]; 3]> {
-    if !(gap > 1e-3 * scale) {
+    if gap.is_nan() || gap <= 1e-3 * scale {
         return None;
     }
     let v1 = null_vector(s, values[0])?;
