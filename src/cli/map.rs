@@ -394,6 +394,42 @@ fn groups(
     Ok((Some(out), "by region: each MP takes only FEM nodes of its own material (no smoothing across material boundaries)".into()))
 }
 
+/// Maps the points whose group is not in `excluded`; excluded points get zero
+/// values and status `Mapped` with no neighbours (they are dry and need no pwp).
+fn map_subset(
+    cloud: &NodeCloud<'_>,
+    points: &[[f64; 3]],
+    groups: Option<&[u32]>,
+    settings: &MapSettings,
+    excluded: &[u32],
+) -> anyhow::Result<mapper::MapResult> {
+    let keep: Vec<usize> = (0..points.len())
+        .filter(|&i| groups.is_none_or(|g| !excluded.contains(&g[i])))
+        .collect();
+    if keep.len() == points.len() {
+        return mapper::map_points(cloud, points, groups, settings)
+            .map_err(|e| anyhow::anyhow!("{e}"));
+    }
+    let sub_points: Vec<[f64; 3]> = keep.iter().map(|&i| points[i]).collect();
+    let sub_groups: Option<Vec<u32>> = groups.map(|g| keep.iter().map(|&i| g[i]).collect());
+    let sub = mapper::map_points(cloud, &sub_points, sub_groups.as_deref(), settings)
+        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let nf = cloud.n_fields;
+    let mut full = mapper::MapResult {
+        values: vec![0.0; points.len() * nf],
+        n_neighbours: vec![0; points.len()],
+        shepard: vec![0.0; points.len()],
+        status: vec![PointStatus::Mapped; points.len()],
+    };
+    for (k, &i) in keep.iter().enumerate() {
+        full.values[i * nf..(i + 1) * nf].copy_from_slice(&sub.values[k * nf..(k + 1) * nf]);
+        full.n_neighbours[i] = sub.n_neighbours[k];
+        full.shepard[i] = sub.shepard[k];
+        full.status[i] = sub.status[k];
+    }
+    Ok(full)
+}
+
 fn min_spacing(points: &[[f64; 3]], dim: usize) -> f64 {
     let index = NeighbourIndex::new(points, dim);
     let mut scratch = Vec::new();
@@ -595,23 +631,37 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
     let point_groups: Option<Vec<u32>> = node_groups
         .as_ref()
         .map(|_| points.iter().map(|p| p.material).collect());
+    // Dry materials without FEM nodes of their own (e.g. an impermeable base the
+    // seepage model left out) get pwp = 0 and no kernel mapping.
+    let mut notes: Vec<String> = Vec::new();
+    let mut dry_without_nodes: Vec<u32> = Vec::new();
     if let (Some(ng), Some(pg)) = (&node_groups, &point_groups) {
         for m in &project.model.materials {
-            if pg.contains(&m.index)
-                && !ng.contains(&m.index)
-                && settings.outside == OutsidePolicy::Error
-            {
-                bail!(
-                    "material {} `{}` has MPs but no FEM nodes of its region; give its nodes, map a region to it with --material-map, or use --outside nearest|skip",
-                    m.index,
-                    m.name
-                );
+            if pg.contains(&m.index) && !ng.contains(&m.index) {
+                if !m.has_water() && stress_source != StressArg::Fem {
+                    dry_without_nodes.push(m.index);
+                    notes.push(format!(
+                        "material {} `{}` is dry and has no FEM nodes: its MPs take pwp = 0 (no mapping)",
+                        m.index, m.name
+                    ));
+                } else if settings.outside == OutsidePolicy::Error {
+                    bail!(
+                        "material {} `{}` has MPs but no FEM nodes of its region; give its nodes, map a region to it with --material-map, or use --outside nearest|skip",
+                        m.index,
+                        m.name
+                    );
+                }
             }
         }
     }
     let t2 = Instant::now();
-    let result = mapper::map_points(&cloud, &positions, point_groups.as_deref(), &settings)
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let result = map_subset(
+        &cloud,
+        &positions,
+        point_groups.as_deref(),
+        &settings,
+        &dry_without_nodes,
+    )?;
     timings.push((
         "kernel mapping".to_string(),
         t2.elapsed().as_secs_f64() * 1e3,
@@ -671,13 +721,13 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
             outside: OutsidePolicy::Nearest,
             ..settings
         };
-        let sampled = mapper::map_points(
+        let sampled = map_subset(
             &cloud,
             &sample_pts,
             sample_groups.as_deref(),
             &sample_settings,
-        )
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
+            &dry_without_nodes,
+        )?;
         let k_pwp = column(Quantity::Pwp).unwrap_or(0);
         let gamma: Vec<f64> = columns
             .samples
