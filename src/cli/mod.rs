@@ -5,6 +5,7 @@
 
 mod bench;
 pub mod calibrate;
+mod demo;
 mod diff;
 mod inspect;
 pub mod map;
@@ -36,6 +37,8 @@ pub enum Command {
     Bench(bench::BenchArgs),
     /// Compare two Anura3D projects or files (GOM, CPS, MAPF, mps.csv) within tolerances.
     Diff(diff::DiffArgs),
+    /// Run the paper's slope application end to end on the shipped fixture.
+    Demo(demo::DemoArgs),
     /// Check with the built-in explicit MPM solver that a mapped state is in equilibrium under gravity.
     Verify(verify::VerifyArgs),
     /// Keep the explicit MPM solver going for a given time, with snapshots (run-out demonstration).
@@ -86,6 +89,7 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Bench(args) => bench::run(args),
         Command::Diff(args) => diff::run(args),
         Command::Verify(args) => verify::run_verify(args),
+        Command::Demo(args) => demo::run(args),
         Command::Run(args) => verify::run_run(args),
     }
 }

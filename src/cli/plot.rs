@@ -181,3 +181,101 @@ pub fn scatter_1to1(
         false,
     )
 }
+
+/// Viridis-like colour for t in [0, 1].
+fn colour(t: f64) -> RGBColor {
+    const STOPS: [(f64, f64, f64); 5] = [
+        (68.0, 1.0, 84.0),
+        (59.0, 82.0, 139.0),
+        (33.0, 145.0, 140.0),
+        (94.0, 201.0, 98.0),
+        (253.0, 231.0, 37.0),
+    ];
+    let t = t.clamp(0.0, 1.0) * 4.0;
+    let k = (t.floor() as usize).min(3);
+    let f = t - k as f64;
+    let (a, b) = (STOPS[k], STOPS[k + 1]);
+    let mix = |p: f64, q: f64| (p + (q - p) * f).round() as u8;
+    RGBColor(mix(a.0, b.0), mix(a.1, b.1), mix(a.2, b.2))
+}
+
+/// A field over the MPs: one dot per point coloured by value, with axes in m and
+/// a labelled colour bar.
+pub fn field_map(
+    path: &Path,
+    title: &str,
+    label: &str,
+    points: &[(f64, f64, f64)],
+) -> anyhow::Result<()> {
+    let (mut x0, mut x1, mut y0, mut y1) = (
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+        f64::INFINITY,
+        f64::NEG_INFINITY,
+    );
+    let (mut v0, mut v1) = (f64::INFINITY, f64::NEG_INFINITY);
+    for &(x, y, v) in points {
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        y0 = y0.min(y);
+        y1 = y1.max(y);
+        v0 = v0.min(v);
+        v1 = v1.max(v);
+    }
+    if !v0.is_finite() {
+        (v0, v1) = (0.0, 1.0);
+    }
+    if v1 - v0 < 1e-12 {
+        v1 = v0 + 1.0;
+    }
+    let (pad_x, pad_y) = (0.03 * (x1 - x0).max(1e-9), 0.05 * (y1 - y0).max(1e-9));
+    let root = SVGBackend::new(path, (1000, 620)).into_drawing_area();
+    root.fill(&WHITE).ok();
+    let draw = || -> Result<(), Box<dyn std::error::Error + '_>> {
+        let (main, bar) = root.split_horizontally(860);
+        let mut chart = ChartBuilder::on(&main)
+            .caption(title, ("sans-serif", 22))
+            .margin(16)
+            .x_label_area_size(44)
+            .y_label_area_size(56)
+            .build_cartesian_2d((x0 - pad_x)..(x1 + pad_x), (y0 - pad_y)..(y1 + pad_y))?;
+        chart
+            .configure_mesh()
+            .x_desc("x (m)")
+            .y_desc("y (m)")
+            .label_style(("sans-serif", 15))
+            .draw()?;
+        chart.draw_series(
+            points
+                .iter()
+                .map(|&(x, y, v)| Circle::new((x, y), 2, colour((v - v0) / (v1 - v0)).filled())),
+        )?;
+        let mut cb = ChartBuilder::on(&bar)
+            .margin_top(60)
+            .margin_bottom(60)
+            .margin_right(10)
+            .y_label_area_size(70)
+            .caption(label, ("sans-serif", 14))
+            .build_cartesian_2d(0.0..1.0, v0..v1)?;
+        cb.configure_mesh()
+            .disable_x_mesh()
+            .disable_x_axis()
+            .disable_y_mesh()
+            .label_style(("sans-serif", 13))
+            .draw()?;
+        let steps = 64;
+        cb.draw_series((0..steps).map(|k| {
+            let a = v0 + (v1 - v0) * k as f64 / steps as f64;
+            let b = v0 + (v1 - v0) * (k + 1) as f64 / steps as f64;
+            Rectangle::new(
+                [(0.0, a), (1.0, b)],
+                colour((k as f64 + 0.5) / steps as f64).filled(),
+            )
+        }))?;
+        root.present()?;
+        Ok(())
+    };
+    draw()
+        .map_err(|e| anyhow::anyhow!("{e}"))
+        .with_context(|| format!("drawing {}", path.display()))
+}

@@ -190,8 +190,23 @@ fn history_plot(path: &Path, report: &mpm::RunReport) -> anyhow::Result<()> {
 }
 
 pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
-    let l = load(&args, "verify")?;
-    let settings = settings(&args, l.project.cps.as_ref());
+    let (report, target) = verify_core(&args)?;
+    print_report(&report, &target);
+    if report.verdict.is_equilibrium() {
+        Ok(())
+    } else {
+        Err(ExitVerdict {
+            message: "not in equilibrium (see verify.json for where)".into(),
+            code: 1,
+        }
+        .into())
+    }
+}
+
+/// Runs the check and writes its outputs; the verdict is in the report.
+pub fn verify_core(args: &VerifyArgs) -> anyhow::Result<(mpm::RunReport, PathBuf)> {
+    let l = load(args, "verify")?;
+    let settings = settings(args, l.project.cps.as_ref());
     let report = mpm::verify(&l.project.model, &l.points, &l.states, &settings)
         .map_err(|e| anyhow::anyhow!("{e}"))?;
     let inputs: Vec<&Path> = vec![&l.model_path];
@@ -223,19 +238,10 @@ pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
         &report.final_plastic,
     )?;
     let target = out.commit()?;
-    print_report(&report, &target);
-    if report.verdict.is_equilibrium() {
-        Ok(())
-    } else {
-        Err(ExitVerdict {
-            message: "not in equilibrium (see verify.json for where)".into(),
-            code: 1,
-        }
-        .into())
-    }
+    Ok((report, target))
 }
 
-fn print_report(r: &mpm::RunReport, target: &Path) {
+pub fn print_report(r: &mpm::RunReport, target: &Path) {
     println!(
         "MPM check  {} MPs on {} elements, dt = {:.3e} s, {} steps, t = {:.4} s ({:?})",
         r.n_points, r.n_elements, r.time_step, r.steps, r.time, r.stop

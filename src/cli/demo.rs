@@ -1,0 +1,215 @@
+//! `a3d-init demo`: the paper's application end to end on the shipped slope
+//! fixture (`fixtures/slope/`): inspect → calibrate h → map → verify, leaving a
+//! ready-to-run Anura3D project with plots of the mapped fields (cf. the paper's
+//! Fig. 9), the calibration curve and the verify history. The pore pressures are
+//! a documented stand-in field, not a SEEP/W result.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::bail;
+
+use super::calibrate::{NormArg, plot_curve, run_calibration};
+use super::map::{self, FemArgs, MapArgs, OutsideArg, SignArg, StressArg};
+use super::output::OutputDir;
+use super::plot;
+use super::verify::{self, VerifyArgs};
+use crate::kernel::KernelKind;
+use crate::model::Quantity;
+
+#[derive(Debug, clap::Args)]
+pub struct DemoArgs {
+    /// Output folder.
+    #[arg(long, default_value = "a3d-init-demo")]
+    pub out: PathBuf,
+    /// Replace an existing output folder.
+    #[arg(long)]
+    pub force: bool,
+}
+
+fn fixture_dir() -> anyhow::Result<PathBuf> {
+    let built_in = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/slope");
+    for dir in [built_in, PathBuf::from("fixtures/slope")] {
+        if dir.join("slope.GOM").exists() {
+            return Ok(dir);
+        }
+    }
+    bail!("fixtures/slope not found: run the demo from the a3d-init repository")
+}
+
+pub fn run(args: DemoArgs) -> anyhow::Result<()> {
+    let started = Instant::now();
+    let dir = fixture_dir()?;
+    let fem_file = dir.join("sand-nodes.csv");
+    println!("a3d-init demo: the rainfall-loaded slope of the seed paper (Lora et al. 2016)");
+    println!(
+        "  NOTE: the pore pressures are a documented STAND-IN field (fixtures/slope/README.md), not SEEP/W results."
+    );
+
+    // 1. Inspect.
+    let project = super::inspect::load_project(&dir)?;
+    println!(
+        "1 inspect    {}: {} nodes, {} TRI3 elements, {} MPs; materials {}",
+        project.files.gom.display(),
+        project.model.mesh.n_nodes(),
+        project.model.mesh.n_elements(),
+        project.points.len(),
+        project
+            .model
+            .materials
+            .iter()
+            .map(|m| m.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+
+    // 2. Calibrate h on the FEM pore pressures.
+    let fem_args = FemArgs {
+        fem: vec![fem_file.clone()],
+        columns: None,
+        fem_units: None,
+        fem_sign: SignArg::Geostudio,
+        fem_mesh: None,
+        analysis: None,
+        step: "last".into(),
+    };
+    let fem = map::load_fem(&fem_args)?;
+    let outcome = run_calibration(
+        &fem.nodes,
+        &[Quantity::Pwp],
+        KernelKind::Cubic,
+        1,
+        NormArg::L1,
+    )?;
+    println!(
+        "2 calibrate  {} FEM nodes: h = {:.4} m, h/l = {:.3} (paper: h = 0.046 m on a 0.05 m mesh, h/l 0.7–1.0); LOO R² = {:.5}",
+        fem.nodes.len(),
+        outcome.h,
+        outcome.h_over_l,
+        outcome.stats.r2
+    );
+
+    // 3. Map with that h.
+    let map_args = MapArgs {
+        fem: fem_args,
+        mpm: dir.clone(),
+        kernel: "cubic".into(),
+        h: Some(format!("{}", outcome.h)),
+        seed: 1,
+        outside: OutsideArg::Error,
+        min_shepard: 0.02,
+        stress: StressArg::Geostatic,
+        material_map: None,
+        out: Some(args.out.clone()),
+        force: args.force,
+    };
+    let mapped = map::compute(&map_args)?;
+    let inputs: Vec<&Path> = vec![&mapped.project.files.gom, &fem_file];
+    let out = OutputDir::create(&args.out, args.force, &inputs)?;
+    let mut written = map::write(&mapped, &out)?;
+    plot_curve(&out.path("calibration.svg"), &outcome)?;
+    let pts = &mapped.project.points;
+    let field = |f: &dyn Fn(&crate::model::MpState) -> f64| -> Vec<(f64, f64, f64)> {
+        pts.iter()
+            .zip(&mapped.states)
+            .map(|(p, s)| (p.position[0], p.position[1], f(s)))
+            .collect()
+    };
+    plot::field_map(
+        &out.path("pwp.svg"),
+        "Mapped pore-water pressure (stand-in field)",
+        "pwp (kPa)",
+        &field(&|s| s.pwp),
+    )?;
+    plot::field_map(
+        &out.path("effective_stress_yy.svg"),
+        "Mapped vertical effective stress σ'yy",
+        "σ'yy (kPa)",
+        &field(&|s| s.effective()[1]),
+    )?;
+    plot::field_map(
+        &out.path("total_stress_yy.svg"),
+        "Mapped vertical total stress σyy",
+        "σyy (kPa)",
+        &field(&|s| s.total[1]),
+    )?;
+    written.extend(
+        [
+            "calibration.svg",
+            "pwp.svg",
+            "effective_stress_yy.svg",
+            "total_stress_yy.svg",
+        ]
+        .map(String::from),
+    );
+    let target = out.commit()?;
+    println!(
+        "3 map        {} MPs, pwp {:.2} .. {:.2} kPa, σyy {:.2} .. {:.2} kPa (Anura3D signs); MAPF h = {:.2e} m",
+        pts.len(),
+        mapped
+            .states
+            .iter()
+            .map(|s| s.pwp)
+            .fold(f64::INFINITY, f64::min),
+        mapped
+            .states
+            .iter()
+            .map(|s| s.pwp)
+            .fold(f64::NEG_INFINITY, f64::max),
+        mapped
+            .states
+            .iter()
+            .map(|s| s.total[1])
+            .fold(f64::INFINITY, f64::min),
+        mapped
+            .states
+            .iter()
+            .map(|s| s.total[1])
+            .fold(f64::NEG_INFINITY, f64::max),
+        mapped.mapf_h
+    );
+
+    // 4. Verify with the explicit MPM runner.
+    let verify_args = VerifyArgs {
+        dir: Some(target.clone()),
+        mpm: None,
+        state: None,
+        max_steps: 20_000,
+        damping: None,
+        out: Some(target.join("verify")),
+        force: true,
+    };
+    let (report, verify_dir) = verify::verify_core(&verify_args)?;
+    println!(
+        "4 verify     {}: initial residual {:.3}, {} MPs yielded, max displacement {:.3} m after {:.3} s",
+        if report.verdict.is_equilibrium() {
+            "IN EQUILIBRIUM"
+        } else {
+            "NOT IN EQUILIBRIUM (the slope is at failure, FS ≈ 1)"
+        },
+        report.initial_residual_ratio,
+        report.plastic_points,
+        report.max_displacement,
+        report.time
+    );
+    println!(
+        "\nfiles in {}/ ({:.1} s):",
+        target.display(),
+        started.elapsed().as_secs_f64()
+    );
+    println!("  Anura3D project  slope.GOM, slope.CPS_001 (MAPF on, K0 off), slope.MAPF");
+    println!("  tables, ParaView mps.csv, mps.vtu, fem.vtu, report.json");
+    println!(
+        "  plots            pwp.svg, effective_stress_yy.svg, total_stress_yy.svg, calibration.svg"
+    );
+    println!(
+        "  MPM check        {}/verify.json, verify_history.svg, mps_start.vtu, mps_end.vtu",
+        verify_dir.display()
+    );
+    println!(
+        "  run-out          a3d-init run {} --time 2 --snapshots 0.3,0.8,1.2,2.0",
+        target.display()
+    );
+    let _ = written;
+    Ok(())
+}

@@ -1,0 +1,59 @@
+//! `a3d-init demo` on the shipped slope: counts, no null points, the calibrated
+//! h/l in the paper's range, one MAPF row per MP, readable plots, and a folder
+//! that `inspect` reads back without warnings.
+
+use std::process::Command;
+
+#[test]
+fn demo_runs_the_whole_chain() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("demo");
+    let o = Command::new(env!("CARGO_BIN_EXE_a3d-init"))
+        .args(["demo", "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        stdout.contains("STAND-IN"),
+        "the stand-in field is labelled: {stdout}"
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["fem_nodes"], 1573);
+    assert_eq!(report["material_points"], 5040);
+    assert_eq!(report["null_points"], 0);
+    let h_over_l =
+        report["smoothing_length"].as_f64().unwrap() / report["fem_spacing"].as_f64().unwrap();
+    assert!((0.7..=1.0).contains(&h_over_l), "h/l = {h_over_l}");
+    let mapf = a3d_init::formats::mapf::read(&out.join("slope.MAPF")).unwrap();
+    assert_eq!(mapf.rows.len(), 5040);
+    for f in [
+        "pwp.svg",
+        "effective_stress_yy.svg",
+        "total_stress_yy.svg",
+        "calibration.svg",
+        "verify/verify.json",
+        "verify/verify_history.svg",
+    ] {
+        let text = std::fs::read_to_string(out.join(f)).unwrap_or_default();
+        assert!(text.len() > 1000, "{f} is written");
+    }
+    let svg = std::fs::read_to_string(out.join("pwp.svg")).unwrap();
+    assert!(
+        svg.contains("x (m)") && svg.contains("y (m)") && svg.contains("pwp (kPa)"),
+        "axes and colour bar are labelled"
+    );
+    let o = Command::new(env!("CARGO_BIN_EXE_a3d-init"))
+        .args(["inspect", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let text = String::from_utf8_lossy(&o.stdout).into_owned();
+    assert_eq!(o.status.code(), Some(0));
+    assert!(text.contains("warnings   none"), "{text}");
+}
