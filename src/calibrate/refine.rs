@@ -26,8 +26,9 @@ pub fn golden_section(
         trace.push((x, v));
         v
     };
-    let fa = eval(a, &mut trace);
-    let fb = eval(b, &mut trace);
+    // Both ends are candidates too.
+    eval(a, &mut trace);
+    eval(b, &mut trace);
     let mut c = b - ratio * (b - a);
     let mut d = a + ratio * (b - a);
     let mut fc = eval(c, &mut trace);
@@ -50,7 +51,6 @@ pub fn golden_section(
             fd = eval(d, &mut trace);
         }
     }
-    let _ = (fa, fb);
     let (x, value) =
         trace.iter().copied().fold(
             (a, f64::INFINITY),

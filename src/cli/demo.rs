@@ -106,7 +106,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     let mapped = map::compute(&map_args)?;
     let inputs: Vec<&Path> = vec![&mapped.project.files.gom, &fem_file];
     let out = OutputDir::create(&args.out, args.force, &inputs)?;
-    let mut written = map::write(&mapped, &out)?;
+    map::write(&mapped, &out)?;
     plot_curve(&out.path("calibration.svg"), &outcome)?;
     let pts = &mapped.project.points;
     let field = |f: &dyn Fn(&crate::model::MpState) -> f64| -> Vec<(f64, f64, f64)> {
@@ -133,15 +133,6 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         "σyy (kPa)",
         &field(&|s| s.total[1]),
     )?;
-    written.extend(
-        [
-            "calibration.svg",
-            "pwp.svg",
-            "effective_stress_yy.svg",
-            "total_stress_yy.svg",
-        ]
-        .map(String::from),
-    );
     let target = out.commit()?;
     println!(
         "3 map        {} MPs, pwp {:.2} .. {:.2} kPa, σyy {:.2} .. {:.2} kPa (Anura3D signs); MAPF h = {:.2e} m",
@@ -210,6 +201,5 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         "  run-out          a3d-init run {} --time 2 --snapshots 0.3,0.8,1.2,2.0",
         target.display()
     );
-    let _ = written;
     Ok(())
 }

@@ -195,7 +195,7 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
     };
     if let Some(path) = &args.mps {
         crate::cli::output::write_new(path, args.force, |w| {
-            crate::formats::mps_table::write_points(w, &p.points, mesh.dimension.n_dim())
+            crate::formats::mps_table::write_points(w, &p.points)
         })
         .with_context(|| format!("writing {}", path.display()))?;
     }

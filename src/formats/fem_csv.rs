@@ -530,7 +530,6 @@ pub fn parse_csv(
         ..FemNodes::default()
     };
     let mut values: Vec<Vec<f64>> = vec![Vec::new(); value_cols.len()];
-    let mut present: Vec<bool> = vec![true; value_cols.len()];
     let mut regions = Vec::new();
     let mut lines_of = Vec::new();
     let mut errors: Vec<ParseError> = Vec::new();
@@ -604,7 +603,6 @@ pub fn parse_csv(
                     if get(c).is_some() {
                         ok = false;
                     }
-                    present[slot] = false;
                     values[slot].push(f64::NAN);
                 }
             }
@@ -665,7 +663,6 @@ pub fn parse_csv(
             .into());
         }
     }
-    let _ = present;
     if cregion.is_some() {
         nodes.region = Some(regions);
     }

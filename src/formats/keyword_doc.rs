@@ -40,6 +40,8 @@ pub struct KeywordDocument {
     terminator: usize,
     /// Replacement data lines for edited blocks, by block index.
     edits: BTreeMap<usize, Vec<String>>,
+    /// Blocks inserted just before the terminator (keyword line, then data lines).
+    appended: Vec<String>,
     eol: &'static str,
 }
 
@@ -139,6 +141,7 @@ impl KeywordDocument {
             blocks,
             terminator,
             edits: BTreeMap::new(),
+            appended: Vec::new(),
             eol,
         })
     }
@@ -214,20 +217,14 @@ impl KeywordDocument {
 
     /// True when some block was replaced.
     pub fn is_edited(&self) -> bool {
-        !self.edits.is_empty()
+        !self.edits.is_empty() || !self.appended.is_empty()
     }
 
     /// Inserts a new block just before the terminator. The new block lives in the
     /// edit list, so everything else is written as read.
     pub fn insert_before_terminator(&mut self, keyword: &str, lines: Vec<String>) {
-        let mut all = vec![keyword.to_string()];
-        all.extend(lines);
-        self.inserted_before_terminator().extend(all);
-    }
-
-    fn inserted_before_terminator(&mut self) -> &mut Vec<String> {
-        // Stored as an edit keyed by usize::MAX; rendered before the terminator.
-        self.edits.entry(usize::MAX).or_default()
+        self.appended.push(keyword.to_string());
+        self.appended.extend(lines);
     }
 
     /// Error position helper: 1-based line `i + 1`, column of `offset` + 1.
@@ -242,7 +239,7 @@ impl KeywordDocument {
 
     /// Renders the document: byte-identical to the input unless blocks were edited.
     pub fn to_text(&self) -> String {
-        if self.edits.is_empty() {
+        if !self.is_edited() {
             return self.text.clone();
         }
         let mut out = String::with_capacity(self.text.len() + 1024);
@@ -256,11 +253,9 @@ impl KeywordDocument {
         }
         for (index, block) in self.blocks.iter().enumerate() {
             if index == self.terminator {
-                if let Some(extra) = self.edits.get(&usize::MAX) {
-                    for l in extra {
-                        out.push_str(l);
-                        out.push_str(self.eol);
-                    }
+                for l in &self.appended {
+                    out.push_str(l);
+                    out.push_str(self.eol);
                 }
                 for i in block.line..self.lines.len() {
                     out.push_str(line_full(i));

@@ -17,12 +17,7 @@ pub fn fmt_f64(v: f64) -> String {
 }
 
 /// Writes the placement table: one row per MP.
-pub fn write_points(
-    w: &mut dyn Write,
-    points: &[MaterialPoint],
-    n_dim: usize,
-) -> std::io::Result<()> {
-    let _ = n_dim;
+pub fn write_points(w: &mut dyn Write, points: &[MaterialPoint]) -> std::io::Result<()> {
     writeln!(w, "id,element,material,local,x,y,z,volume")?;
     for p in points {
         writeln!(
