@@ -20,5 +20,6 @@ pub mod formats;
 pub mod kernel;
 pub mod model;
 pub mod mpm;
+pub mod pipeline;
 pub mod place;
 pub mod state;

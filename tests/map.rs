@@ -82,6 +82,9 @@ fn hydrostatic_block_maps_to_the_analytic_state() {
         gom.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
+        // Per-MP values are what this test checks against the analytic field.
+        "--mixed-state",
+        "per-mp",
     ]);
     assert_eq!(code, 0, "{stderr}");
     let (points, states) = mps_table::read_states(&out.join("mps.csv")).unwrap();
@@ -147,6 +150,8 @@ fn sample_project_round_trip_through_map() {
         model_dir.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
+        "--mixed-state",
+        "per-mp",
     ]);
     assert_eq!(code, 0, "{stderr}");
     // GOM byte-identical.

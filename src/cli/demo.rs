@@ -94,14 +94,16 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         fem: fem_args,
         mpm: dir.clone(),
         kernel: "cubic".into(),
-        h: Some(format!("{}", outcome.h)),
+        h: None,
         seed: 1,
         outside: OutsideArg::Error,
         min_shepard: 0.02,
         stress: StressArg::Geostatic,
         material_map: None,
+        mixed_state: map::MixedStateArg::Mean,
         out: Some(args.out.clone()),
         force: args.force,
+        calibration: Some(outcome.clone()),
     };
     let mapped = map::compute(&map_args)?;
     let inputs: Vec<&Path> = vec![&mapped.project.files.gom, &fem_file];
@@ -170,19 +172,35 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         out: Some(target.join("verify")),
         force: true,
     };
-    let (report, verify_dir) = verify::verify_core(&verify_args)?;
-    println!(
-        "4 verify     {}: initial residual {:.3}, {} MPs yielded, max displacement {:.3} m after {:.3} s",
-        if report.verdict.is_equilibrium() {
-            "IN EQUILIBRIUM"
-        } else {
-            "NOT IN EQUILIBRIUM (the slope is at failure, FS ≈ 1)"
-        },
-        report.initial_residual_ratio,
-        report.plastic_points,
-        report.max_displacement,
-        report.time
-    );
+    let (outcome, verify_dir) = verify::verify_core(&verify_args)?;
+    match &outcome.run {
+        Some(r) => println!(
+            "4 verify     {}: initial residual {:.3}, {} MPs yielded, max displacement {:.3} m after {:.3} s",
+            if outcome.equilibrium {
+                "IN EQUILIBRIUM"
+            } else {
+                "NOT IN EQUILIBRIUM"
+            },
+            r.initial_residual_ratio,
+            r.plastic_points,
+            r.max_displacement,
+            r.time
+        ),
+        None => println!("4 verify     NOT IN EQUILIBRIUM: the run could not start"),
+    }
+    for c in &outcome.causes {
+        println!("             - {c}");
+    }
+    if let Some(d) = outcome
+        .anura3d
+        .as_ref()
+        .and_then(|k| k.sigma_zz_defect.as_ref())
+    {
+        println!(
+            "             σ'zz: Anura3D's 2D MAPF reader sets σ'zz := τxy on all {} MPs; {} of them start outside the yield surface because of it (README: \"The 2D σ'zz defect\")",
+            d.affected, d.outside_because_of_defect
+        );
+    }
     println!(
         "\nfiles in {}/ ({:.1} s):",
         target.display(),

@@ -8,9 +8,7 @@ use anyhow::Context;
 use serde::Serialize;
 
 use crate::formats::cps::CpsDocument;
-use crate::formats::gom::{GomDocument, GomInfo};
-use crate::formats::project::{self, ProjectFiles};
-use crate::model::{AnuraModel, MaterialPoint};
+use crate::formats::project::ProjectFiles;
 
 #[derive(Debug, clap::Args)]
 pub struct InspectArgs {
@@ -30,63 +28,11 @@ pub struct InspectArgs {
     pub force: bool,
 }
 
-/// A loaded Anura3D project: files, documents, typed model and predicted MPs.
-pub struct LoadedProject {
-    pub files: ProjectFiles,
-    pub gom: GomDocument,
-    pub cps: Option<CpsDocument>,
-    pub model: AnuraModel,
-    pub info: GomInfo,
-    pub points: Vec<MaterialPoint>,
-}
+pub use crate::pipeline::Project as LoadedProject;
 
-/// Reads a project and places its MPs; errors are positioned.
+/// Reads a project and places its MPs for its computation method.
 pub fn load_project(path: &std::path::Path) -> anyhow::Result<LoadedProject> {
-    let files = project::discover(path)?;
-    let gom = GomDocument::read(&files.gom)?;
-    let cps = files.cps.as_deref().map(CpsDocument::read).transpose()?;
-    let (model, mut info) = gom.model()?;
-    let points = crate::place::place_material_points(&model).map_err(|errors| {
-        let lines: Vec<String> = errors
-            .0
-            .iter()
-            .take(20)
-            .map(|e| {
-                let line = e
-                    .element()
-                    .and_then(|el| info.element_lines.get(el))
-                    .copied()
-                    .unwrap_or(0);
-                format!("{}:{}:1: {}", files.gom.display(), line, e)
-            })
-            .collect();
-        let more = errors.0.len().saturating_sub(20);
-        anyhow::anyhow!(
-            "{}{}",
-            lines.join("\n"),
-            if more > 0 {
-                format!("\n… and {more} more")
-            } else {
-                String::new()
-            }
-        )
-    })?;
-    if let Some(cps) = &cps {
-        let method = cps.computation_method();
-        if method == "FEM" || method == "UL-FEM" {
-            info.warnings.push(format!(
-                "the CPS computation method is {method}: Anura3D then creates 1 MP per element and ignores the GOM's MP counts; the MPs listed follow the GOM counts"
-            ));
-        }
-    }
-    Ok(LoadedProject {
-        files,
-        gom,
-        cps,
-        model,
-        info,
-        points,
-    })
+    Ok(LoadedProject::load(path)?)
 }
 
 #[derive(Serialize)]

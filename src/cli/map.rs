@@ -46,6 +46,14 @@ pub enum StressArg {
     Zero,
 }
 
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
+pub enum MixedStateArg {
+    /// Each fully filled element's volume-weighted mean state on all its MPs.
+    Mean,
+    /// Keep every MP's own mapped value (Anura3D MPM-MIXED keeps only MP 1's after the first step).
+    PerMp,
+}
+
 /// Options shared by every command that reads FEM node files.
 #[derive(Debug, Clone, clap::Args)]
 pub struct FemArgs {
@@ -100,12 +108,21 @@ pub struct MapArgs {
     /// FEM region → GOM material, e.g. `sand=1,clay=Base` (default: by name or index).
     #[arg(long, value_name = "REGION=MATERIAL,…")]
     pub material_map: Option<String>,
+    /// MPM-MIXED models: what the MPs of a fully filled element carry. Anura3D
+    /// integrates such an element at one point and, after its first step, gives
+    /// every MP the state of the element's first MP.
+    #[arg(long, value_enum, default_value_t = MixedStateArg::Mean)]
+    pub mixed_state: MixedStateArg,
     /// Output folder (default `<project>.a3d-init/` next to the model).
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Replace an existing output folder.
     #[arg(long)]
     pub force: bool,
+    /// A calibration already run on these FEM nodes (the demo's): its h is used
+    /// and it is reported as with `--h auto`.
+    #[arg(skip)]
+    pub calibration: Option<super::calibrate::Outcome>,
 }
 
 /// FEM nodes read and joined, with the reports of each file.
@@ -288,6 +305,9 @@ pub struct MapReport {
     fem_spacing: f64,
     gaussian_truncated_mass: Option<f64>,
     stress_source: String,
+    computation_method: crate::model::ComputationMethod,
+    /// MPM-MIXED only: `mean` or `per-mp` (see `--mixed-state`).
+    mixed_state: Option<MixedStateArg>,
     calibration: Option<super::calibrate::Outcome>,
     material_separation: String,
     materials: Vec<MaterialCount>,
@@ -453,6 +473,22 @@ fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
     })
 }
 
+/// How a calibrated h is described in the report.
+fn calibrated_rule(outcome: &super::calibrate::Outcome, seed: u64) -> String {
+    format!(
+        "calibrated by leave-one-out (paper Eq. 4) on {}: h/l = {:.3}, LOO R² = {:.5}, seed {}{}",
+        outcome.fields.join(", "),
+        outcome.h_over_l,
+        outcome.stats.r2,
+        seed,
+        outcome
+            .fallback
+            .as_deref()
+            .map(|f| format!("; {f}"))
+            .unwrap_or_default()
+    )
+}
+
 /// Everything `map` computes before writing.
 pub struct Mapped {
     pub project: LoadedProject,
@@ -516,6 +552,13 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
     let spacing = mapper::median_spacing(&fem.nodes.positions, dim);
     let mut calibration = None;
     let (h, rule) = match args.h.as_deref() {
+        _ if args.calibration.is_some() => {
+            let outcome = args.calibration.clone().expect("checked");
+            let rule = calibrated_rule(&outcome, args.seed);
+            let h = outcome.h;
+            calibration = Some(outcome);
+            (h, rule)
+        }
         Some("auto") => {
             let fields: Vec<Quantity> = if stress_source_wants_fem(args, &fem.nodes) {
                 fem.nodes.fields.iter().map(|(q, _)| *q).collect()
@@ -531,18 +574,7 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
                 super::calibrate::NormArg::L1,
             )?;
             timings.push(("calibration".to_string(), t.elapsed().as_secs_f64() * 1e3));
-            let rule = format!(
-                "calibrated by leave-one-out (paper Eq. 4) on {}: h/l = {:.3}, LOO R² = {:.5}, seed {}{}",
-                outcome.fields.join(", "),
-                outcome.h_over_l,
-                outcome.stats.r2,
-                args.seed,
-                outcome
-                    .fallback
-                    .as_deref()
-                    .map(|f| format!("; {f}"))
-                    .unwrap_or_default()
-            );
+            let rule = calibrated_rule(&outcome, args.seed);
             let h = outcome.h;
             calibration = Some(outcome);
             (h, rule)
@@ -562,7 +594,12 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
             (
                 factor * spacing,
                 format!(
-                    "spacing rule h = {factor}·l with l = {spacing:.6} m, the median nearest-node spacing (paper §2.2, triangle meshes)"
+                    "spacing rule h = {factor}·l with l = {spacing:.6} m, the median nearest-node spacing (paper §2.2, {})",
+                    if dim == 2 {
+                        "fitted on triangle meshes"
+                    } else {
+                        "fitted on 2D triangle meshes; on this 3D model a rule of thumb, use --h auto to calibrate"
+                    }
                 ),
             )
         }
@@ -697,12 +734,22 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
             saturation: state::saturation(material, pwp),
         });
     }
-    let mut notes = Vec::new();
     if stress_source == StressArg::Fem
         && dim == 2
         && column(Quantity::TotalStress(StressComponent::Zz)).is_none()
     {
         notes.push("σzz was not in the FEM file: set from plane-strain elasticity, σ'zz = ν(σ'xx + σ'yy), with each material's ν".into());
+    }
+    let dropped = state::drop_pore_water_of_dry_materials(&project.model.materials, points, &mut states);
+    if !dropped.is_empty() {
+        let list: Vec<String> = dropped
+            .iter()
+            .map(|d| format!("{} `{}` ({} MPs, |pwp| up to {:.3} kPa)", d.material, d.name, d.points, d.max_abs_pwp))
+            .collect();
+        notes.push(format!(
+            "FEM pore pressure dropped on MPs of materials without a liquid phase (dry_material): {}; they carry pwp = 0 and σ' = σ, as Anura3D would otherwise subtract the MAPF's Pwp from their stress",
+            list.join(", ")
+        ));
     }
     if stress_source == StressArg::Geostatic {
         let t3 = Instant::now();
@@ -794,6 +841,28 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
             };
         }
     }
+    let mixed = if project.method == crate::model::ComputationMethod::MpmMixed {
+        let fully_filled = state::mixed::fully_filled_elements(&project.model, points);
+        let spread = state::mixed::element_spread(points, &states, &fully_filled);
+        match args.mixed_state {
+            MixedStateArg::Mean => {
+                state::mixed::average_elements(&project.model, points, &mut states, &fully_filled);
+                notes.push(format!(
+                    "MPM-MIXED: each of the {} fully filled elements carries its volume-weighted mean state on all its MPs (Anura3D integrates such an element at one point and gives every MP the state of its first MP after the first step); the largest spread inside an element was {:.3} kPa in pwp and {:.3} kPa in total stress; use $$COMPUTATION_METHOD MPM-MP when per-MP detail matters",
+                    spread.elements, spread.pwp, spread.stress
+                ));
+            }
+            MixedStateArg::PerMp => {
+                warnings.push(format!(
+                    "MPM-MIXED with --mixed-state per-mp: Anura3D will replace the state of every MP of the {} fully filled elements by that of the element's first MP after the first step (largest spread inside an element: {:.3} kPa pwp, {:.3} kPa stress); use $$COMPUTATION_METHOD MPM-MP to keep per-MP detail",
+                    spread.elements, spread.pwp, spread.stress
+                ));
+            }
+        }
+        Some(args.mixed_state)
+    } else {
+        None
+    };
     if let Some(bad) = states
         .iter()
         .position(|s| !s.pwp.is_finite() || s.total.iter().any(|v| !v.is_finite()))
@@ -851,6 +920,8 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
             _ => None,
         },
         stress_source: format!("{stress_source:?}").to_lowercase(),
+        computation_method: project.method,
+        mixed_state: mixed,
         calibration,
         material_separation: separation,
         materials,

@@ -10,12 +10,13 @@ use anyhow::{Context, bail};
 use plotters::style::RGBColor;
 
 use super::Verdict as ExitVerdict;
-use super::inspect::load_project;
+use super::inspect::{LoadedProject, load_project};
 use super::output::OutputDir;
 use super::plot::{self, Series};
 use crate::formats::cps::CpsDocument;
 use crate::formats::{mps_table, vtu};
-use crate::model::{MaterialPoint, MpState};
+use crate::model::{ComputationMethod, MaterialPoint, MpState};
+use crate::pipeline::anura3d;
 use crate::mpm::{self, RunSettings};
 
 #[derive(Debug, clap::Args)]
@@ -54,21 +55,249 @@ pub struct RunArgs {
 }
 
 struct Loaded {
-    model_path: PathBuf,
-    project: super::inspect::LoadedProject,
+    project: LoadedProject,
     points: Vec<MaterialPoint>,
+    /// The state the runner starts from: what Anura3D holds at t = 0 (with the
+    /// MPM-MIXED collapse of the first step applied), or the given state table.
     states: Vec<MpState>,
+    /// How the state was obtained and what it shows.
+    kernel: Option<KernelCheck>,
+    /// The state at t = 0 as Anura3D holds it (before the MIXED collapse).
+    start: Vec<MpState>,
     out: PathBuf,
+    /// The output folder is verify's own default subfolder: rerunning replaces it.
+    own_subfolder: bool,
+    inputs: Vec<PathBuf>,
 }
 
+/// What the files Anura3D reads give, next to what a3d-init intended.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct KernelCheck {
+    pub gom: PathBuf,
+    pub cps: Option<PathBuf>,
+    pub mapf: PathBuf,
+    pub computation_method: &'static str,
+    pub mapf_read: bool,
+    pub mapf_rows: usize,
+    pub smoothing_length: f64,
+    /// MPs Anura3D will hold as NaN (no MAPF row within 2h): count and first ids.
+    pub nan_points: usize,
+    pub nan_ids: Vec<u32>,
+    pub carried_saturation: usize,
+    /// mps.csv against the MAPF as Anura3D reads it.
+    pub mps_csv: Option<TableComparison>,
+    /// 2D only: the σ'zz := SigXY defect.
+    pub sigma_zz_defect: Option<SigmaZzDefect>,
+    /// MPs outside their yield surface in the intended state (mps.csv, or the
+    /// kernel state without the 2D defect when there is no mps.csv).
+    pub intended_outside_yield: usize,
+    /// MPM-MIXED: what the first step overwrites.
+    pub mixed: Option<crate::state::mixed::Spread>,
+    pub notes: Vec<String>,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct TableComparison {
+    pub rows: usize,
+    pub differing: usize,
+    /// (MP id, largest difference relative to the column range), worst first.
+    pub worst: Vec<(u32, f64)>,
+}
+
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct SigmaZzDefect {
+    /// MPs whose σ'zz Anura3D sets from SigXY differs from the intended σ'zz.
+    pub affected: usize,
+    /// MPs outside their yield surface because of it (inside in the intended state).
+    pub outside_because_of_defect: usize,
+    /// The first step's return mapping on those MPs: largest change of each
+    /// effective-stress component (xx, yy, zz, xy; kPa).
+    pub first_step_change: [f64; 4],
+}
+
+const MAX_IDS: usize = 10;
+
 fn load(args: &VerifyArgs, default_out: &str) -> anyhow::Result<Loaded> {
-    let (model_path, state_path) = match (&args.dir, &args.mpm, &args.state) {
-        (Some(dir), None, None) => (dir.clone(), dir.join("mps.csv")),
-        (None, Some(m), Some(s)) => (m.clone(), s.clone()),
+    match (&args.dir, &args.mpm, &args.state) {
+        (Some(dir), None, None) => load_folder(args, dir, default_out),
+        (None, Some(m), Some(s)) => load_state_table(args, m, s, default_out),
         _ => bail!("give a folder written by `map`, or --mpm MODEL --state mps.csv"),
+    }
+}
+
+/// `verify DIR`: the GOM, CPS and MAPF of the folder, read as Anura3D reads them.
+fn load_folder(args: &VerifyArgs, dir: &Path, default_out: &str) -> anyhow::Result<Loaded> {
+    let project = load_project(dir)?;
+    let mapf_path = project.files.dir.join(format!("{}.MAPF", project.files.name));
+    let mapf_name = mapf_path.display().to_string();
+    let table = if mapf_path.is_file() {
+        Some(crate::formats::mapf::read(&mapf_path)?)
+    } else {
+        None
     };
-    let project = load_project(&model_path)?;
-    let (points, states) = mps_table::read_states(&state_path)?;
+    let kernel = anura3d::initial_state(&project, table.as_ref(), &mapf_name)?;
+    let n_dim = project.n_dim();
+    let points = project.points.clone();
+    // The intended state: mps.csv when it belongs to this model.
+    let mps_path = project.files.dir.join("mps.csv");
+    let mut notes = kernel.notes.clone();
+    let mut intended: Option<Vec<MpState>> = None;
+    let mut mps_csv = None;
+    if mps_path.is_file() {
+        let (mps_points, mps_states) = mps_table::read_states(&mps_path)?;
+        if same_points(&mps_points, &points) {
+            let worst = anura3d::differing_points(&points, &kernel.states, &mps_states, 1e-9);
+            mps_csv = Some(TableComparison {
+                rows: mps_points.len(),
+                differing: worst.len(),
+                worst: worst.into_iter().take(MAX_IDS).collect(),
+            });
+            intended = Some(mps_states);
+        } else {
+            notes.push(format!(
+                "{} holds {} MPs that are not the {} MPs Anura3D creates for this model ({}): it is ignored",
+                mps_path.display(),
+                mps_points.len(),
+                points.len(),
+                project.method.cps_name()
+            ));
+            mps_csv = Some(TableComparison {
+                rows: mps_points.len(),
+                differing: mps_points.len().max(points.len()),
+                worst: Vec::new(),
+            });
+        }
+    }
+    let nan: Vec<u32> = kernel.nan_points.clone();
+    // Yield checks need each material's model; materials the runner cannot
+    // model are skipped here (the run reports them).
+    let models: Vec<Option<crate::mpm::SolidModel>> = project
+        .model
+        .materials
+        .iter()
+        .map(|m| crate::mpm::SolidModel::from_material(m).ok())
+        .collect();
+    let model_of = |p: &MaterialPoint| models.get(p.material as usize - 1).and_then(Option::as_ref);
+    let plane_strain = n_dim == 2;
+    let intended_eff: Vec<[f64; 6]> = match &intended {
+        Some(states) => states.iter().map(MpState::effective).collect(),
+        None => kernel.effective.clone(),
+    };
+    let intended_outside = points
+        .iter()
+        .zip(&intended_eff)
+        .filter(|(p, e)| {
+            e.iter().all(|v| v.is_finite())
+                && model_of(p).is_some_and(|m| !m.is_admissible(e, plane_strain))
+        })
+        .count();
+    let sigma_zz_defect = (n_dim == 2 && kernel.mapf_read).then(|| {
+        let mut d = SigmaZzDefect {
+            affected: 0,
+            outside_because_of_defect: 0,
+            first_step_change: [0.0; 4],
+        };
+        for ((p, k), i) in points.iter().zip(&kernel.effective).zip(&intended_eff) {
+            if !k.iter().all(|v| v.is_finite()) {
+                continue;
+            }
+            let scale = i.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+            if (k[2] - i[2]).abs() > 1e-9 * scale {
+                d.affected += 1;
+            }
+            let Some(m) = model_of(p) else { continue };
+            if !m.is_admissible(k, plane_strain) && m.is_admissible(i, plane_strain) {
+                d.outside_because_of_defect += 1;
+                let mut returned = *k;
+                if let Some(map) = &m.plasticity {
+                    map.return_stress(&mut returned, plane_strain);
+                }
+                for c in 0..4 {
+                    d.first_step_change[c] = d.first_step_change[c].max((returned[c] - k[c]).abs());
+                }
+            }
+        }
+        d
+    });
+    // MPM-MIXED: after the first step every MP of a fully filled element holds
+    // the state of the element's first MP; the runner starts from that.
+    let mut states = kernel.states.clone();
+    let mixed = (project.method == ComputationMethod::MpmMixed).then(|| {
+        let filled = crate::state::mixed::fully_filled_elements(&project.model, &points);
+        let spread = crate::state::mixed::element_spread(&points, &states, &filled);
+        let mut first: Option<(u32, MpState)> = None;
+        for (p, s) in points.iter().zip(states.iter_mut()) {
+            if !filled[p.element as usize] {
+                continue;
+            }
+            match first {
+                Some((e, f)) if e == p.element => *s = f,
+                _ => first = Some((p.element, *s)),
+            }
+        }
+        spread
+    });
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| project.files.dir.join(default_out));
+    let own_subfolder = args.out.is_none();
+    let mut inputs = vec![project.files.gom.clone(), mapf_path.clone()];
+    inputs.extend(project.files.cps.clone());
+    if mps_path.is_file() {
+        inputs.push(mps_path);
+    }
+    let check = KernelCheck {
+        gom: project.files.gom.clone(),
+        cps: project.files.cps.clone(),
+        mapf: mapf_path,
+        computation_method: project.method.cps_name(),
+        mapf_read: kernel.mapf_read,
+        mapf_rows: kernel.rows,
+        smoothing_length: kernel.smoothing_length,
+        nan_points: nan.len(),
+        nan_ids: nan.iter().take(MAX_IDS).copied().collect(),
+        carried_saturation: kernel.carried_saturation,
+        mps_csv,
+        sigma_zz_defect,
+        intended_outside_yield: intended_outside,
+        mixed,
+        notes,
+    };
+    Ok(Loaded {
+        project,
+        points,
+        states,
+        kernel: Some(check),
+        out,
+        own_subfolder,
+        inputs,
+        start: kernel.states,
+    })
+}
+
+fn same_points(a: &[MaterialPoint], b: &[MaterialPoint]) -> bool {
+    a.len() == b.len()
+        && a.iter().zip(b).all(|(x, y)| {
+            let d = (0..3)
+                .map(|k| (x.position[k] - y.position[k]).powi(2))
+                .sum::<f64>()
+                .sqrt();
+            x.id == y.id
+                && x.element == y.element
+                && d <= 1e-9 * (1.0 + y.position[0].abs() + y.position[1].abs())
+        })
+}
+
+/// `verify --mpm MODEL --state TABLE`: a state table as given (no MAPF).
+fn load_state_table(
+    args: &VerifyArgs,
+    model_path: &Path,
+    state_path: &Path,
+    default_out: &str,
+) -> anyhow::Result<Loaded> {
+    let project = load_project(model_path)?;
+    let (points, states) = mps_table::read_states(state_path)?;
     if points.len() != project.points.len() {
         bail!(
             "{}: {} MPs, but the model places {}",
@@ -77,22 +306,16 @@ fn load(args: &VerifyArgs, default_out: &str) -> anyhow::Result<Loaded> {
             project.points.len()
         );
     }
-    for (a, b) in points.iter().zip(&project.points) {
-        let d = (0..3)
-            .map(|k| (a.position[k] - b.position[k]).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        if a.id != b.id
-            || a.element != b.element
-            || d > 1e-9 * (1.0 + b.position[0].abs() + b.position[1].abs())
-        {
-            bail!(
-                "{}: MP {} does not match the model's MP {} (element or position differ): the state belongs to another model",
-                state_path.display(),
-                a.id,
-                b.id
-            );
-        }
+    if !same_points(&points, &project.points) {
+        let bad = points
+            .iter()
+            .zip(&project.points)
+            .find(|(a, b)| !same_points(std::slice::from_ref(a), std::slice::from_ref(b)))
+            .map_or(0, |(a, _)| a.id);
+        bail!(
+            "{}: MP {bad} does not match the model's MP (element or position differ): the state belongs to another model",
+            state_path.display(),
+        );
     }
     let out = args.out.clone().unwrap_or_else(|| {
         state_path
@@ -100,12 +323,17 @@ fn load(args: &VerifyArgs, default_out: &str) -> anyhow::Result<Loaded> {
             .unwrap_or(Path::new("."))
             .join(default_out)
     });
+    let mut inputs = vec![project.files.gom.clone(), state_path.to_path_buf()];
+    inputs.extend(project.files.cps.clone());
     Ok(Loaded {
-        model_path,
         project,
         points,
+        start: states.clone(),
         states,
+        kernel: None,
         out,
+        own_subfolder: false,
+        inputs,
     })
 }
 
@@ -189,10 +417,142 @@ fn history_plot(path: &Path, report: &mpm::RunReport) -> anyhow::Result<()> {
     )
 }
 
+/// What `verify` found: every cause named separately, the Anura3D-side checks
+/// and the runner's report.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct VerifyOutcome {
+    pub equilibrium: bool,
+    pub causes: Vec<String>,
+    pub anura3d: Option<KernelCheck>,
+    /// `None` when the run could not start (NaN MPs).
+    pub run: Option<mpm::RunReport>,
+}
+
+/// The causes behind a verdict, each on its own.
+fn causes(check: Option<&KernelCheck>, run: Option<&mpm::RunReport>) -> Vec<String> {
+    let mut out = Vec::new();
+    if let Some(k) = check {
+        if k.nan_points > 0 {
+            out.push(format!(
+                "{} MPs will hold NaN in Anura3D: no row of {} within 2h = {:.3e} m (first ids: {:?})",
+                k.nan_points,
+                k.mapf.display(),
+                2.0 * k.smoothing_length,
+                k.nan_ids
+            ));
+        }
+        if let Some(d) = &k.sigma_zz_defect
+            && d.outside_because_of_defect > 0
+        {
+            out.push(format!(
+                "{} MPs start outside their yield surface only because Anura3D's 2D MAPF reader sets σ'zz := SigXY; its first step return-maps them, changing σ'xx, σ'yy, σ'zz, τxy by up to {:.3}, {:.3}, {:.3}, {:.3} kPa",
+                d.outside_because_of_defect,
+                d.first_step_change[0],
+                d.first_step_change[1],
+                d.first_step_change[2],
+                d.first_step_change[3]
+            ));
+        }
+        if k.intended_outside_yield > 0 {
+            out.push(format!(
+                "{} MPs are outside their yield surface in the intended state itself",
+                k.intended_outside_yield
+            ));
+        }
+    }
+    if let Some(r) = run
+        && let mpm::Verdict::NotInEquilibrium { reasons } = &r.verdict
+    {
+        for reason in reasons {
+            if check.is_some() && matches!(reason, mpm::Reason::InadmissibleStress { .. }) {
+                continue; // split into the two causes above
+            }
+            out.push(reason.to_string());
+        }
+    }
+    out
+}
+
+/// Runs the check and writes its outputs; the verdict is in the outcome.
+pub fn verify_core(args: &VerifyArgs) -> anyhow::Result<(VerifyOutcome, PathBuf)> {
+    let l = load(args, "verify")?;
+    let settings = settings(args, l.project.cps.as_ref());
+    let runnable = l.states.iter().all(|s| {
+        s.pwp.is_finite() && s.saturation.is_finite() && s.total.iter().all(|v| v.is_finite())
+    });
+    let report = if runnable {
+        Some(
+            mpm::verify(&l.project.model, &l.points, &l.states, &settings)
+                .map_err(|e| anyhow::anyhow!("{e}"))?,
+        )
+    } else {
+        None
+    };
+    let causes = causes(l.kernel.as_ref(), report.as_ref());
+    let equilibrium = report.as_ref().is_some_and(|r| r.verdict.is_equilibrium())
+        && l.kernel.as_ref().is_none_or(|k| k.nan_points == 0);
+    let outcome = VerifyOutcome {
+        equilibrium,
+        causes,
+        anura3d: l.kernel.clone(),
+        run: report,
+    };
+    let inputs: Vec<&Path> = l.inputs.iter().map(PathBuf::as_path).collect();
+    // Rerunning `verify DIR` replaces its own default subfolder.
+    let force = args.force || (l.own_subfolder && l.out.join("verify.json").is_file());
+    let out = OutputDir::create(&l.out, force, &inputs)?;
+    let json = serde_json::to_string_pretty(&outcome)?;
+    out.write("verify.json", |w| w.write_all(json.as_bytes()))?;
+    let diagnostics: Vec<mps_table::MpDiagnostics> = l
+        .start
+        .iter()
+        .map(|s| mps_table::MpDiagnostics {
+            neighbours: 0,
+            shepard: 0.0,
+            status: if s.pwp.is_finite() && s.total.iter().all(|v| v.is_finite()) {
+                "anura3d"
+            } else {
+                "nan"
+            },
+        })
+        .collect();
+    out.write("start.csv", |w| {
+        mps_table::write_states(w, &l.points, &l.start, &diagnostics)
+    })?;
+    let positions: Vec<[f64; 3]> = l.points.iter().map(|p| p.position).collect();
+    let start_stress: Vec<[f64; 6]> = l.start.iter().map(MpState::effective).collect();
+    write_snapshot(
+        &out,
+        "mps_start.vtu",
+        &positions,
+        &vec![[0.0; 3]; positions.len()],
+        &start_stress,
+        &vec![false; positions.len()],
+    )?;
+    if let Some(report) = &outcome.run {
+        history_plot(&out.path("verify_history.svg"), report)?;
+        let end_positions: Vec<[f64; 3]> = positions
+            .iter()
+            .zip(&report.final_displacements)
+            .map(|(p, d)| [p[0] + d[0], p[1] + d[1], p[2] + d[2]])
+            .collect();
+        write_snapshot(
+            &out,
+            "mps_end.vtu",
+            &end_positions,
+            &report.final_displacements,
+            &report.final_stresses,
+            &report.final_plastic,
+        )?;
+    }
+    let target = out.commit()?;
+    Ok((outcome, target))
+}
+
 pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
-    let (report, target) = verify_core(&args)?;
-    print_report(&report, &target);
-    if report.verdict.is_equilibrium() {
+    let (outcome, target) = verify_core(&args)?;
+    print_outcome(&outcome, &target);
+    if outcome.equilibrium {
         Ok(())
     } else {
         Err(ExitVerdict {
@@ -203,45 +563,87 @@ pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
     }
 }
 
-/// Runs the check and writes its outputs; the verdict is in the report.
-pub fn verify_core(args: &VerifyArgs) -> anyhow::Result<(mpm::RunReport, PathBuf)> {
-    let l = load(args, "verify")?;
-    let settings = settings(args, l.project.cps.as_ref());
-    let report = mpm::verify(&l.project.model, &l.points, &l.states, &settings)
-        .map_err(|e| anyhow::anyhow!("{e}"))?;
-    let inputs: Vec<&Path> = vec![&l.model_path];
-    let out = OutputDir::create(&l.out, args.force, &inputs)?;
-    let json = serde_json::to_string_pretty(&report)?;
-    out.write("verify.json", |w| w.write_all(json.as_bytes()))?;
-    history_plot(&out.path("verify_history.svg"), &report)?;
-    let start_stress: Vec<[f64; 6]> = l.states.iter().map(MpState::effective).collect();
-    let positions: Vec<[f64; 3]> = l.points.iter().map(|p| p.position).collect();
-    write_snapshot(
-        &out,
-        "mps_start.vtu",
-        &positions,
-        &vec![[0.0; 3]; positions.len()],
-        &start_stress,
-        &vec![false; positions.len()],
-    )?;
-    let end_positions: Vec<[f64; 3]> = positions
-        .iter()
-        .zip(&report.final_displacements)
-        .map(|(p, d)| [p[0] + d[0], p[1] + d[1], p[2] + d[2]])
-        .collect();
-    write_snapshot(
-        &out,
-        "mps_end.vtu",
-        &end_positions,
-        &report.final_displacements,
-        &report.final_stresses,
-        &report.final_plastic,
-    )?;
-    let target = out.commit()?;
-    Ok((report, target))
+/// Prints the Anura3D-side checks, the run and the verdict with its causes.
+pub fn print_outcome(o: &VerifyOutcome, target: &Path) {
+    if let Some(k) = &o.anura3d {
+        println!(
+            "Anura3D    {} ({}), MAPF {} rows, h = {:.3e} m{}",
+            k.gom.display(),
+            k.computation_method,
+            k.mapf_rows,
+            k.smoothing_length,
+            if k.mapf_read { "" } else { " (not read: switch off)" }
+        );
+        if let Some(t) = &k.mps_csv {
+            if t.differing == 0 {
+                println!("           mps.csv agrees with what Anura3D reads from the MAPF ({} MPs)", t.rows);
+            } else {
+                println!(
+                    "           mps.csv and the MAPF disagree on {} of {} MPs (worst: {})",
+                    t.differing,
+                    t.rows,
+                    t.worst
+                        .iter()
+                        .take(5)
+                        .map(|(id, d)| format!("MP {id} by {:.2}% of range", d * 100.0))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                );
+            }
+        }
+        if let Some(m) = &k.mixed
+            && m.elements > 0
+            && (m.pwp > 0.0 || m.stress > 0.0)
+        {
+            println!(
+                "           MPM-MIXED: the first step gives every MP of {} elements its element's first-MP state (spread up to {:.3} kPa pwp, {:.3} kPa stress)",
+                m.elements, m.pwp, m.stress
+            );
+        }
+        for n in &k.notes {
+            println!("           {n}");
+        }
+    }
+    if let Some(r) = &o.run {
+        print_report(r);
+    }
+    if o.equilibrium {
+        println!("verdict    IN EQUILIBRIUM");
+    } else {
+        println!("verdict    NOT IN EQUILIBRIUM");
+        for c in &o.causes {
+            println!("           - {c}");
+        }
+        if let Some(r) = &o.run
+            && !r.verdict.is_equilibrium()
+        {
+            for e in r.worst_residual_elements.iter().take(5) {
+                println!(
+                    "           largest residual: element {} at ({:.3}, {:.3}): {:.3e}",
+                    e.id, e.centroid[0], e.centroid[1], e.value
+                );
+            }
+            for e in r.plastic_elements.iter().take(5) {
+                println!(
+                    "           plastic flow: element {} at ({:.3}, {:.3}): {} MPs",
+                    e.id, e.centroid[0], e.centroid[1], e.value
+                );
+            }
+        }
+    }
+    println!(
+        "wrote      {}/ (verify.json, start.csv, mps_start.vtu{})",
+        target.display(),
+        if o.run.is_some() {
+            ", verify_history.svg, mps_end.vtu"
+        } else {
+            ""
+        }
+    );
 }
 
-pub fn print_report(r: &mpm::RunReport, target: &Path) {
+/// Prints the runner's figures (no verdict).
+pub fn print_report(r: &mpm::RunReport) {
     println!(
         "MPM check  {} MPs on {} elements, dt = {:.3e} s, {} steps, t = {:.4} s ({:?})",
         r.n_points, r.n_elements, r.time_step, r.steps, r.time, r.stop
@@ -262,34 +664,6 @@ pub fn print_report(r: &mpm::RunReport, target: &Path) {
         "plastic    {} MPs start outside the yield surface, {} yielded during the run",
         r.inadmissible_points, r.plastic_points
     );
-    match &r.verdict {
-        mpm::Verdict::Equilibrium { .. } => println!("verdict    IN EQUILIBRIUM"),
-        mpm::Verdict::NotInEquilibrium { reasons } => {
-            println!("verdict    NOT IN EQUILIBRIUM");
-            for reason in reasons {
-                println!(
-                    "           - {}",
-                    serde_json::to_string(reason).unwrap_or_default()
-                );
-            }
-            for e in r.worst_residual_elements.iter().take(5) {
-                println!(
-                    "           largest residual: element {} at ({:.3}, {:.3}): {:.3e}",
-                    e.id, e.centroid[0], e.centroid[1], e.value
-                );
-            }
-            for e in r.plastic_elements.iter().take(5) {
-                println!(
-                    "           plastic flow: element {} at ({:.3}, {:.3}): {} MPs",
-                    e.id, e.centroid[0], e.centroid[1], e.value
-                );
-            }
-        }
-    }
-    println!(
-        "wrote      {}/ (verify.json, verify_history.svg, mps_start.vtu, mps_end.vtu)",
-        target.display()
-    );
 }
 
 pub fn run_run(args: RunArgs) -> anyhow::Result<()> {
@@ -308,7 +682,7 @@ pub fn run_run(args: RunArgs) -> anyhow::Result<()> {
         .collect();
     let output = mpm::run(&l.project.model, &l.points, &l.states, &settings)
         .map_err(|e| anyhow::anyhow!("{e}"))?;
-    let inputs: Vec<&Path> = vec![&l.model_path];
+    let inputs: Vec<&Path> = l.inputs.iter().map(PathBuf::as_path).collect();
     let out = OutputDir::create(&l.out, args.verify.force, &inputs)?;
     let json = serde_json::to_string_pretty(&output.report)?;
     out.write("run.json", |w| w.write_all(json.as_bytes()))?;

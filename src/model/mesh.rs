@@ -192,3 +192,47 @@ impl AnuraModel {
         }
     }
 }
+
+/// `$$COMPUTATION_METHOD` of the CPS: how Anura3D creates and integrates MPs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, serde::Serialize)]
+pub enum ComputationMethod {
+    /// `MPM-MIXED` (Anura3D's default): fully filled elements are integrated at
+    /// their Gauss point, so after the first step every MP of such an element
+    /// carries the state of its first MP.
+    #[default]
+    MpmMixed,
+    /// `MPM-MP`: every element is integrated at its MPs; per-MP detail survives.
+    MpmMp,
+    /// `FEM`: one MP per active element, whatever the GOM's counts say.
+    Fem,
+    /// `UL-FEM`: as `FEM`, updated Lagrangian.
+    UlFem,
+}
+
+impl ComputationMethod {
+    /// Parses the CPS value (case-insensitive, as Anura3D upper-cases it).
+    pub fn parse(s: &str) -> Option<ComputationMethod> {
+        match s.trim().to_ascii_uppercase().as_str() {
+            "MPM-MIXED" => Some(ComputationMethod::MpmMixed),
+            "MPM-MP" => Some(ComputationMethod::MpmMp),
+            "FEM" => Some(ComputationMethod::Fem),
+            "UL-FEM" => Some(ComputationMethod::UlFem),
+            _ => None,
+        }
+    }
+
+    /// The CPS spelling.
+    pub fn cps_name(self) -> &'static str {
+        match self {
+            ComputationMethod::MpmMixed => "MPM-MIXED",
+            ComputationMethod::MpmMp => "MPM-MP",
+            ComputationMethod::Fem => "FEM",
+            ComputationMethod::UlFem => "UL-FEM",
+        }
+    }
+
+    /// True for `FEM` and `UL-FEM`: one MP per active element.
+    pub fn one_point_per_element(self) -> bool {
+        matches!(self, ComputationMethod::Fem | ComputationMethod::UlFem)
+    }
+}

@@ -16,7 +16,7 @@ mod points;
 
 pub use fem::{FemNodes, Quantity, StressComponent};
 pub use material::{Material, RetentionCurve};
-pub use mesh::{AnuraModel, Dimension, ElementType, Mesh};
+pub use mesh::{AnuraModel, ComputationMethod, Dimension, ElementType, Mesh};
 pub use points::{MaterialPoint, MpState};
 
 /// Standard gravitational acceleration used when a CPS gives none (m/s²).

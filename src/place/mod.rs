@@ -10,7 +10,7 @@
 
 pub mod tables;
 
-use crate::model::{AnuraModel, ElementType, MaterialPoint, Mesh};
+use crate::model::{AnuraModel, ComputationMethod, ElementType, MaterialPoint, Mesh};
 pub use tables::{LocalPoint, local_points};
 
 /// A problem with one element.
@@ -200,8 +200,21 @@ pub fn check_elements(mesh: &Mesh, active: impl Fn(usize) -> bool) -> Vec<PlaceE
         .collect()
 }
 
-/// Creates the MPs of `model` exactly as Anura3D does at load step 1.
+/// Creates the MPs of `model` exactly as Anura3D does at load step 1 of an MPM
+/// computation (the GOM's counts).
 pub fn place_material_points(model: &AnuraModel) -> Result<Vec<MaterialPoint>, PlaceErrors> {
+    place_material_points_for(model, ComputationMethod::MpmMixed)
+}
+
+/// Creates the MPs of `model` as Anura3D does for `method`: the GOM's counts for
+/// MPM, and for `FEM`/`UL-FEM` one point per active element whatever the counts
+/// say (Anura3D's one-point table, i.e. the mean of the corner nodes; counts of 0
+/// are accepted there).
+pub fn place_material_points_for(
+    model: &AnuraModel,
+    method: ComputationMethod,
+) -> Result<Vec<MaterialPoint>, PlaceErrors> {
+    let one_point = method.one_point_per_element();
     let mesh = &model.mesh;
     let et = mesh.element_type;
     let mut errors = Vec::new();
@@ -210,7 +223,7 @@ pub fn place_material_points(model: &AnuraModel) -> Result<Vec<MaterialPoint>, P
         .iter()
         .zip(&model.element_material)
         .filter(|(_, m)| **m > 0)
-        .map(|(c, _)| c.0 as usize)
+        .map(|(c, _)| if one_point { 1 } else { c.0 as usize })
         .sum();
     let mut points = Vec::with_capacity(total);
     for e in 0..mesh.n_elements() {
@@ -218,7 +231,11 @@ pub fn place_material_points(model: &AnuraModel) -> Result<Vec<MaterialPoint>, P
         if material == 0 {
             continue;
         }
-        let count = model.mp_counts.get(e).map_or(0, |c| c.0);
+        let count = if one_point {
+            1
+        } else {
+            model.mp_counts.get(e).map_or(0, |c| c.0)
+        };
         if count == 0 {
             errors.push(PlaceError::ActiveWithoutPoints {
                 element: e,

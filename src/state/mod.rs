@@ -7,8 +7,9 @@
 //! material's degree of saturation. The kernel mapping itself lives in `kernel`.
 
 pub mod geostatic;
+pub mod mixed;
 
-use crate::model::{Material, MpState};
+use crate::model::{Material, MaterialPoint, MpState};
 
 /// Degree of saturation for Bishop's equation at an Anura3D-signed pwp:
 /// 1 in compression (below the water table); above it the material's retention
@@ -24,4 +25,53 @@ pub fn saturation(material: Option<&Material>, pwp: f64) -> f64 {
 /// Effective stress by Bishop, σ' = σ − S·p on the normal components.
 pub fn bishop(state: &MpState) -> [f64; 6] {
     state.effective()
+}
+
+/// A material whose FEM pore pressure was dropped.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct DroppedPwp {
+    pub material: u32,
+    pub name: String,
+    /// MPs that carried a non-zero mapped pwp.
+    pub points: usize,
+    /// kPa
+    pub max_abs_pwp: f64,
+}
+
+/// MPs of materials without a liquid phase (`dry_material`) carry no pore
+/// water: their pwp is set to 0 (so σ' = σ) and their saturation to 1.
+/// Anura3D subtracts the MAPF's `Pwp` from every MP's stress (with Sr = 1 in a
+/// one-phase analysis), so a mapped suction would otherwise turn into tension.
+/// Returns, per material, how many MPs had a non-zero value dropped.
+pub fn drop_pore_water_of_dry_materials(
+    materials: &[Material],
+    points: &[MaterialPoint],
+    states: &mut [MpState],
+) -> Vec<DroppedPwp> {
+    let mut out: Vec<DroppedPwp> = Vec::new();
+    for (p, s) in points.iter().zip(states.iter_mut()) {
+        let Some(m) = materials.get(p.material as usize - 1) else {
+            continue;
+        };
+        if m.material_type != "dry_material" {
+            continue;
+        }
+        if s.pwp != 0.0 {
+            match out.iter_mut().find(|d| d.material == m.index) {
+                Some(d) => {
+                    d.points += 1;
+                    d.max_abs_pwp = d.max_abs_pwp.max(s.pwp.abs());
+                }
+                None => out.push(DroppedPwp {
+                    material: m.index,
+                    name: m.name.clone(),
+                    points: 1,
+                    max_abs_pwp: s.pwp.abs(),
+                }),
+            }
+        }
+        s.pwp = 0.0;
+        s.saturation = 1.0;
+    }
+    out
 }

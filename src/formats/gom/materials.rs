@@ -129,6 +129,132 @@ pub(super) fn is_structural_keyword(keyword: &str) -> bool {
         || keyword.starts_with("$$MOVING_MESH")
 }
 
+/// Keywords a material type's properties may carry on their name lines.
+fn is_type_property(name: &str) -> bool {
+    [
+        "dry_material",
+        "saturated_material_drained",
+        "saturated_material_coupled",
+        "unsaturated_material_3phase_coupled",
+        "liquid",
+    ]
+    .iter()
+    .filter_map(|t| type_properties(t))
+    .any(|props| props.contains(&name))
+}
+
+/// Keywords a constitutive model's parameters may carry on their name lines.
+fn is_model_parameter(name: &str) -> bool {
+    [
+        "linear_elasticity",
+        "mohr_coulomb",
+        "strain_softening_mohr_coulomb",
+        "bingham_liquid",
+        "frictional_liquid",
+    ]
+    .iter()
+    .filter_map(|m| model_parameters(m, true))
+    .any(|params| params.contains(&name))
+}
+
+/// Refuses a value Anura3D's material reader would stop on (its `Assert`s):
+/// porosity and K0 outside [0, 1], a solid density ≤ 0, a bulk modulus ≤ 0,
+/// and anything non-finite.
+fn check_range(
+    doc: &KeywordDocument,
+    context: &str,
+    prop: &str,
+    v: f64,
+    line: usize,
+) -> Result<(), ParseError> {
+    let bad = match prop {
+        _ if !v.is_finite() => Some("must be a finite number"),
+        "POROSITY_SOLID" | "K0_VALUE_SOLID" if !(0.0..=1.0).contains(&v) => {
+            Some("must lie in [0, 1]")
+        }
+        "DENSITY_SOLID" if v <= 0.0 => Some("must be > 0"),
+        "DENSITY_LIQUID" | "DENSITY_GAS" if v < 0.0 => Some("must be ≥ 0"),
+        "BULK_MODULUS_LIQUID" | "BULK_MODULUS_GAS" if v <= 0.0 => Some("must be > 0"),
+        _ => None,
+    };
+    match bad {
+        Some(why) => Err(doc.error_at(
+            line,
+            0,
+            format!("{context}: {prop} = {v} {why}; Anura3D refuses this value, so no state is computed from it"),
+        )),
+        None => Ok(()),
+    }
+}
+
+/// Reads one group of properties (a type's, or a model's parameters).
+///
+/// GiD writes each property's keyword on its name line. When the name lines
+/// ahead are all keywords of this group (`known`) and name every property in
+/// `expected`, the values are taken **by name**: files seen in the wild put
+/// `$$BULK_MODULUS_LIQUID` before `$$K0_VALUE_SOLID`, and reading them by
+/// position would turn a bulk modulus into K0. A differing order or an extra
+/// property is warned. Otherwise the properties are read by position, as the
+/// kernel of this snapshot does, warning where a name line differs.
+fn read_properties<G>(
+    cur: &mut Cursor<'_>,
+    expected: &[&'static str],
+    known: fn(&str) -> bool,
+    get: &mut G,
+    warnings: &mut Vec<String>,
+    context: &str,
+) -> Result<Vec<(&'static str, Pair)>, ParseError>
+where
+    G: FnMut(&mut Cursor<'_>, &str, bool, &mut Vec<String>) -> Result<Pair, ParseError>,
+{
+    // Look ahead at the name lines (every other non-blank line).
+    let mut ahead = Cursor {
+        doc: cur.doc,
+        next: cur.next,
+        end: cur.end,
+    };
+    let mut names: Vec<(String, usize)> = Vec::new();
+    while let Some((line_no, line)) = ahead.peek_line() {
+        let name = line.trim().trim_start_matches("$$").to_string();
+        if !known(&name) || names.iter().any(|(n, _)| *n == name) {
+            break;
+        }
+        ahead.next_line();
+        if ahead.next_line().is_none() {
+            break;
+        }
+        names.push((name, line_no));
+    }
+    let by_name = !expected.is_empty()
+        && expected
+            .iter()
+            .all(|e| names.iter().any(|(n, _)| n == e));
+    let in_order = names.len() == expected.len()
+        && names.iter().zip(expected).all(|((n, _), e)| n == e);
+    if !by_name || in_order {
+        return expected
+            .iter()
+            .map(|&prop| Ok((prop, get(cur, prop, true, warnings)?)))
+            .collect();
+    }
+    let mut out = Vec::with_capacity(names.len());
+    for (name, _) in &names {
+        let pair = get(cur, name, false, warnings)?;
+        if let Some(&prop) = expected.iter().find(|e| *e == name) {
+            out.push((prop, pair));
+        }
+    }
+    let listed: Vec<&str> = names.iter().map(|(n, _)| n.as_str()).collect();
+    warnings.push(format!(
+        "{}:{}: {context}: properties read by the names on their name lines ({}), not by Anura3D's positional order ({}); check that your Anura3D version reads them in this order",
+        cur.doc.path().display(),
+        names.first().map_or(0, |(_, l)| l + 1),
+        listed.join(", "),
+        expected.join(", ")
+    ));
+    Ok(out)
+}
+
 /// A cursor over the non-blank lines of the document.
 struct Cursor<'d> {
     doc: &'d KeywordDocument,
@@ -272,6 +398,7 @@ pub fn read_materials(
             ));
         }
         let name = get(&mut cur, "MATERIAL_NAME", true, &mut warnings)?.value;
+        let context = format!("material {position} `{name}`");
         let type_pair = get(&mut cur, "MATERIAL_TYPE", true, &mut warnings)?;
         let material_type = type_pair.value.clone();
         let Some(props) = type_properties(&material_type) else {
@@ -313,13 +440,21 @@ pub fn read_materials(
                 )
             })
         };
-        for &prop in props {
-            let p = get(&mut cur, prop, true, &mut warnings)?;
-            if prop == "APPLY_DETECT_LIQUID_SURFACE" || prop == "LIQUID_CAVITATION" {
+        let type_pairs = read_properties(
+            &mut cur,
+            props,
+            is_type_property,
+            &mut get,
+            &mut warnings,
+            &context,
+        )?;
+        for (prop, p) in &type_pairs {
+            if *prop == "APPLY_DETECT_LIQUID_SURFACE" || *prop == "LIQUID_CAVITATION" {
                 continue;
             }
-            let v = real(&p)?;
-            match prop {
+            let v = real(p)?;
+            check_range(doc, &context, prop, v, p.value_line)?;
+            match *prop {
                 "POROSITY_SOLID" => material.porosity = Some(v),
                 "DENSITY_SOLID" => material.density_solid = Some(v),
                 "DENSITY_LIQUID" => material.density_liquid = Some(v),
@@ -337,10 +472,18 @@ pub fn read_materials(
         let undrained = material_type == "saturated_material_undrained_effective";
         match model_parameters(&model, undrained) {
             Some(params) => {
-                for prop in params {
-                    let p = get(&mut cur, prop, true, &mut warnings)?;
-                    let v = real(&p)?;
-                    match prop {
+                let model_pairs = read_properties(
+                    &mut cur,
+                    &params,
+                    is_model_parameter,
+                    &mut get,
+                    &mut warnings,
+                    &context,
+                )?;
+                for (prop, p) in &model_pairs {
+                    let v = real(p)?;
+                    check_range(doc, &context, prop, v, p.value_line)?;
+                    match *prop {
                         "YOUNG_MODULUS" => material.young_modulus = Some(v),
                         "POISSON_RATIO" => material.poisson_ratio = Some(v),
                         "FRICTION_ANGLE" | "PEAK_FRICTION_ANGLE" => {
@@ -416,9 +559,22 @@ pub fn read_materials(
                     ));
                 }
             };
-            for _ in 0..n_params {
+            let mut v = [0.0; 4];
+            for slot in v.iter_mut().take(n_params) {
                 let p = get(&mut cur, "", false, &mut warnings)?;
-                real(&p)?;
+                *slot = real(&p)?;
+            }
+            // Anura3D stores Mualem's four parameters in the same slots as the
+            // van Genuchten retention curve, so they are what its Sr uses.
+            if n_params == 4
+                && let Some(RetentionCurve::VanGenuchten {
+                    s_min,
+                    s_max,
+                    p0,
+                    lambda,
+                }) = &mut material.retention
+            {
+                [*s_min, *s_max, *p0, *lambda] = v;
             }
         }
         // Everything after the head is kept verbatim.

@@ -1,0 +1,87 @@
+//! An Anura3D project as Anura3D will run it: its files, the lossless GOM and
+//! CPS documents, the typed model, the computation method and the material
+//! points Anura3D creates at load step 1.
+
+use std::path::Path;
+
+use super::PipelineError;
+use crate::formats::cps::CpsDocument;
+use crate::formats::gom::{GomDocument, GomInfo};
+use crate::formats::project::{self, ProjectFiles};
+use crate::model::{AnuraModel, ComputationMethod, MaterialPoint};
+
+/// A loaded Anura3D project: files, documents, typed model and predicted MPs.
+pub struct Project {
+    pub files: ProjectFiles,
+    pub gom: GomDocument,
+    pub cps: Option<CpsDocument>,
+    pub model: AnuraModel,
+    pub info: GomInfo,
+    /// The CPS `$$COMPUTATION_METHOD` (MPM-MIXED when there is no CPS).
+    pub method: ComputationMethod,
+    /// The MPs Anura3D creates, in its order.
+    pub points: Vec<MaterialPoint>,
+}
+
+impl Project {
+    /// Reads a project (a GOM, CPS, GiD `-2.dat` or folder) and places its MPs
+    /// for its computation method; errors are positioned.
+    pub fn load(path: &Path) -> Result<Project, PipelineError> {
+        let files = project::discover(path)?;
+        let gom = GomDocument::read(&files.gom)?;
+        let cps = files.cps.as_deref().map(CpsDocument::read).transpose()?;
+        let (model, info) = gom.model()?;
+        let method = match &cps {
+            Some(cps) => {
+                let text = cps.computation_method();
+                ComputationMethod::parse(&text).ok_or_else(|| {
+                    PipelineError::Input(format!(
+                        "{}: unknown $$COMPUTATION_METHOD `{text}` (Anura3D knows MPM-MIXED, MPM-MP, FEM, UL-FEM)",
+                        files.cps.as_deref().unwrap_or(path).display()
+                    ))
+                })?
+            }
+            None => ComputationMethod::default(),
+        };
+        let points =
+            crate::place::place_material_points_for(&model, method).map_err(|errors| {
+                let lines: Vec<String> = errors
+                    .0
+                    .iter()
+                    .take(20)
+                    .map(|e| {
+                        let line = e
+                            .element()
+                            .and_then(|el| info.element_lines.get(el))
+                            .copied()
+                            .unwrap_or(0);
+                        format!("{}:{}:1: {}", files.gom.display(), line, e)
+                    })
+                    .collect();
+                let more = errors.0.len().saturating_sub(20);
+                PipelineError::Positioned(format!(
+                    "{}{}",
+                    lines.join("\n"),
+                    if more > 0 {
+                        format!("\n… and {more} more")
+                    } else {
+                        String::new()
+                    }
+                ))
+            })?;
+        Ok(Project {
+            files,
+            gom,
+            cps,
+            model,
+            info,
+            method,
+            points,
+        })
+    }
+
+    /// Dimension count (2 or 3).
+    pub fn n_dim(&self) -> usize {
+        self.model.mesh.dimension.n_dim()
+    }
+}
