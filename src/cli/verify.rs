@@ -480,15 +480,25 @@ pub fn verify_core(args: &VerifyArgs) -> anyhow::Result<(VerifyOutcome, PathBuf)
     let runnable = l.states.iter().all(|s| {
         s.pwp.is_finite() && s.saturation.is_finite() && s.total.iter().all(|v| v.is_finite())
     });
+    // A model the runner cannot simulate still gets its Anura3D-side checks
+    // and start.csv; the verdict then says why no run was made.
+    let mut run_error = None;
     let report = if runnable {
-        Some(
-            mpm::verify(&l.project.model, &l.points, &l.states, &settings)
-                .map_err(|e| anyhow::anyhow!("{e}"))?,
-        )
+        match mpm::verify(&l.project.model, &l.points, &l.states, &settings) {
+            Ok(r) => Some(r),
+            Err(e @ (mpm::MpmError::Unsupported(_) | mpm::MpmError::UnsupportedMaterialModel { .. }))
+                if l.kernel.is_some() =>
+            {
+                run_error = Some(format!("no equilibrium run: {e}"));
+                None
+            }
+            Err(e) => return Err(anyhow::anyhow!("{e}")),
+        }
     } else {
         None
     };
-    let causes = causes(l.kernel.as_ref(), report.as_ref());
+    let mut causes = causes(l.kernel.as_ref(), report.as_ref());
+    causes.extend(run_error);
     let equilibrium = report.as_ref().is_some_and(|r| r.verdict.is_equilibrium())
         && l.kernel.as_ref().is_none_or(|k| k.nan_points == 0);
     let outcome = VerifyOutcome {
