@@ -283,11 +283,38 @@ pub fn malformed_gom_cases() -> Vec<(&'static str, String, &'static str)> {
         ("bad_porosity", replace_line(&base, "0.4", "zero.four"), "TwoMat.GOM:38:1: expected a number for $$POROSITY_SOLID, found `zero.four`"),
         ("element_material_out_of_range", base.replacen("$$STARTELMMAT\n1\n1\n2\n2", "$$STARTELMMAT\n1\n1\n2\n3", 1), "TwoMat.GOM:79:1: element 4: material 3 does not exist (2 materials)"),
         ("mp_count_not_allowed", base.replacen("$$START_NUMBER_OF_MATERIAL_POINTS\n3 0", "$$START_NUMBER_OF_MATERIAL_POINTS\n4 0", 1), "TwoMat.GOM:86:1: element 1: 4 MPs per element is not allowed for triangular_3-noded"),
-        ("active_element_without_mps", base.replacen("$$START_NUMBER_OF_MATERIAL_POINTS\n3 0", "$$START_NUMBER_OF_MATERIAL_POINTS\n0 0", 1), "TwoMat.GOM:86:1: element 1: active element (material 1) without material points"),
         ("mp_counts_short", base.replacen("3 0\n$$FINISH", "$$FINISH", 1), "TwoMat.GOM:89:1: $$START_NUMBER_OF_MATERIAL_POINTS (line 85) expects 4 MP count lines, found 3"),
     ]
     .into_iter()
     .collect()
+}
+
+/// An active element without MPs is legal in the GOM (FEM/UL-FEM ignore the
+/// counts); for an MPM computation the placement refuses it at its count line.
+#[test]
+fn active_element_without_mps_is_refused_for_mpm_at_its_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = std::fs::read_to_string(fixtures().join("anura3d-mini/TwoMat.GOM")).unwrap();
+    let gom = dir.path().join("TwoMat.GOM");
+    std::fs::write(
+        &gom,
+        base.replacen(
+            "$$START_NUMBER_OF_MATERIAL_POINTS\n3 0",
+            "$$START_NUMBER_OF_MATERIAL_POINTS\n0 0",
+            1,
+        ),
+    )
+    .unwrap();
+    let err = a3d_init::pipeline::Project::load(&gom)
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        err.contains(
+            "TwoMat.GOM:86:1: element 1: active element (material 1) without material points"
+        ),
+        "{err}"
+    );
 }
 
 #[test]

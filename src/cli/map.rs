@@ -740,11 +740,17 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
     {
         notes.push("σzz was not in the FEM file: set from plane-strain elasticity, σ'zz = ν(σ'xx + σ'yy), with each material's ν".into());
     }
-    let dropped = state::drop_pore_water_of_dry_materials(&project.model.materials, points, &mut states);
+    let dropped =
+        state::drop_pore_water_of_dry_materials(&project.model.materials, points, &mut states);
     if !dropped.is_empty() {
         let list: Vec<String> = dropped
             .iter()
-            .map(|d| format!("{} `{}` ({} MPs, |pwp| up to {:.3} kPa)", d.material, d.name, d.points, d.max_abs_pwp))
+            .map(|d| {
+                format!(
+                    "{} `{}` ({} MPs, |pwp| up to {:.3} kPa)",
+                    d.material, d.name, d.points, d.max_abs_pwp
+                )
+            })
             .collect();
         notes.push(format!(
             "FEM pore pressure dropped on MPs of materials without a liquid phase (dry_material): {}; they carry pwp = 0 and σ' = σ, as Anura3D would otherwise subtract the MAPF's Pwp from their stress",

@@ -16,8 +16,8 @@ use super::plot::{self, Series};
 use crate::formats::cps::CpsDocument;
 use crate::formats::{mps_table, vtu};
 use crate::model::{ComputationMethod, MaterialPoint, MpState};
-use crate::pipeline::anura3d;
 use crate::mpm::{self, RunSettings};
+use crate::pipeline::anura3d;
 
 #[derive(Debug, clap::Args)]
 pub struct VerifyArgs {
@@ -128,7 +128,10 @@ fn load(args: &VerifyArgs, default_out: &str) -> anyhow::Result<Loaded> {
 /// `verify DIR`: the GOM, CPS and MAPF of the folder, read as Anura3D reads them.
 fn load_folder(args: &VerifyArgs, dir: &Path, default_out: &str) -> anyhow::Result<Loaded> {
     let project = load_project(dir)?;
-    let mapf_path = project.files.dir.join(format!("{}.MAPF", project.files.name));
+    let mapf_path = project
+        .files
+        .dir
+        .join(format!("{}.MAPF", project.files.name));
     let mapf_name = mapf_path.display().to_string();
     let table = if mapf_path.is_file() {
         Some(crate::formats::mapf::read(&mapf_path)?)
@@ -146,7 +149,8 @@ fn load_folder(args: &VerifyArgs, dir: &Path, default_out: &str) -> anyhow::Resu
     if mps_path.is_file() {
         let (mps_points, mps_states) = mps_table::read_states(&mps_path)?;
         if same_points(&mps_points, &points) {
-            let worst = anura3d::differing_points(&points, &kernel.states, &mps_states, 1e-9);
+            let worst =
+                anura3d::differing_points(&points, &kernel.states, &mps_states, n_dim, 1e-9);
             mps_csv = Some(TableComparison {
                 rows: mps_points.len(),
                 differing: worst.len(),
@@ -486,9 +490,10 @@ pub fn verify_core(args: &VerifyArgs) -> anyhow::Result<(VerifyOutcome, PathBuf)
     let report = if runnable {
         match mpm::verify(&l.project.model, &l.points, &l.states, &settings) {
             Ok(r) => Some(r),
-            Err(e @ (mpm::MpmError::Unsupported(_) | mpm::MpmError::UnsupportedMaterialModel { .. }))
-                if l.kernel.is_some() =>
-            {
+            Err(
+                e
+                @ (mpm::MpmError::Unsupported(_) | mpm::MpmError::UnsupportedMaterialModel { .. }),
+            ) if l.kernel.is_some() => {
                 run_error = Some(format!("no equilibrium run: {e}"));
                 None
             }
@@ -582,11 +587,18 @@ pub fn print_outcome(o: &VerifyOutcome, target: &Path) {
             k.computation_method,
             k.mapf_rows,
             k.smoothing_length,
-            if k.mapf_read { "" } else { " (not read: switch off)" }
+            if k.mapf_read {
+                ""
+            } else {
+                " (not read: switch off)"
+            }
         );
         if let Some(t) = &k.mps_csv {
             if t.differing == 0 {
-                println!("           mps.csv agrees with what Anura3D reads from the MAPF ({} MPs)", t.rows);
+                println!(
+                    "           mps.csv agrees with what Anura3D reads from the MAPF ({} MPs)",
+                    t.rows
+                );
             } else {
                 println!(
                     "           mps.csv and the MAPF disagree on {} of {} MPs (worst: {})",

@@ -190,9 +190,7 @@ pub fn initial_state(
         }
     }
     let Some(first) = table.rows.first() else {
-        return Err(PipelineError::Input(format!(
-            "{mapf_name}: no data rows"
-        )));
+        return Err(PipelineError::Input(format!("{mapf_name}: no data rows")));
     };
     let h = first[col[col.len() - 1]];
     if !(h.is_finite() && h > 0.0) {
@@ -357,15 +355,22 @@ fn kernel_saturation(curve: &RetentionCurve, pwp: f64) -> (f64, f64) {
 
 /// The MPs (1-based ids) whose state differs between `a` and `b` by more than
 /// `tol` times each column's range, with the largest difference first.
+///
+/// In 2D the total σzz is left out: Anura3D's reader replaces it (σ'zz :=
+/// SigXY), which the σ'zz check reports on its own.
 pub fn differing_points(
     points: &[MaterialPoint],
     a: &[MpState],
     b: &[MpState],
+    n_dim: usize,
     tol: f64,
 ) -> Vec<(u32, f64)> {
     let columns = |s: &MpState| {
         let mut v = vec![s.pwp];
         v.extend(s.total);
+        if n_dim == 2 {
+            v[3] = 0.0;
+        }
         v
     };
     let mut range = [0.0f64; 7];
@@ -383,7 +388,13 @@ pub fn differing_points(
             let d = columns(x)
                 .into_iter()
                 .zip(columns(y))
-                .map(|(u, v)| if u.is_finite() && v.is_finite() { (u - v).abs() } else { f64::INFINITY })
+                .map(|(u, v)| {
+                    if u.is_finite() && v.is_finite() {
+                        (u - v).abs()
+                    } else {
+                        f64::INFINITY
+                    }
+                })
                 .enumerate()
                 .map(|(k, d)| d / range[k].max(1e-300))
                 .fold(0.0, f64::max);

@@ -43,32 +43,40 @@ impl Project {
             }
             None => ComputationMethod::default(),
         };
-        let points =
-            crate::place::place_material_points_for(&model, method).map_err(|errors| {
-                let lines: Vec<String> = errors
-                    .0
-                    .iter()
-                    .take(20)
-                    .map(|e| {
-                        let line = e
-                            .element()
-                            .and_then(|el| info.element_lines.get(el))
-                            .copied()
-                            .unwrap_or(0);
-                        format!("{}:{}:1: {}", files.gom.display(), line, e)
-                    })
-                    .collect();
-                let more = errors.0.len().saturating_sub(20);
-                PipelineError::Positioned(format!(
-                    "{}{}",
-                    lines.join("\n"),
-                    if more > 0 {
-                        format!("\n… and {more} more")
-                    } else {
-                        String::new()
-                    }
-                ))
-            })?;
+        let points = crate::place::place_material_points_for(&model, method).map_err(|errors| {
+            let lines: Vec<String> = errors
+                .0
+                .iter()
+                .take(20)
+                .map(|e| {
+                    let lines = match e {
+                        crate::place::PlaceError::ActiveWithoutPoints { .. }
+                        | crate::place::PlaceError::UnsupportedCount { .. }
+                            if !info.mp_count_lines.is_empty() =>
+                        {
+                            &info.mp_count_lines
+                        }
+                        _ => &info.element_lines,
+                    };
+                    let line = e
+                        .element()
+                        .and_then(|el| lines.get(el))
+                        .copied()
+                        .unwrap_or(0);
+                    format!("{}:{}:1: {}", files.gom.display(), line, e)
+                })
+                .collect();
+            let more = errors.0.len().saturating_sub(20);
+            PipelineError::Positioned(format!(
+                "{}{}",
+                lines.join("\n"),
+                if more > 0 {
+                    format!("\n… and {more} more")
+                } else {
+                    String::new()
+                }
+            ))
+        })?;
         Ok(Project {
             files,
             gom,

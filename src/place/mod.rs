@@ -30,7 +30,7 @@ pub enum PlaceError {
         count: u32,
         allowed: &'static [u32],
     },
-    #[error("element {}: active (material {material}) but has no material points", .element + 1)]
+    #[error("element {}: active element (material {material}) without material points (allowed only with $$COMPUTATION_METHOD FEM or UL-FEM)", .element + 1)]
     ActiveWithoutPoints { element: usize, material: u32 },
 }
 

@@ -225,12 +225,10 @@ where
         }
         names.push((name, line_no));
     }
-    let by_name = !expected.is_empty()
-        && expected
-            .iter()
-            .all(|e| names.iter().any(|(n, _)| n == e));
-    let in_order = names.len() == expected.len()
-        && names.iter().zip(expected).all(|((n, _), e)| n == e);
+    let by_name =
+        !expected.is_empty() && expected.iter().all(|e| names.iter().any(|(n, _)| n == e));
+    let in_order =
+        names.len() == expected.len() && names.iter().zip(expected).all(|((n, _), e)| n == e);
     if !by_name || in_order {
         return expected
             .iter()

@@ -42,6 +42,8 @@ pub struct GomInfo {
     pub formulation: Option<String>,
     /// 1-based file line of each element's connectivity line.
     pub element_lines: Vec<u32>,
+    /// 1-based file line of each element's MP-count line (empty without the block).
+    pub mp_count_lines: Vec<u32>,
     /// Things that are legal for Anura3D but worth telling the user.
     pub warnings: Vec<String>,
 }
@@ -272,6 +274,7 @@ impl GomDocument {
         let element_material = self.read_element_materials(n_elements, &materials, &mut errors)?;
         let mp_counts = match self.block("$$START_NUMBER_OF_MATERIAL_POINTS") {
             Some(b) => {
+                info.mp_count_lines = self.rows(b).map(|(i, _)| i as u32 + 1).collect();
                 self.read_mp_counts(b, n_elements, element_type, &element_material, &mut errors)?
             }
             None => {
@@ -503,17 +506,6 @@ impl GomDocument {
                         e + 1,
                         element_type.gom_name(),
                         element_type.allowed_mp_counts()
-                    ),
-                ));
-            }
-            if element_material.get(e).is_some_and(|&m| m > 0) && solid == 0 {
-                errors.push(self.doc.error_at(
-                    i,
-                    0,
-                    format!(
-                        "element {}: active element (material {}) without material points",
-                        e + 1,
-                        element_material[e]
                     ),
                 ));
             }
