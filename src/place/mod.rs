@@ -263,7 +263,9 @@ pub fn place_material_points(model: &AnuraModel) -> Result<Vec<MaterialPoint>, P
                 break;
             }
             let position = global_position(mesh, e, lp.xi);
-            if mesh.dimension == Dimension::Axisymmetric && !(position[0] > 0.0) {
+            if mesh.dimension == Dimension::Axisymmetric
+                && (position[0].is_nan() || position[0] <= 0.0)
+            {
                 bad = Some(PlaceError::NonPositiveRadius {
                     element: e,
                     x: position[0],
