@@ -486,6 +486,55 @@ fn anura3d_kernel_holds_what_verify_says() {
         run(&["verify", out.to_str().unwrap()]);
         compare_with_kernel(&kernel, &out, &dir.join("run"));
     }
+    // Shipped samples: 2D axisymmetric (MPM-MP) and 3D tetrahedral_old (MPM-MP),
+    // from an analytic FEM table over their extent.
+    for (sample, three) in [
+        ("CC_AXI_MC_2Phase_K0_MPM-MP", false),
+        ("test-1005_3D", true),
+    ] {
+        let dir = tmp.path().join(sample);
+        std::fs::create_dir_all(&dir).unwrap();
+        let fem = dir.join("fem.csv");
+        let mut csv = String::from(if three {
+            "X,Y,Z,PWP,SXX,SYY,SZZ,SXY,SYZ,SXZ\n"
+        } else {
+            "X,Y,PWP,SXX,SYY,SXY\n"
+        });
+        for i in 0..=12 {
+            for j in 0..=12 {
+                for k in 0..=if three { 12 } else { 0 } {
+                    let (x, y, z) = (
+                        -0.1 + 0.1 * i as f64,
+                        -0.1 + 0.1 * j as f64,
+                        -0.1 + 0.1 * k as f64,
+                    );
+                    let (p, sv) = (9.81 * (0.7 - y), 19.0 * (1.0 - y) + x);
+                    csv.push_str(&if three {
+                        format!(
+                            "{x},{y},{z},{p},{},{sv},{},{},{},{}\n",
+                            0.5 * sv,
+                            0.4 * sv,
+                            0.1 * x,
+                            0.2 * z,
+                            0.3 * y
+                        )
+                    } else {
+                        format!("{x},{y},{p},{},{sv},{}\n", 0.5 * sv, 0.1 * x - 0.2 * y)
+                    });
+                }
+            }
+        }
+        std::fs::write(&fem, csv).unwrap();
+        let out = dir.join("out");
+        map(
+            &fixture(&format!("anura3d/{sample}")),
+            &fem,
+            &out,
+            &["--outside", "nearest"],
+        );
+        run(&["verify", out.to_str().unwrap()]);
+        compare_with_kernel(&kernel, &out, &dir.join("run"));
+    }
     // The demo slope (unsaturated sand over a dry base) and a foreign MAPF
     // written at the FEM nodes (Anura3D's own interpolation, with NaN MPs).
     let demo = tmp.path().join("demo");

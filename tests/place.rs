@@ -96,7 +96,17 @@ fn sample_mp_totals_match_the_sample_readme() {
         }
         for (e, v) in per_element.iter().enumerate() {
             if model.element_material[e] > 0 {
-                let m = element_measure(&model.mesh, e);
+                // Axisymmetric: Σ w·det J·x = ∫x dA = area × centroid radius
+                // (every rule integrates linear functions exactly).
+                let m = match model.mesh.dimension {
+                    Dimension::Axisymmetric => {
+                        let c = model.mesh.corner_coords(e);
+                        let n = model.mesh.element_type.n_corners();
+                        let centroid_x = (0..n).map(|i| c[i][0]).sum::<f64>() / n as f64;
+                        element_measure(&model.mesh, e) * centroid_x
+                    }
+                    _ => element_measure(&model.mesh, e),
+                };
                 assert!(
                     (v - m).abs() <= 1e-12 * m.abs().max(1e-300) * 10.0,
                     "{rel}: element {} sum {v} vs {m}",
@@ -331,4 +341,68 @@ proptest! {
             }
         }
     }
+}
+
+/// One hand-made TRI3 with corners (2, 0), (5, 0), (2, 4): det J = 12.
+fn axisymmetric_triangle(dimension: Dimension, x_shift: f64, count: u32) -> AnuraModel {
+    let mesh = Mesh {
+        dimension,
+        element_type: ElementType::Tri3,
+        nodes: vec![
+            [2.0 + x_shift, 0.0, 0.0],
+            [5.0 + x_shift, 0.0, 0.0],
+            [2.0 + x_shift, 4.0, 0.0],
+        ],
+        connectivity: vec![0, 1, 2],
+    };
+    AnuraModel {
+        solid_fixity: vec![[false; 3]; 3],
+        mesh,
+        materials: vec![],
+        element_material: vec![1],
+        mp_counts: vec![(count, 0)],
+        damping: None,
+    }
+}
+
+/// #13: in 2D-axisymmetric models Anura3D's MP volume is weight × det J × x
+/// (per radian), checked on the running kernel; plane strain keeps weight × det J.
+#[test]
+fn axisymmetric_volume_is_weight_times_det_j_times_radius() {
+    for &count in ElementType::Tri3.allowed_mp_counts() {
+        let table = local_points(ElementType::Tri3, count).unwrap();
+        let axi =
+            place_material_points(&axisymmetric_triangle(Dimension::Axisymmetric, 0.0, count))
+                .unwrap();
+        let plane =
+            place_material_points(&axisymmetric_triangle(Dimension::PlaneStrain, 0.0, count))
+                .unwrap();
+        assert_eq!(axi.len(), count as usize);
+        for ((a, p), lp) in axi.iter().zip(&plane).zip(table) {
+            assert_eq!(a.position, p.position);
+            let x = 2.0 + 3.0 * lp.xi[0];
+            assert!((a.position[0] - x).abs() < 1e-12);
+            let expected = lp.weight * 12.0 * x;
+            assert!(
+                (a.volume - expected).abs() <= 1e-13 * expected,
+                "{count} MPs: {} vs {expected}",
+                a.volume
+            );
+            assert!((p.volume - lp.weight * 12.0).abs() <= 1e-13 * p.volume);
+        }
+        // Σ w·det J·x = ∫ x dA = area × centroid radius = 6 × 3.
+        let sum: f64 = axi.iter().map(|m| m.volume).sum();
+        assert!((sum - 18.0).abs() < 1e-12, "{count} MPs: Σ V = {sum}");
+    }
+}
+
+#[test]
+fn axisymmetric_points_left_of_the_axis_are_reported() {
+    let model = axisymmetric_triangle(Dimension::Axisymmetric, -4.0, 3);
+    let errors = place_material_points(&model).unwrap_err().0;
+    assert!(
+        matches!(errors[..], [PlaceError::NonPositiveRadius { element: 0, x }] if x < 0.0),
+        "{errors:?}"
+    );
+    assert!(errors[0].to_string().starts_with("element 1: "));
 }

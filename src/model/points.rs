@@ -13,7 +13,9 @@ pub struct MaterialPoint {
     pub local: u32,
     /// Global position (z = 0 in 2D).
     pub position: [f64; 3],
-    /// Integration weight: table weight × det J (m² per metre in 2D, m³ in 3D).
+    /// Integration weight: table weight × det J (m² per metre in 2D plane
+    /// strain, m³ in 3D), times the radius x in 2D-axisymmetric models (m³ per
+    /// radian).
     pub volume: f64,
 }
 

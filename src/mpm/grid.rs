@@ -8,6 +8,7 @@
 //! corner indices, the affine shape functions ([`Simplex`]) and the neighbour
 //! across each face; a uniform spatial hash over element bounding boxes backs
 //! up the neighbour walk when a material point has to be located from scratch.
+//! In 2D axisymmetry the axis nodes are fixed radially ([`Grid::fix_axis`]).
 //! This file does no physics and no I/O.
 
 // Numerical kernels index several small arrays with one loop counter.
@@ -116,6 +117,28 @@ impl<const D: usize, const NC: usize> Grid<D, NC> {
             neighbours,
             hash,
         })
+    }
+
+    /// 2D axisymmetry: fixes the radial direction (x) of every node on the
+    /// axis x = 0 (within 1e-9 of the mesh's x-extent), where u_r = 0 by
+    /// symmetry. Anura3D models fix these nodes in the GOM already; this makes
+    /// the runner safe for meshes that do not. Returns how many nodes were
+    /// newly fixed.
+    pub fn fix_axis(&mut self, mesh: &Mesh) -> usize {
+        let extent = self
+            .mesh_node
+            .iter()
+            .map(|&n| mesh.nodes[n as usize][0].abs())
+            .fold(0.0, f64::max);
+        let tolerance = 1e-9 * extent.max(f64::MIN_POSITIVE);
+        let mut count = 0;
+        for (fixed, &n) in self.fixed.iter_mut().zip(&self.mesh_node) {
+            if mesh.nodes[n as usize][0].abs() <= tolerance && !fixed[0] {
+                fixed[0] = true;
+                count += 1;
+            }
+        }
+        count
     }
 
     pub fn n_nodes(&self) -> usize {
@@ -416,6 +439,22 @@ mod tests {
                 assert!(grid.neighbours[n as usize].contains(&(e as u32)));
             }
         }
+    }
+
+    #[test]
+    fn axis_nodes_are_fixed_radially() {
+        let mut model = column_tri3(2.0, 1.0, 2, 1, elastic_material(1e4, 0.3, 2650.0, 0.3));
+        for f in &mut model.solid_fixity {
+            *f = [false; 3];
+        }
+        let mut grid = Grid::<2, 3>::new(&model.mesh, &model.solid_fixity).expect("valid mesh");
+        assert_eq!(grid.fix_axis(&model.mesh), 2);
+        for (node, fixed) in grid.mesh_node.iter().zip(&grid.fixed) {
+            let x = model.mesh.nodes[*node as usize][0];
+            assert_eq!(fixed[0], x == 0.0, "node at x = {x}");
+            assert!(!fixed[1]);
+        }
+        assert_eq!(grid.fix_axis(&model.mesh), 0);
     }
 
     #[test]

@@ -1,8 +1,10 @@
 //! Explicit MPM check: is a mapped initial state in equilibrium under gravity?
 //!
 //! The solver runs on the Anura3D background mesh itself (fixed in space, no
-//! moving mesh): linear shape functions on TRI3 in plane strain and on the four
-//! corners of `tetrahedral_old` in 3D, lumped nodal masses, gravity along −y,
+//! moving mesh): linear shape functions on TRI3 in plane strain or 2D
+//! axisymmetry (x the radius, per-radian volumes and masses, hoop strain and
+//! force, [`step`]) and on the four corners of `tetrahedral_old` in 3D, lumped
+//! nodal masses, gravity along −y,
 //! nodal fixities from the GOM, local (Cundall) damping as Anura3D applies it,
 //! and a MUSL update ([`step`] documents the scheme). Material points carry the
 //! effective stress σ′; the pore pressure p and the saturation S are frozen

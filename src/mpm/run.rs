@@ -29,7 +29,8 @@ pub struct StepRecord {
     pub step: usize,
     /// Time at the end of the step (s).
     pub time: f64,
-    /// MP kinetic energy at the end of the step (kJ; kJ/m in plane strain).
+    /// MP kinetic energy at the end of the step (kJ; kJ/m in plane strain,
+    /// kJ/rad in 2D axisymmetry).
     pub kinetic_energy: f64,
     /// ‖f_ext + f_int‖/‖f_ext‖ over free DOFs, measured in this step (on the
     /// state at its start).
@@ -124,8 +125,9 @@ pub struct ElementScore {
     pub id: u64,
     pub centroid: [f64; 3],
     /// Residual: Σ over the corners of |f_ext + f_int| at the free
-    /// directions at the first step (kN; kN/m in plane strain). Plastic:
-    /// number of MPs in the element that yielded during the run.
+    /// directions at the first step (kN; kN/m in plane strain, kN/rad in 2D
+    /// axisymmetry). Plastic: number of MPs in the element that yielded
+    /// during the run.
     pub value: f64,
 }
 

@@ -6,6 +6,12 @@
 //! 1. P2G: lumped nodal mass, momentum and internal force
 //!    f_int = −Σ V_p σ_p ∇N (total stress σ = σ′ + S·p on the normals).
 //!    Gravity enters as f_ext = m_I·g, which equals Σ N m_p g.
+//!    2D-axisymmetric (x = r ≥ 0, y axial, zz the hoop component θθ): V_p and
+//!    m_p are per radian (they already hold the MP radius, see `place`), the
+//!    radial force gains the hoop term −V_p N_i σ_θθ / r_p, and the strain
+//!    gains ε_θθ = u_r / r_p = Σ N_i u_r,i / r_p; so f_int = −Σ V_p B_pᵀ σ_p with
+//!    the axisymmetric B. Nodes on the axis are fixed radially (u_r = 0 there
+//!    by symmetry; Anura3D models fix them in the GOM as well).
 //! 2. Nodes: unbalanced force f = f_ext + f_int, local (Cundall) damping
 //!    f_d = f − α·|f|·sign(v) per component, a = f_d / m; fixed directions and
 //!    nodes lighter than a tiny floor get zero acceleration and velocity.
@@ -44,11 +50,15 @@ pub(crate) struct Particle<const D: usize, const NC: usize> {
     pub velocity: [f64; D],
     /// Shape function values at the start of the step (set in P2G).
     pub shape: [f64; NC],
+    /// 1 / r at the start of the step (set in P2G) in 2D-axisymmetric
+    /// models, else 0: the weight of the hoop terms.
+    pub inverse_radius: f64,
     /// Effective stress σ′ (kPa).
     pub stress: [f64; 6],
-    /// Mass (t, or t per metre in plane strain).
+    /// Mass (t; t per metre in plane strain, t per radian in axisymmetry).
     pub mass: f64,
-    /// Current volume (m³, or m² per metre).
+    /// Current volume (m³; m² per metre in plane strain, m³ per radian in
+    /// axisymmetry).
     pub volume: f64,
     /// S·p: added to the normal components to get the total stress (kPa).
     pub pore_term: f64,
@@ -84,7 +94,8 @@ impl<const D: usize> Contribution<D> {
 pub struct StepOutcome {
     /// ‖f_ext + f_int‖ / ‖f_ext‖ over free DOFs at the start of the step.
     pub residual_ratio: f64,
-    /// Kinetic energy of the MPs after the step (kJ, or kJ/m in plane strain).
+    /// Kinetic energy of the MPs after the step (kJ; kJ/m in plane strain,
+    /// kJ per radian in axisymmetry).
     pub kinetic_energy: f64,
     /// MPs whose stress update was plastic in this step.
     pub yielded: usize,
@@ -115,6 +126,11 @@ pub(crate) struct Solver<const D: usize, const NC: usize> {
     pub steps: usize,
     mass_floor: f64,
     plane_strain: bool,
+    /// 2D-axisymmetric: hoop strain and force terms on.
+    axisymmetric: bool,
+    /// Smallest radius used in the hoop terms (m): a guard only, since MPs
+    /// are interior points and never sit on the axis.
+    radius_floor: f64,
     pub wave_speed: f64,
     pub min_altitude: f64,
 }
@@ -126,7 +142,11 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         states: &[MpState],
         settings: &RunSettings,
     ) -> Result<Self, MpmError> {
-        let grid = Grid::<D, NC>::new(&model.mesh, &model.solid_fixity)?;
+        let axisymmetric = D == 2 && model.mesh.dimension == Dimension::Axisymmetric;
+        let mut grid = Grid::<D, NC>::new(&model.mesh, &model.solid_fixity)?;
+        if axisymmetric {
+            grid.fix_axis(&model.mesh);
+        }
         // Material models are built for the materials MPs actually use, so an
         // unused material with an unsupported model does not stop the check.
         let mut slots: Vec<Option<u32>> = vec![None; model.materials.len()];
@@ -166,6 +186,12 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             if !(point.volume > 0.0 && point.volume.is_finite()) {
                 return Err(bad(format!("volume {} is not positive", point.volume)));
             }
+            if axisymmetric && position[0] <= 0.0 {
+                return Err(bad(format!(
+                    "radius x = {} is not positive in a 2D-axisymmetric model",
+                    position[0]
+                )));
+            }
             let element = grid
                 .locate(&position, point.element)
                 .ok_or_else(|| bad(format!("position {:?} is outside the mesh", point.position)))?;
@@ -190,6 +216,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 displacement: [0.0; D],
                 velocity: [0.0; D],
                 shape: [0.0; NC],
+                inverse_radius: 0.0,
                 stress,
                 mass: density * point.volume,
                 volume: point.volume,
@@ -234,6 +261,8 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             steps: 0,
             mass_floor: 1e-10 * max_mass,
             plane_strain: D == 2,
+            axisymmetric,
+            radius_floor: 1e-6 * min_altitude,
             wave_speed,
             min_altitude,
         })
@@ -243,6 +272,8 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
     pub fn step(&mut self) -> StepOutcome {
         let dt = self.dt;
         let grid = &self.grid;
+        let axisymmetric = self.axisymmetric;
+        let radius_floor = self.radius_floor;
 
         // 1. P2G contributions, per MP in parallel.
         self.particles
@@ -257,13 +288,18 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 let element = &grid.elements[p.element as usize];
                 let n = element.shape.values(&p.position);
                 p.shape = n;
+                p.inverse_radius = if axisymmetric {
+                    1.0 / p.position[0].max(radius_floor)
+                } else {
+                    0.0
+                };
                 let mut total = p.stress;
                 for k in 0..3 {
                     total[k] += p.pore_term;
                 }
                 for i in 0..NC {
                     let g = &element.shape.grad[i];
-                    let force = internal_force::<D>(&total, g, p.volume);
+                    let force = corner_force::<D>(&total, g, n[i], p.volume, p.inverse_radius);
                     let weight = p.mass * n[i];
                     let mut momentum = [0.0; D];
                     for d in 0..D {
@@ -398,7 +434,16 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                     return;
                 }
                 let element = &grid.elements[p.element as usize];
-                let strain = strain_increment::<D, NC>(element, node_velocity, dt);
+                let mut strain = strain_increment::<D, NC>(element, node_velocity, dt);
+                if D == 2 && p.inverse_radius != 0.0 {
+                    strain[2] = hoop_strain_increment(
+                        &p.shape,
+                        &element.corners,
+                        node_velocity,
+                        p.inverse_radius,
+                        dt,
+                    );
+                }
                 let kind = models[p.model as usize].update(&mut p.stress, &strain, plane_strain);
                 p.yielded = kind.is_plastic();
                 p.plastic |= p.yielded;
@@ -446,6 +491,41 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         }
         (max, if count > 0 { sum / count as f64 } else { 0.0 })
     }
+}
+
+/// Internal force of one MP on one corner: −V σ·∇N, plus in 2D axisymmetry
+/// the hoop term −V N σ_θθ / r in the radial component (`inverse_radius` is
+/// 1/r there and 0 otherwise).
+#[inline]
+fn corner_force<const D: usize>(
+    s: &[f64; 6],
+    g: &[f64; D],
+    n: f64,
+    volume: f64,
+    inverse_radius: f64,
+) -> [f64; D] {
+    let mut f = internal_force::<D>(s, g, volume);
+    if inverse_radius != 0.0 {
+        f[0] -= volume * s[2] * n * inverse_radius;
+    }
+    f
+}
+
+/// Hoop strain increment Δε_θθ = Δt·u̇_r/r = Δt Σ N_i v_r,i / r, with the
+/// shape values and radius of the step's start (those of the gradients).
+#[inline]
+fn hoop_strain_increment<const D: usize, const NC: usize>(
+    shape: &[f64; NC],
+    corners: &[u32; NC],
+    node_velocity: &[[f64; D]],
+    inverse_radius: f64,
+    dt: f64,
+) -> f64 {
+    let mut radial = 0.0;
+    for i in 0..NC {
+        radial += shape[i] * node_velocity[corners[i] as usize][0];
+    }
+    dt * radial * inverse_radius
 }
 
 /// −V σ·∇N for one corner, in D components.
@@ -518,12 +598,14 @@ pub(crate) fn ratio(a: f64, b: f64) -> f64 {
 }
 
 /// A running explicit MPM simulation of an Anura3D model: the state between
-/// steps, for either a plane-strain TRI3 model or a 3D `tetrahedral_old` one.
+/// steps, for a plane-strain or axisymmetric TRI3 model or a 3D
+/// `tetrahedral_old` one.
 pub struct Simulation {
     pub(crate) inner: Inner,
 }
 
 pub(crate) enum Inner {
+    /// TRI3 in plane strain or 2D axisymmetry.
     Plane(Box<Solver<2, 3>>),
     Solid(Box<Solver<3, 4>>),
 }
@@ -562,7 +644,7 @@ impl Simulation {
         }
         let mesh = &model.mesh;
         let inner = match (mesh.dimension, mesh.element_type) {
-            (Dimension::PlaneStrain, ElementType::Tri3) => {
+            (Dimension::PlaneStrain | Dimension::Axisymmetric, ElementType::Tri3) => {
                 Inner::Plane(Box::new(Solver::new(model, points, states, settings)?))
             }
             (Dimension::Cartesian3D, ElementType::TetOld) => {
@@ -570,8 +652,8 @@ impl Simulation {
             }
             (dimension, element_type) => {
                 return Err(MpmError::Unsupported(format!(
-                    "{} with {} elements (supported: 2D-plane_strain with triangular_3-noded, \
-                     3D-cartesian with tetrahedral_old)",
+                    "{} with {} elements (supported: 2D-plane_strain and 2D-axisymmetric with \
+                     triangular_3-noded, 3D-cartesian with tetrahedral_old)",
                     dimension.gom_name(),
                     element_type.gom_name()
                 )));
@@ -650,4 +732,68 @@ fn widen<const D: usize>(v: &[f64; D]) -> [f64; 3] {
     let mut out = [0.0; 3];
     out[..D].copy_from_slice(v);
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mpm::grid::GridElement;
+    use crate::mpm::shape::Simplex;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// The axisymmetric force and strain are one B matrix: for any nodal
+    /// velocities v and stress σ, the power of the internal forces equals
+    /// −V σ : ε̇ (f_int = −V Bᵀσ, ε̇ = B v), hoop terms included. A hoop force
+    /// without the hoop strain (or the reverse) breaks this by about V σθθ u̇_r/r.
+    #[test]
+    fn axisymmetric_force_and_strain_share_one_b_matrix() {
+        let mut rng = ChaCha8Rng::seed_from_u64(13);
+        for _ in 0..200 {
+            let mut corners = [[0.0; 2]; 3];
+            for c in &mut corners {
+                *c = [0.1 + 2.0 * rng.random::<f64>(), 2.0 * rng.random::<f64>()];
+            }
+            let Some(shape) = Simplex::<2, 3>::from_corners(&corners) else {
+                continue;
+            };
+            let element = GridElement {
+                corners: [0, 1, 2],
+                shape,
+            };
+            let velocity: Vec<[f64; 2]> = (0..3)
+                .map(|_| [rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5])
+                .collect();
+            let stress = [
+                -rng.random::<f64>(),
+                -rng.random::<f64>(),
+                -rng.random::<f64>(),
+                rng.random::<f64>() - 0.5,
+                0.0,
+                0.0,
+            ];
+            let (a, b) = (rng.random::<f64>(), rng.random::<f64>());
+            let (a, b) = if a + b > 1.0 {
+                (1.0 - a, 1.0 - b)
+            } else {
+                (a, b)
+            };
+            let n = [1.0 - a - b, a, b];
+            let radius: f64 = (0..3).map(|i| n[i] * corners[i][0]).sum();
+            let (volume, dt) = (0.7, 1.0);
+            let mut strain = strain_increment::<2, 3>(&element, &velocity, dt);
+            strain[2] = hoop_strain_increment(&n, &element.corners, &velocity, 1.0 / radius, dt);
+            let mut power = 0.0;
+            for i in 0..3 {
+                let f = corner_force::<2>(&stress, &shape.grad[i], n[i], volume, 1.0 / radius);
+                power += f[0] * velocity[i][0] + f[1] * velocity[i][1];
+            }
+            let work: f64 = (0..4).map(|k| stress[k] * strain[k]).sum();
+            assert!(
+                (power + volume * work).abs() < 1e-12 * (1.0 + power.abs()),
+                "{power} vs {}",
+                -volume * work
+            );
+        }
+    }
 }

@@ -2,7 +2,9 @@
 //! (`formats-notes/anura3d.md` §3): elements in file order, elements with
 //! material 0 skipped, `nSolid` points per element from Anura3D's own local
 //! tables ([`tables`]), ids numbered 1, 2, 3, … in creation order, positions
-//! x = Σ Nᵢ(ξ)·xᵢ with Anura3D's shape functions, volume = weight × det J(ξ).
+//! x = Σ Nᵢ(ξ)·xᵢ with Anura3D's shape functions, volume = weight × det J(ξ),
+//! times the MP's radius x in 2D-axisymmetric models (per radian; verified on
+//! the running kernel, `formats-notes/anura3d.md` §3.1 step 5 and §8).
 //!
 //! Pure computation. Element orientation is checked here (a clockwise triangle or
 //! an inverted tetrahedron would get a negative volume in Anura3D); errors carry
@@ -10,7 +12,7 @@
 
 pub mod tables;
 
-use crate::model::{AnuraModel, ComputationMethod, ElementType, MaterialPoint, Mesh};
+use crate::model::{AnuraModel, ComputationMethod, Dimension, ElementType, MaterialPoint, Mesh};
 pub use tables::{LocalPoint, local_points};
 
 /// A problem with one element.
@@ -32,6 +34,8 @@ pub enum PlaceError {
     },
     #[error("element {}: active element (material {material}) without material points (allowed only with $$COMPUTATION_METHOD FEM or UL-FEM)", .element + 1)]
     ActiveWithoutPoints { element: usize, material: u32 },
+    #[error("element {}: a material point at radius x = {x:.6e} ≤ 0 in a 2D-axisymmetric model; Anura3D would give it a non-positive volume", .element + 1)]
+    NonPositiveRadius { element: usize, x: f64 },
 }
 
 fn orientation_hint(et: ElementType) -> &'static str {
@@ -48,7 +52,8 @@ impl PlaceError {
         match self {
             PlaceError::NonPositiveJacobian { element, .. }
             | PlaceError::UnsupportedCount { element, .. }
-            | PlaceError::ActiveWithoutPoints { element, .. } => Some(*element),
+            | PlaceError::ActiveWithoutPoints { element, .. }
+            | PlaceError::NonPositiveRadius { element, .. } => Some(*element),
         }
     }
 }
@@ -200,6 +205,16 @@ pub fn check_elements(mesh: &Mesh, active: impl Fn(usize) -> bool) -> Vec<PlaceE
         .collect()
 }
 
+/// Integration weight of a material point: `weight` × det J, times the radius
+/// x (per radian) in a 2D-axisymmetric model (Anura3D's
+/// `AdjustParticleDiscretisation.FOR`, verified on the running kernel).
+pub fn mp_volume(dimension: Dimension, weight: f64, det: f64, position: [f64; 3]) -> f64 {
+    match dimension {
+        Dimension::Axisymmetric => weight * det * position[0],
+        _ => weight * det,
+    }
+}
+
 /// Creates the MPs of `model` exactly as Anura3D does at load step 1 of an MPM
 /// computation (the GOM's counts).
 pub fn place_material_points(model: &AnuraModel) -> Result<Vec<MaterialPoint>, PlaceErrors> {
@@ -257,7 +272,21 @@ pub fn place_material_points_for(
         for (k, lp) in table.iter().enumerate() {
             let det = det_jacobian(mesh, e, lp.xi);
             if det.is_nan() || det <= 0.0 {
-                bad = Some(det);
+                bad = Some(PlaceError::NonPositiveJacobian {
+                    element: e,
+                    element_type: et,
+                    det,
+                });
+                break;
+            }
+            let position = global_position(mesh, e, lp.xi);
+            if mesh.dimension == Dimension::Axisymmetric
+                && (position[0].is_nan() || position[0] <= 0.0)
+            {
+                bad = Some(PlaceError::NonPositiveRadius {
+                    element: e,
+                    x: position[0],
+                });
                 break;
             }
             points.push(MaterialPoint {
@@ -265,17 +294,13 @@ pub fn place_material_points_for(
                 element: e as u32,
                 material,
                 local: k as u32 + 1,
-                position: global_position(mesh, e, lp.xi),
-                volume: lp.weight * det,
+                position,
+                volume: mp_volume(mesh.dimension, lp.weight, det, position),
             });
         }
-        if let Some(det) = bad {
+        if let Some(error) = bad {
             points.truncate(first_new);
-            errors.push(PlaceError::NonPositiveJacobian {
-                element: e,
-                element_type: et,
-                det,
-            });
+            errors.push(error);
         }
     }
     if errors.is_empty() {

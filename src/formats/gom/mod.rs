@@ -275,7 +275,7 @@ impl GomDocument {
         let mp_counts = match self.block("$$START_NUMBER_OF_MATERIAL_POINTS") {
             Some(b) => {
                 info.mp_count_lines = self.rows(b).map(|(i, _)| i as u32 + 1).collect();
-                self.read_mp_counts(b, n_elements, element_type, &element_material, &mut errors)?
+                self.read_mp_counts(b, n_elements, element_type, &mut errors)?
             }
             None => {
                 info.warnings
@@ -479,7 +479,6 @@ impl GomDocument {
         b: usize,
         n_elements: usize,
         element_type: ElementType,
-        element_material: &[u32],
         errors: &mut Vec<ParseError>,
     ) -> Result<Vec<(u32, u32)>, ParseError> {
         let out = self.parse_rows(b, n_elements, "MP count lines", |_, i, line| {
