@@ -364,6 +364,7 @@ fn cc_axi_sample_verifies_as_a_collapsing_column() {
         &std::fs::read_to_string(out.join("verify/verify.json")).expect("verify.json"),
     )
     .expect("json");
+    let report = &report["run"];
     assert_eq!(report["dimension"], "Axisymmetric");
     assert!(report["initial_residual_ratio"].as_f64().expect("ratio") > 0.1);
     let worst = report["worst_residual_elements"]

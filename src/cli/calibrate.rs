@@ -4,24 +4,31 @@
 
 use std::path::PathBuf;
 
-use anyhow::bail;
 use plotters::style::RGBColor;
 use serde::Serialize;
 
-use super::map::{FemArgs, load_fem};
+use super::args::FemArgs;
 use super::output::OutputDir;
 use super::plot::{self, Series};
-use crate::calibrate::{AnnealSettings, Calibration, calibrate};
-use crate::kernel::loo::{LooObjective, LooStats, Norm};
+use crate::kernel::KernelKind;
 use crate::kernel::mapper::{self, MapSettings, NodeCloud, OutsidePolicy};
-use crate::kernel::{Kernel, KernelKind};
-use crate::model::{FemNodes, Quantity};
+use crate::pipeline::calibrate::{Outcome, calibrate_h, select_fields};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
 pub enum NormArg {
     L1,
     L2,
     Relative,
+}
+
+impl From<NormArg> for crate::kernel::loo::Norm {
+    fn from(n: NormArg) -> Self {
+        match n {
+            NormArg::L1 => crate::kernel::loo::Norm::L1,
+            NormArg::L2 => crate::kernel::loo::Norm::L2,
+            NormArg::Relative => crate::kernel::loo::Norm::Relative,
+        }
+    }
 }
 
 #[derive(Debug, clap::Args)]
@@ -49,109 +56,6 @@ pub struct CalibrateArgs {
     /// Replace an existing output folder.
     #[arg(long)]
     pub force: bool,
-}
-
-/// The outcome of a calibration.
-#[derive(Clone, Debug, Serialize)]
-pub struct Outcome {
-    pub h: f64,
-    /// Median nearest-node spacing l.
-    pub spacing: f64,
-    pub h_over_l: f64,
-    pub kernel: String,
-    pub fields: Vec<String>,
-    pub norm: NormArg,
-    pub stats: LooStats,
-    pub calibration: Calibration,
-    /// Set when every h is optimal (constant field): h then follows the spacing rule.
-    pub fallback: Option<String>,
-    /// (h, objective) on an even grid over the bracket, for plotting.
-    pub curve: Vec<(f64, f64)>,
-}
-
-/// Field selection: one quantity or every field of the file.
-pub fn select_fields(fem: &FemNodes, field: &str) -> anyhow::Result<Vec<Quantity>> {
-    if field == "all" {
-        return Ok(fem.fields.iter().map(|(q, _)| *q).collect());
-    }
-    let q = Quantity::from_name(field).ok_or_else(|| {
-        anyhow::anyhow!(
-            "--field {field}: expected pwp, sxx, syy, szz, sxy, syz, sxz, esxx, … or all"
-        )
-    })?;
-    if fem.field(q).is_none() {
-        bail!(
-            "--field {field}: the FEM file has no such column (it has: {})",
-            fem.fields
-                .iter()
-                .map(|(q, _)| q.name())
-                .collect::<Vec<_>>()
-                .join(", ")
-        );
-    }
-    Ok(vec![q])
-}
-
-/// Calibrates h on `fields` of `fem`.
-pub fn run_calibration(
-    fem: &FemNodes,
-    fields: &[Quantity],
-    kernel: KernelKind,
-    seed: u64,
-    norm: NormArg,
-) -> anyhow::Result<Outcome> {
-    let n = fem.len();
-    let nf = fields.len();
-    let mut values = vec![0.0; n * nf];
-    for (k, q) in fields.iter().enumerate() {
-        for (i, v) in fem.field(*q).unwrap_or(&[]).iter().enumerate() {
-            values[i * nf + k] = *v;
-        }
-    }
-    let spacing = mapper::median_spacing(&fem.positions, fem.dim);
-    let (lo, hi) = (0.3 * spacing, 2.5 * spacing);
-    let objective = LooObjective::new(&fem.positions, fem.dim, &values, nf, kernel, hi)
-        .map_err(|e| anyhow::anyhow!("calibration: {e}"))?;
-    let norm_kind = match norm {
-        NormArg::L1 => Norm::L1,
-        NormArg::L2 => Norm::L2,
-        NormArg::Relative => Norm::Relative,
-    };
-    let settings = AnnealSettings {
-        seed,
-        ..AnnealSettings::default()
-    };
-    let f = |h: f64| objective.evaluate(h, norm_kind);
-    let mut calibration = calibrate(f, lo, hi, &settings);
-    let mut fallback = None;
-    if objective.is_constant() {
-        let factor = if matches!(kernel, KernelKind::Gaussian { .. }) {
-            0.8
-        } else {
-            1.0
-        };
-        calibration.h = factor * spacing;
-        fallback = Some(format!(
-            "the field is constant, so every h predicts it exactly; h follows the spacing rule {factor}·l"
-        ));
-    }
-    let curve = (0..=120)
-        .map(|k| lo + (hi - lo) * k as f64 / 120.0)
-        .map(|h| (h, f(h)))
-        .collect();
-    let stats = objective.stats(calibration.h);
-    Ok(Outcome {
-        h: calibration.h,
-        spacing,
-        h_over_l: calibration.h / spacing,
-        kernel: kernel.name().into(),
-        fields: fields.iter().map(|q| q.name()).collect(),
-        norm,
-        stats,
-        calibration,
-        fallback,
-        curve,
-    })
 }
 
 /// Writes the objective-against-h plot with the optimum marked.
@@ -203,7 +107,7 @@ struct Check {
 }
 
 pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
-    let fem = load_fem(&args.fem)?;
+    let fem = args.fem.load()?;
     let fields = select_fields(&fem.nodes, &args.field)?;
     let kernel = KernelKind::parse(&args.kernel, fem.nodes.dim).ok_or_else(|| {
         anyhow::anyhow!(
@@ -211,13 +115,14 @@ pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
             args.kernel
         )
     })?;
-    let outcome = run_calibration(&fem.nodes, &fields, kernel, args.seed, args.norm)?;
+    let outcome = calibrate_h(&fem.nodes, &fields, kernel, args.seed, args.norm.into())?;
     let check = match &args.check {
         Some(path) => {
-            let other = load_fem(&FemArgs {
+            let other = FemArgs {
                 fem: vec![path.clone()],
                 ..args.fem.clone()
-            })?;
+            }
+            .load()?;
             let q = fields[0];
             let observed = other
                 .nodes

@@ -9,13 +9,16 @@ use std::time::Instant;
 
 use anyhow::bail;
 
-use super::calibrate::{NormArg, plot_curve, run_calibration};
-use super::map::{self, FemArgs, MapArgs, OutsideArg, SignArg, StressArg};
+use super::args::{FemArgs, SignArg};
+use super::calibrate::plot_curve;
+use super::map::{self, MapArgs};
 use super::output::OutputDir;
 use super::plot;
 use super::verify::{self, VerifyArgs};
 use crate::kernel::KernelKind;
 use crate::model::Quantity;
+use crate::pipeline::calibrate::calibrate_h;
+use crate::pipeline::map::{MixedState, Outside, SmoothingLength, StressSource};
 
 #[derive(Debug, clap::Args)]
 pub struct DemoArgs {
@@ -73,13 +76,13 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         analysis: None,
         step: "last".into(),
     };
-    let fem = map::load_fem(&fem_args)?;
-    let outcome = run_calibration(
+    let fem = fem_args.load()?;
+    let outcome = calibrate_h(
         &fem.nodes,
         &[Quantity::Pwp],
         KernelKind::Cubic,
         1,
-        NormArg::L1,
+        crate::kernel::loo::Norm::L1,
     )?;
     println!(
         "2 calibrate  {} FEM nodes: h = {:.4} m, h/l = {:.3} (paper: h = 0.046 m on a 0.05 m mesh, h/l 0.7–1.0); LOO R² = {:.5}",
@@ -96,16 +99,21 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         kernel: "cubic".into(),
         h: None,
         seed: 1,
-        outside: OutsideArg::Error,
+        outside: Outside::Error,
         min_shepard: 0.02,
-        stress: StressArg::Geostatic,
+        stress: StressSource::Geostatic,
         material_map: None,
-        mixed_state: map::MixedStateArg::Mean,
+        mixed_state: MixedState::Mean,
         out: Some(args.out.clone()),
         force: args.force,
-        calibration: Some(outcome.clone()),
     };
-    let mapped = map::compute(&map_args)?;
+    let mapped = map::compute(
+        &map_args,
+        Some(SmoothingLength::Calibrated {
+            outcome: Box::new(outcome.clone()),
+            seed: 1,
+        }),
+    )?;
     let inputs: Vec<&Path> = vec![&mapped.project.files.gom, &fem_file];
     let out = OutputDir::create(&args.out, args.force, &inputs)?;
     map::write(&mapped, &out)?;

@@ -16,7 +16,7 @@ pub struct InspectArgs {
     pub model: Option<PathBuf>,
     /// Inspect FEM node file(s) instead: how each column was understood.
     #[command(flatten)]
-    pub fem: super::map::FemArgs,
+    pub fem: super::args::FemArgs,
     /// Write the predicted material points (id, element, material, x, y, z, volume) to this CSV.
     #[arg(long, value_name = "CSV")]
     pub mps: Option<PathBuf>,
@@ -226,7 +226,7 @@ fn print_summary(out: &mut impl Write, s: &Summary<'_>) -> std::io::Result<()> {
 }
 
 fn inspect_fem(args: &InspectArgs) -> anyhow::Result<()> {
-    let fem = super::map::load_fem(&args.fem)?;
+    let fem = args.fem.load()?;
     let mut out = std::io::stdout().lock();
     if args.json {
         serde_json::to_writer_pretty(&mut out, &fem.reports)?;

@@ -3,6 +3,7 @@
 //! `anyhow::Error` and print as one chain (`error: {:#}`); see [`main`].
 #![allow(clippy::print_stdout, clippy::print_stderr)]
 
+pub mod args;
 mod bench;
 pub mod calibrate;
 mod demo;

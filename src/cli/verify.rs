@@ -10,13 +10,13 @@ use anyhow::{Context, bail};
 use plotters::style::RGBColor;
 
 use super::Verdict as ExitVerdict;
-use super::inspect::{LoadedProject, load_project};
 use super::output::OutputDir;
 use super::plot::{self, Series};
 use crate::formats::cps::CpsDocument;
 use crate::formats::{mps_table, vtu};
 use crate::model::{ComputationMethod, MaterialPoint, MpState};
 use crate::mpm::{self, RunSettings};
+use crate::pipeline::Project as LoadedProject;
 use crate::pipeline::anura3d;
 
 #[derive(Debug, clap::Args)]
@@ -127,7 +127,7 @@ fn load(args: &VerifyArgs, default_out: &str) -> anyhow::Result<Loaded> {
 
 /// `verify DIR`: the GOM, CPS and MAPF of the folder, read as Anura3D reads them.
 fn load_folder(args: &VerifyArgs, dir: &Path, default_out: &str) -> anyhow::Result<Loaded> {
-    let project = load_project(dir)?;
+    let project = LoadedProject::load(dir)?;
     let mapf_path = project
         .files
         .dir
@@ -300,7 +300,7 @@ fn load_state_table(
     state_path: &Path,
     default_out: &str,
 ) -> anyhow::Result<Loaded> {
-    let project = load_project(model_path)?;
+    let project = LoadedProject::load(model_path)?;
     let (points, states) = mps_table::read_states(state_path)?;
     if points.len() != project.points.len() {
         bail!(

@@ -164,6 +164,16 @@ impl KernelKind {
             _ => None,
         }
     }
+
+    /// The paper's spacing rule (§2.2): h = factor · l with l the median
+    /// nearest-node spacing; 1.0 for the cubic spline (and Wendland), 0.8 for
+    /// the Gaussian. The one place this constant lives.
+    pub fn spacing_factor(self) -> f64 {
+        match self {
+            KernelKind::Gaussian { .. } => 0.8,
+            _ => 1.0,
+        }
+    }
 }
 
 impl Kernel for KernelKind {

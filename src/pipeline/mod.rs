@@ -6,7 +6,11 @@
 //! This module reads files (through [`crate::formats`]) but never prints.
 
 pub mod anura3d;
+pub mod calibrate;
+pub mod fem;
+pub mod map;
 pub mod project;
+pub mod write;
 
 pub use project::Project;
 

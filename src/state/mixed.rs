@@ -86,7 +86,7 @@ pub fn average_elements(
             continue;
         }
         let volume: f64 = points[run.clone()].iter().map(|p| p.volume).sum();
-        if !(volume > 0.0) {
+        if volume.is_nan() || volume <= 0.0 {
             continue;
         }
         let mut mean = MpState::default();

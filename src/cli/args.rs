@@ -1,0 +1,84 @@
+//! Argument groups shared by several commands, and their conversion into the
+//! library's typed options. Keeping them here (not in one command's module)
+//! keeps the commands free of imports between each other.
+
+use std::path::PathBuf;
+
+use anyhow::Context;
+use serde::Serialize;
+
+use crate::formats::fem_csv::{self, CsvOptions, SignConvention};
+use crate::pipeline::fem::{FemOptions, LoadedFem};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
+pub enum SignArg {
+    Geostudio,
+    TensionPositive,
+}
+
+/// Options shared by every command that reads FEM node files.
+#[derive(Debug, Clone, clap::Args)]
+pub struct FemArgs {
+    /// FEM node file(s): CSV node tables, or a GeoStudio node.csv with --fem-mesh. Several files are joined by node id or coordinates.
+    #[arg(long = "fem", value_name = "FILE")]
+    pub fem: Vec<PathBuf>,
+    /// Explicit column mapping, e.g. `x=X (m),y=Y (m),pwp=PWP`.
+    #[arg(long, value_name = "FIELD=HEADER,…")]
+    pub columns: Option<String>,
+    /// Unit overrides, e.g. `length=ft,pressure=psf`.
+    #[arg(long, value_name = "length=…,pressure=…")]
+    pub fem_units: Option<String>,
+    /// Sign convention of the FEM file.
+    #[arg(long, value_enum, default_value_t = SignArg::Geostudio)]
+    pub fem_sign: SignArg,
+    /// GeoStudio mesh (`Mesh.ply`) giving the coordinates of a `node.csv` without X, Y columns.
+    #[arg(long, value_name = "PLY")]
+    pub fem_mesh: Option<PathBuf>,
+    /// Analysis of a `.gsz` project: its name or 1-based index (needed when there are several).
+    #[arg(long, value_name = "NAME|INDEX")]
+    pub analysis: Option<String>,
+    /// Saved step of a `.gsz` analysis: a step number, `last`, or `time=<seconds>`.
+    #[arg(long, default_value = "last", value_name = "k|last|time=T")]
+    pub step: String,
+}
+
+impl FemArgs {
+    /// The library options these arguments describe.
+    pub fn options(&self) -> anyhow::Result<FemOptions> {
+        let columns = match &self.columns {
+            Some(s) => {
+                fem_csv::parse_columns_option(s).map_err(|e| anyhow::anyhow!("--columns: {e}"))?
+            }
+            None => Vec::new(),
+        };
+        let units = match &self.fem_units {
+            Some(s) => {
+                fem_csv::parse_units_option(s).map_err(|e| anyhow::anyhow!("--fem-units: {e}"))?
+            }
+            None => Default::default(),
+        };
+        Ok(FemOptions {
+            paths: self.fem.clone(),
+            csv: CsvOptions {
+                columns,
+                units,
+                sign: match self.fem_sign {
+                    SignArg::Geostudio => SignConvention::GeoStudio,
+                    SignArg::TensionPositive => SignConvention::TensionPositive,
+                },
+            },
+            mesh: self.fem_mesh.clone(),
+            analysis: self.analysis.clone(),
+            step: self
+                .step
+                .parse()
+                .map_err(|e| anyhow::anyhow!("--step {e}"))
+                .context("reading the FEM files")?,
+        })
+    }
+
+    /// Reads and joins the FEM files.
+    pub fn load(&self) -> anyhow::Result<LoadedFem> {
+        Ok(crate::pipeline::fem::load(&self.options()?)?)
+    }
+}

@@ -1,0 +1,779 @@
+//! The mapping step as a library call: [`map`] takes a loaded [`Project`], the
+//! FEM nodes and a typed [`MapConfig`] and returns the state of every MP with
+//! its diagnostics and the report. Nothing is written here
+//! ([`super::write::write_project`] does that) and nothing is printed.
+//!
+//! Physics lives in [`crate::state`] (geostatic stress, Bishop, MPM-MIXED
+//! means, dry materials); the kernel interpolation in [`crate::kernel`].
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use serde::Serialize;
+
+use super::PipelineError;
+use super::Project;
+use super::Project as LoadedProject;
+use super::fem::LoadedFem;
+use crate::formats::cps::CpsDocument;
+use crate::formats::fem_csv::{FemReadReport, SignConvention};
+use crate::formats::mapf;
+use crate::formats::mps_table::MpDiagnostics;
+use crate::kernel::mapper::{self, MapSettings, NodeCloud, OutsidePolicy, PointStatus};
+use crate::kernel::neighbours::NeighbourIndex;
+use crate::kernel::{Kernel, KernelKind};
+use crate::model::{FemNodes, MpState, Quantity, StressComponent};
+use crate::state::{self, geostatic};
+
+macro_rules! input_err {
+    ($($t:tt)*) => { PipelineError::Input(format!($($t)*)) };
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum Outside {
+    Error,
+    Nearest,
+    Skip,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum StressSource {
+    /// `fem` when the FEM file has total stresses, otherwise `geostatic`.
+    Auto,
+    /// Map the FEM total stresses.
+    Fem,
+    /// Overburden of the GOM materials along the vertical, σh = K0·σ'v + S·p.
+    Geostatic,
+    /// Zero total stress (warned).
+    Zero,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+pub enum MixedState {
+    /// Each fully filled element's volume-weighted mean state on all its MPs.
+    Mean,
+    /// Keep every MP's own mapped value (Anura3D MPM-MIXED keeps only MP 1's after the first step).
+    PerMp,
+}
+
+/// How the smoothing length h is chosen.
+#[derive(Clone, Debug)]
+pub enum SmoothingLength {
+    /// The paper's spacing rule (§2.2): [`KernelKind::spacing_factor`] × the
+    /// median nearest-node spacing.
+    SpacingRule,
+    /// A given h in metres.
+    Metres(f64),
+    /// Leave-one-out calibration (paper Eq. 4) with this annealer seed.
+    Calibrate { seed: u64 },
+    /// A calibration already run on these nodes (reported as calibrated).
+    Calibrated {
+        outcome: Box<super::calibrate::Outcome>,
+        seed: u64,
+    },
+}
+
+/// Everything that decides how the FEM fields become MP states.
+#[derive(Clone, Debug)]
+pub struct MapConfig {
+    pub kernel: KernelKind,
+    pub h: SmoothingLength,
+    /// MPs no FEM node reaches.
+    pub outside: Outside,
+    /// Null-point threshold on the Shepard ratio Σw·l^dim.
+    pub min_shepard: f64,
+    pub stress: StressSource,
+    /// FEM region → GOM material, `region=material,…` (names or indices).
+    pub material_map: Option<String>,
+    /// MPM-MIXED models: element means or per-MP values.
+    pub mixed_state: MixedState,
+}
+
+impl Default for MapConfig {
+    fn default() -> Self {
+        MapConfig {
+            kernel: KernelKind::Cubic,
+            h: SmoothingLength::SpacingRule,
+            outside: Outside::Error,
+            min_shepard: 0.02,
+            stress: StressSource::Auto,
+            material_map: None,
+            mixed_state: MixedState::Mean,
+        }
+    }
+}
+
+#[derive(Serialize)]
+pub struct InputFile {
+    path: PathBuf,
+    bytes: u64,
+    sha256: String,
+}
+
+fn describe(path: &Path) -> Result<InputFile, PipelineError> {
+    use sha2::{Digest, Sha256};
+    let bytes =
+        std::fs::read(path).map_err(|e| input_err!("{}: cannot read: {e}", path.display()))?;
+    let digest = Sha256::digest(&bytes);
+    Ok(InputFile {
+        path: path.to_path_buf(),
+        bytes: bytes.len() as u64,
+        sha256: digest.iter().map(|b| format!("{b:02x}")).collect(),
+    })
+}
+
+#[derive(Serialize)]
+pub struct MaterialCount {
+    index: u32,
+    name: String,
+    mps: usize,
+    fem_nodes: Option<usize>,
+}
+
+#[derive(Serialize)]
+pub struct MapReport {
+    pub tool: String,
+    pub inputs: Vec<InputFile>,
+    pub fem: Vec<FemReadReport>,
+    pub conventions: Vec<String>,
+    pub kernel: String,
+    pub smoothing_length: f64,
+    pub smoothing_length_rule: String,
+    pub fem_spacing: f64,
+    pub gaussian_truncated_mass: Option<f64>,
+    pub stress_source: String,
+    pub computation_method: crate::model::ComputationMethod,
+    /// MPM-MIXED only: `mean` or `per-mp` (see `--mixed-state`).
+    pub mixed_state: Option<MixedState>,
+    pub calibration: Option<crate::pipeline::calibrate::Outcome>,
+    pub material_separation: String,
+    pub materials: Vec<MaterialCount>,
+    pub fem_nodes: usize,
+    pub material_points: usize,
+    pub null_points: usize,
+    pub null_point_policy: Outside,
+    pub mapf_smoothing_length: f64,
+    pub min_mp_spacing: f64,
+    pub pwp_range: (f64, f64),
+    pub sigma_yy_range: (f64, f64),
+    pub notes: Vec<String>,
+    pub warnings: Vec<String>,
+    pub timings_ms: Vec<(String, f64)>,
+}
+
+/// Assigns FEM nodes and MPs to groups (GOM material indices) when the FEM has a
+/// region column; returns (node groups, description).
+fn groups(
+    project: &LoadedProject,
+    fem: &FemNodes,
+    material_map: Option<&str>,
+) -> Result<(Option<Vec<u32>>, String), PipelineError> {
+    let Some(regions) = &fem.region else {
+        return Ok((None, "none: the FEM file has no region column, so nodes of every material were used for every MP".into()));
+    };
+    let materials = &project.model.materials;
+    let mut explicit: Vec<(String, u32)> = Vec::new();
+    if let Some(spec) = material_map {
+        for pair in spec.split(',').filter(|s| !s.trim().is_empty()) {
+            let (r, m) = pair
+                .split_once('=')
+                .ok_or_else(|| input_err!("--material-map: `{pair}`: expected region=material"))?;
+            let m = m.trim();
+            let index = m
+                .parse::<u32>()
+                .ok()
+                .filter(|&i| i >= 1 && i as usize <= materials.len())
+                .or_else(|| {
+                    materials
+                        .iter()
+                        .find(|x| x.name.eq_ignore_ascii_case(m))
+                        .map(|x| x.index)
+                })
+                .ok_or_else(|| {
+                    input_err!(
+                        "--material-map: no GOM material `{m}` (materials: {})",
+                        materials
+                            .iter()
+                            .map(|x| x.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )
+                })?;
+            explicit.push((r.trim().to_string(), index));
+        }
+    }
+    let resolve = |region: &str| -> Option<u32> {
+        explicit
+            .iter()
+            .find(|(r, _)| r == region)
+            .map(|(_, i)| *i)
+            .or_else(|| {
+                materials
+                    .iter()
+                    .find(|m| m.name.eq_ignore_ascii_case(region))
+                    .map(|m| m.index)
+            })
+            .or_else(|| {
+                region
+                    .parse::<u32>()
+                    .ok()
+                    .filter(|&i| i >= 1 && i as usize <= materials.len())
+            })
+    };
+    let mut out = Vec::with_capacity(regions.len());
+    let mut unknown: Vec<&str> = Vec::new();
+    for r in regions {
+        match resolve(r) {
+            Some(i) => out.push(i),
+            None => {
+                if !unknown.contains(&r.as_str()) {
+                    unknown.push(r);
+                }
+                out.push(0);
+            }
+        }
+    }
+    if !unknown.is_empty() {
+        return Err(input_err!(
+            "FEM regions {} match no GOM material (materials: {}); map them with --material-map region=material",
+            unknown
+                .iter()
+                .map(|s| format!("`{s}`"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            materials
+                .iter()
+                .map(|m| format!("{} {}", m.index, m.name))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    Ok((Some(out), "by region: each MP takes only FEM nodes of its own material (no smoothing across material boundaries)".into()))
+}
+
+/// Maps the points whose group is not in `excluded`; excluded points get zero
+/// values and status `Mapped` with no neighbours (they are dry and need no pwp).
+fn map_subset(
+    cloud: &NodeCloud<'_>,
+    points: &[[f64; 3]],
+    groups: Option<&[u32]>,
+    settings: &MapSettings,
+    excluded: &[u32],
+) -> Result<mapper::MapResult, PipelineError> {
+    let keep: Vec<usize> = (0..points.len())
+        .filter(|&i| groups.is_none_or(|g| !excluded.contains(&g[i])))
+        .collect();
+    if keep.len() == points.len() {
+        return mapper::map_points(cloud, points, groups, settings).map_err(|e| input_err!("{e}"));
+    }
+    let sub_points: Vec<[f64; 3]> = keep.iter().map(|&i| points[i]).collect();
+    let sub_groups: Option<Vec<u32>> = groups.map(|g| keep.iter().map(|&i| g[i]).collect());
+    let sub = mapper::map_points(cloud, &sub_points, sub_groups.as_deref(), settings)
+        .map_err(|e| input_err!("{e}"))?;
+    let nf = cloud.n_fields;
+    let mut full = mapper::MapResult {
+        values: vec![0.0; points.len() * nf],
+        n_neighbours: vec![0; points.len()],
+        shepard: vec![0.0; points.len()],
+        status: vec![PointStatus::Mapped; points.len()],
+    };
+    for (k, &i) in keep.iter().enumerate() {
+        full.values[i * nf..(i + 1) * nf].copy_from_slice(&sub.values[k * nf..(k + 1) * nf]);
+        full.n_neighbours[i] = sub.n_neighbours[k];
+        full.shepard[i] = sub.shepard[k];
+        full.status[i] = sub.status[k];
+    }
+    Ok(full)
+}
+
+fn min_spacing(points: &[[f64; 3]], dim: usize) -> f64 {
+    let index = NeighbourIndex::new(points, dim);
+    let mut scratch = Vec::new();
+    let mut best = f64::INFINITY;
+    let spacing = mapper::median_spacing(points, dim);
+    for (i, p) in points.iter().enumerate() {
+        index.within(*p, spacing.max(1e-12), &mut scratch);
+        for &(j, d) in &scratch {
+            if j as usize != i {
+                best = best.min(d);
+                break;
+            }
+        }
+    }
+    if best.is_finite() { best } else { spacing }
+}
+
+fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
+    values.fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+        (lo.min(v), hi.max(v))
+    })
+}
+
+/// How a calibrated h is described in the report.
+fn calibrated_rule(outcome: &crate::pipeline::calibrate::Outcome, seed: u64) -> String {
+    format!(
+        "calibrated by leave-one-out (paper Eq. 4) on {}: h/l = {:.3}, LOO R² = {:.5}, seed {}{}",
+        outcome.fields.join(", "),
+        outcome.h_over_l,
+        outcome.stats.r2,
+        seed,
+        outcome
+            .fallback
+            .as_deref()
+            .map(|f| format!("; {f}"))
+            .unwrap_or_default()
+    )
+}
+
+/// Everything `map` computes before writing.
+pub struct Mapped {
+    pub project: LoadedProject,
+    pub fem: LoadedFem,
+    pub states: Vec<MpState>,
+    pub diagnostics: Vec<MpDiagnostics>,
+    pub report: MapReport,
+    pub mapf_h: f64,
+}
+
+/// Maps the FEM fields onto the project's MPs (no output written): the state
+/// per MP, the mapping diagnostics and the report.
+pub fn map(project: Project, fem: LoadedFem, config: &MapConfig) -> Result<Mapped, PipelineError> {
+    let mut timings = Vec::new();
+    let mut warnings: Vec<String> = project.info.warnings.clone();
+    for r in &fem.reports {
+        warnings.extend(
+            r.warnings
+                .iter()
+                .map(|w| format!("{}: {w}", r.path.display())),
+        );
+    }
+    let dim = project.model.mesh.dimension.n_dim();
+    if fem.nodes.dim != dim {
+        return Err(input_err!(
+            "{}: the FEM nodes are {}D but the Anura3D model is {} ({}D)",
+            fem.paths[0].display(),
+            fem.nodes.dim,
+            project.model.mesh.dimension.gom_name(),
+            dim
+        ));
+    }
+    if fem.nodes.len() < 3 {
+        return Err(input_err!(
+            "{}: at least 3 FEM nodes are needed, found {}",
+            fem.paths[0].display(),
+            fem.nodes.len()
+        ));
+    }
+    let pwp = fem.nodes.field(Quantity::Pwp);
+    if pwp.is_none() && !fem.nodes.has_total_stress() {
+        return Err(input_err!(
+            "{}: no pore-water pressure or total stress columns found",
+            fem.paths[0].display()
+        ));
+    }
+    let kernel = config.kernel;
+    let spacing = mapper::median_spacing(&fem.nodes.positions, dim);
+    let mut calibration = None;
+    let (h, rule) = match &config.h {
+        SmoothingLength::Calibrated { outcome, seed } => {
+            let rule = calibrated_rule(outcome, *seed);
+            let h = outcome.h;
+            calibration = Some((**outcome).clone());
+            (h, rule)
+        }
+        SmoothingLength::Calibrate { seed } => {
+            let fields: Vec<Quantity> = if stress_source_wants_fem(config.stress, &fem.nodes) {
+                fem.nodes.fields.iter().map(|(q, _)| *q).collect()
+            } else {
+                vec![Quantity::Pwp]
+            };
+            let t = Instant::now();
+            let outcome = crate::pipeline::calibrate::calibrate_h(
+                &fem.nodes,
+                &fields,
+                kernel,
+                *seed,
+                crate::kernel::loo::Norm::L1,
+            )?;
+            timings.push(("calibration".to_string(), t.elapsed().as_secs_f64() * 1e3));
+            let rule = calibrated_rule(&outcome, *seed);
+            let h = outcome.h;
+            calibration = Some(outcome);
+            (h, rule)
+        }
+        SmoothingLength::Metres(h) if *h > 0.0 && h.is_finite() => {
+            (*h, "given with --h".to_string())
+        }
+        SmoothingLength::Metres(h) => {
+            return Err(input_err!(
+                "--h {h}: the smoothing length must be a positive number of metres, or auto"
+            ));
+        }
+        SmoothingLength::SpacingRule => {
+            let factor = kernel.spacing_factor();
+            (
+                factor * spacing,
+                format!(
+                    "spacing rule h = {factor}·l with l = {spacing:.6} m, the median nearest-node spacing (paper §2.2, {})",
+                    if dim == 2 {
+                        "fitted on triangle meshes"
+                    } else {
+                        "fitted on 2D triangle meshes; on this 3D model a rule of thumb, use --h auto to calibrate"
+                    }
+                ),
+            )
+        }
+    };
+    fn stress_source_wants_fem(stress: StressSource, nodes: &FemNodes) -> bool {
+        matches!(stress, StressSource::Fem)
+            || (matches!(stress, StressSource::Auto) && nodes.has_total_stress())
+    }
+    let stress_source = match config.stress {
+        StressSource::Auto if fem.nodes.has_total_stress() => StressSource::Fem,
+        StressSource::Auto => StressSource::Geostatic,
+        StressSource::Fem if !fem.nodes.has_total_stress() => {
+            return Err(input_err!(
+                "--stress fem: the FEM files have no total stress columns (sxx, syy, sxy{})",
+                if dim == 3 { ", szz, syz, sxz" } else { "" }
+            ));
+        }
+        s => s,
+    };
+    if stress_source != StressSource::Fem && pwp.is_none() {
+        return Err(input_err!(
+            "{}: --stress {:?} needs a pore-water pressure column",
+            fem.paths[0].display(),
+            stress_source
+        ));
+    }
+    let (node_groups, separation) = groups(&project, &fem.nodes, config.material_map.as_deref())?;
+
+    // Fields mapped: pwp and (for --stress fem) the total stresses.
+    let mut quantities: Vec<Quantity> = Vec::new();
+    if pwp.is_some() {
+        quantities.push(Quantity::Pwp);
+    }
+    if stress_source == StressSource::Fem {
+        for c in StressComponent::ALL {
+            if fem.nodes.field(Quantity::TotalStress(c)).is_some() {
+                quantities.push(Quantity::TotalStress(c));
+            }
+        }
+    }
+    let n_fields = quantities.len();
+    let mut values = vec![0.0; fem.nodes.len() * n_fields];
+    for (k, q) in quantities.iter().enumerate() {
+        for (i, v) in fem.nodes.field(*q).unwrap_or(&[]).iter().enumerate() {
+            values[i * n_fields + k] = *v;
+        }
+    }
+    let cloud = NodeCloud {
+        positions: &fem.nodes.positions,
+        dim,
+        values: &values,
+        n_fields,
+        group: node_groups.as_deref(),
+        node_volume: spacing.powi(dim as i32),
+    };
+    let settings = MapSettings {
+        kernel,
+        h,
+        min_shepard: config.min_shepard,
+        outside: match config.outside {
+            Outside::Error => OutsidePolicy::Error,
+            Outside::Nearest => OutsidePolicy::Nearest,
+            Outside::Skip => OutsidePolicy::Skip,
+        },
+    };
+    let points = &project.points;
+    let positions: Vec<[f64; 3]> = points.iter().map(|p| p.position).collect();
+    let point_groups: Option<Vec<u32>> = node_groups
+        .as_ref()
+        .map(|_| points.iter().map(|p| p.material).collect());
+    // Dry materials without FEM nodes of their own (e.g. an impermeable base the
+    // seepage model left out) get pwp = 0 and no kernel mapping.
+    let mut notes: Vec<String> = Vec::new();
+    let mut dry_without_nodes: Vec<u32> = Vec::new();
+    if let (Some(ng), Some(pg)) = (&node_groups, &point_groups) {
+        for m in &project.model.materials {
+            if pg.contains(&m.index) && !ng.contains(&m.index) {
+                if !m.has_water() && stress_source != StressSource::Fem {
+                    dry_without_nodes.push(m.index);
+                    notes.push(format!(
+                        "material {} `{}` is dry and has no FEM nodes: its MPs take pwp = 0 (no mapping)",
+                        m.index, m.name
+                    ));
+                } else if settings.outside == OutsidePolicy::Error {
+                    return Err(input_err!(
+                        "material {} `{}` has MPs but no FEM nodes of its region; give its nodes, map a region to it with --material-map, or use --outside nearest|skip",
+                        m.index,
+                        m.name
+                    ));
+                }
+            }
+        }
+    }
+    let t2 = Instant::now();
+    let result = map_subset(
+        &cloud,
+        &positions,
+        point_groups.as_deref(),
+        &settings,
+        &dry_without_nodes,
+    )?;
+    timings.push((
+        "kernel mapping".to_string(),
+        t2.elapsed().as_secs_f64() * 1e3,
+    ));
+
+    let g = project
+        .cps
+        .as_ref()
+        .map_or(crate::model::DEFAULT_GRAVITY, CpsDocument::gravity);
+    let column = |q: Quantity| quantities.iter().position(|x| *x == q);
+    let mut states: Vec<MpState> = Vec::with_capacity(points.len());
+    for (i, p) in points.iter().enumerate() {
+        let material = project.model.materials.get(p.material as usize - 1);
+        let row = &result.values[i * n_fields..(i + 1) * n_fields];
+        let pwp = column(Quantity::Pwp).map_or(0.0, |k| row[k]);
+        let mut total = [0.0; 6];
+        if stress_source == StressSource::Fem {
+            for c in StressComponent::ALL {
+                if let Some(k) = column(Quantity::TotalStress(c)) {
+                    total[c.index()] = row[k];
+                }
+            }
+            if dim == 2 && column(Quantity::TotalStress(StressComponent::Zz)).is_none() {
+                // Plane strain, elastic: σ'zz = ν(σ'xx + σ'yy).
+                let s = state::saturation(material, pwp);
+                let nu = material.and_then(|m| m.poisson_ratio).unwrap_or(0.3);
+                total[2] = nu * (total[0] - s * pwp + total[1] - s * pwp) + s * pwp;
+            }
+        }
+        states.push(MpState {
+            pwp,
+            total,
+            saturation: state::saturation(material, pwp),
+        });
+    }
+    if stress_source == StressSource::Fem
+        && dim == 2
+        && column(Quantity::TotalStress(StressComponent::Zz)).is_none()
+    {
+        notes.push("σzz was not in the FEM file: set from plane-strain elasticity, σ'zz = ν(σ'xx + σ'yy), with each material's ν".into());
+    }
+    let dropped =
+        state::drop_pore_water_of_dry_materials(&project.model.materials, points, &mut states);
+    if !dropped.is_empty() {
+        let list: Vec<String> = dropped
+            .iter()
+            .map(|d| {
+                format!(
+                    "{} `{}` ({} MPs, |pwp| up to {:.3} kPa)",
+                    d.material, d.name, d.points, d.max_abs_pwp
+                )
+            })
+            .collect();
+        notes.push(format!(
+            "FEM pore pressure dropped on MPs of materials without a liquid phase (dry_material): {}; they carry pwp = 0 and σ' = σ, as Anura3D would otherwise subtract the MAPF's Pwp from their stress",
+            list.join(", ")
+        ));
+    }
+    if stress_source == StressSource::Geostatic {
+        let t3 = Instant::now();
+        let model = &project.model;
+        let index = geostatic::VerticalIndex::new(&model.mesh, |e| model.element_material[e] > 0);
+        let columns = index.columns(&positions, 4);
+        let sample_pts: Vec<[f64; 3]> = columns.samples.iter().map(|s| s.midpoint).collect();
+        let sample_groups: Option<Vec<u32>> = node_groups.as_ref().map(|_| {
+            columns
+                .samples
+                .iter()
+                .map(|s| model.element_material[s.element as usize])
+                .collect()
+        });
+        let sample_settings = MapSettings {
+            outside: OutsidePolicy::Nearest,
+            ..settings
+        };
+        let sampled = map_subset(
+            &cloud,
+            &sample_pts,
+            sample_groups.as_deref(),
+            &sample_settings,
+            &dry_without_nodes,
+        )?;
+        let k_pwp = column(Quantity::Pwp).unwrap_or(0);
+        let gamma: Vec<f64> = columns
+            .samples
+            .iter()
+            .enumerate()
+            .map(|(s, sample)| {
+                let m = model.material_of(sample.element as usize);
+                let p = sampled.values[s * n_fields + k_pwp];
+                let saturation = match m {
+                    Some(m) if p > 0.0 && !m.is_unsaturated() => 0.0,
+                    other => state::saturation(other, p),
+                };
+                m.map_or(0.0, |m| m.gamma_at_saturation(saturation, g))
+            })
+            .collect();
+        let sigma_v = geostatic::vertical_stress(&columns, &gamma);
+        for (i, p) in points.iter().enumerate() {
+            let m = model.materials.get(p.material as usize - 1);
+            let k0 = m.and_then(|m| m.k0).unwrap_or(0.5);
+            states[i].total =
+                geostatic::geostatic_tensor(sigma_v[i], k0, states[i].pwp, states[i].saturation);
+        }
+        notes.push(format!("total stress from the overburden of the GOM materials along the vertical (g = {g} m/s²; γ saturated below the water table, from the retention curve or dry above), σh = K0·σ'v + S·p with each material's K0"));
+        timings.push((
+            "geostatic stress".to_string(),
+            t3.elapsed().as_secs_f64() * 1e3,
+        ));
+    }
+    if stress_source == StressSource::Zero {
+        warnings.push("--stress zero: all total stresses are 0; the MPs start unstressed".into());
+    }
+    if dim == 2 {
+        notes.push("Anura3D's MAPF reader puts τxy into σ'zz in 2D (a kernel defect); mps.csv holds the intended σzz".into());
+    } else {
+        notes.push("3D MAPF: τyz is written under SigXZ[kPa] and τxz under SigYZ[kPa], cancelling Anura3D's swapped reader".into());
+    }
+
+    let diagnostics: Vec<MpDiagnostics> = (0..points.len())
+        .map(|i| MpDiagnostics {
+            neighbours: result.n_neighbours[i],
+            shepard: result.shepard[i],
+            status: match result.status[i] {
+                PointStatus::Mapped => "mapped",
+                PointStatus::Nearest => "nearest",
+                PointStatus::Skipped => "skipped",
+            },
+        })
+        .collect();
+    let null_points = result
+        .status
+        .iter()
+        .filter(|s| **s != PointStatus::Mapped)
+        .count();
+    if null_points > 0 {
+        warnings.push(format!("{null_points} MP(s) had no FEM node inside the support: handled with --outside {:?}", config.outside).to_lowercase());
+    }
+    // Skipped MPs keep zero state in the outputs rather than NaN.
+    for (s, st) in states.iter_mut().zip(&result.status) {
+        if *st == PointStatus::Skipped {
+            *s = MpState {
+                pwp: 0.0,
+                total: [0.0; 6],
+                saturation: 1.0,
+            };
+        }
+    }
+    let mixed = if project.method == crate::model::ComputationMethod::MpmMixed {
+        let fully_filled = state::mixed::fully_filled_elements(&project.model, points);
+        let spread = state::mixed::element_spread(points, &states, &fully_filled);
+        match config.mixed_state {
+            MixedState::Mean => {
+                state::mixed::average_elements(&project.model, points, &mut states, &fully_filled);
+                notes.push(format!(
+                    "MPM-MIXED: each of the {} fully filled elements carries its volume-weighted mean state on all its MPs (Anura3D integrates such an element at one point and gives every MP the state of its first MP after the first step); the largest spread inside an element was {:.3} kPa in pwp and {:.3} kPa in total stress; use $$COMPUTATION_METHOD MPM-MP when per-MP detail matters",
+                    spread.elements, spread.pwp, spread.stress
+                ));
+            }
+            MixedState::PerMp => {
+                warnings.push(format!(
+                    "MPM-MIXED with --mixed-state per-mp: Anura3D will replace the state of every MP of the {} fully filled elements by that of the element's first MP after the first step (largest spread inside an element: {:.3} kPa pwp, {:.3} kPa stress); use $$COMPUTATION_METHOD MPM-MP to keep per-MP detail",
+                    spread.elements, spread.pwp, spread.stress
+                ));
+            }
+        }
+        Some(config.mixed_state)
+    } else {
+        None
+    };
+    if let Some(bad) = states
+        .iter()
+        .position(|s| !s.pwp.is_finite() || s.total.iter().any(|v| !v.is_finite()))
+    {
+        return Err(input_err!(
+            "MP {} got a non-finite value; nothing was written",
+            bad + 1
+        ));
+    }
+    let min_mp = min_spacing(&positions, dim);
+    let mapf_h = mapf::exact_point_smoothing_length(min_mp);
+
+    let mut inputs = vec![describe(&project.files.gom)?];
+    if let Some(c) = &project.files.cps {
+        inputs.push(describe(c)?);
+    }
+    for f in &fem.paths {
+        inputs.push(describe(f)?);
+    }
+    let materials = project
+        .model
+        .materials
+        .iter()
+        .map(|m| MaterialCount {
+            index: m.index,
+            name: m.name.clone(),
+            mps: points.iter().filter(|p| p.material == m.index).count(),
+            fem_nodes: node_groups
+                .as_ref()
+                .map(|g| g.iter().filter(|&&x| x == m.index).count()),
+        })
+        .collect();
+    let sign = match fem.sign {
+        SignConvention::GeoStudio => {
+            "FEM sign geostudio: stresses compression positive and pwp positive below the water table in the file; all were negated into Anura3D's convention"
+        }
+        SignConvention::TensionPositive => "FEM sign tension-positive: values kept as in the file",
+    };
+    let report = MapReport {
+        tool: format!("a3d-init {}", env!("CARGO_PKG_VERSION")),
+        inputs,
+        fem: fem.reports.clone(),
+        conventions: vec![
+            "units: m, kPa, kN/m³, s".into(),
+            "output signs (Anura3D): tension positive, pore pressure negative in compression"
+                .into(),
+            sign.into(),
+            "MAPF Sig* columns are total stresses; Anura3D forms σ' = σ − S·p (Bishop)".into(),
+        ],
+        kernel: kernel.name().into(),
+        smoothing_length: h,
+        smoothing_length_rule: rule,
+        fem_spacing: spacing,
+        gaussian_truncated_mass: match kernel {
+            KernelKind::Gaussian { cutoff } => {
+                Some(crate::kernel::Gaussian { cutoff }.truncated_mass(dim))
+            }
+            _ => None,
+        },
+        stress_source: format!("{stress_source:?}").to_lowercase(),
+        computation_method: project.method,
+        mixed_state: mixed,
+        calibration,
+        material_separation: separation,
+        materials,
+        fem_nodes: fem.nodes.len(),
+        material_points: points.len(),
+        null_points,
+        null_point_policy: config.outside,
+        mapf_smoothing_length: mapf_h,
+        min_mp_spacing: min_mp,
+        pwp_range: range(states.iter().map(|s| s.pwp)),
+        sigma_yy_range: range(states.iter().map(|s| s.total[1])),
+        notes,
+        warnings,
+        timings_ms: timings,
+    };
+    Ok(Mapped {
+        project,
+        fem,
+        states,
+        diagnostics,
+        report,
+        mapf_h,
+    })
+}
