@@ -10,6 +10,7 @@ pub mod calibrate;
 pub mod fem;
 pub mod map;
 pub mod project;
+pub mod verify;
 pub mod write;
 
 pub use project::Project;
