@@ -6,17 +6,17 @@
 //! Physics lives in [`crate::state`] (geostatic stress, Bishop, MPM-MIXED
 //! means, dry materials); the kernel interpolation in [`crate::kernel`].
 
-use std::path::{Path, PathBuf};
 use std::time::Instant;
-
-use serde::Serialize;
 
 use super::PipelineError;
 use super::Project;
 use super::Project as LoadedProject;
 use super::fem::LoadedFem;
+use super::regions::groups;
+use super::report::describe;
+pub use super::report::{InputFile, MapReport, MaterialCount};
 use crate::formats::cps::CpsDocument;
-use crate::formats::fem_csv::{FemReadReport, SignConvention};
+use crate::formats::fem_csv::SignConvention;
 use crate::formats::mapf;
 use crate::formats::mps_table::MpDiagnostics;
 use crate::kernel::mapper::{self, MapSettings, NodeCloud, OutsidePolicy, PointStatus};
@@ -101,154 +101,6 @@ impl Default for MapConfig {
             mixed_state: MixedState::Mean,
         }
     }
-}
-
-#[derive(Serialize)]
-pub struct InputFile {
-    path: PathBuf,
-    bytes: u64,
-    sha256: String,
-}
-
-fn describe(path: &Path) -> Result<InputFile, PipelineError> {
-    use sha2::{Digest, Sha256};
-    let bytes =
-        std::fs::read(path).map_err(|e| input_err!("{}: cannot read: {e}", path.display()))?;
-    let digest = Sha256::digest(&bytes);
-    Ok(InputFile {
-        path: path.to_path_buf(),
-        bytes: bytes.len() as u64,
-        sha256: digest.iter().map(|b| format!("{b:02x}")).collect(),
-    })
-}
-
-#[derive(Serialize)]
-pub struct MaterialCount {
-    index: u32,
-    name: String,
-    mps: usize,
-    fem_nodes: Option<usize>,
-}
-
-#[derive(Serialize)]
-pub struct MapReport {
-    pub tool: String,
-    pub inputs: Vec<InputFile>,
-    pub fem: Vec<FemReadReport>,
-    pub conventions: Vec<String>,
-    pub kernel: String,
-    pub smoothing_length: f64,
-    pub smoothing_length_rule: String,
-    pub fem_spacing: f64,
-    pub gaussian_truncated_mass: Option<f64>,
-    pub stress_source: String,
-    pub computation_method: crate::model::ComputationMethod,
-    /// MPM-MIXED only: `mean` or `per-mp` (see `--mixed-state`).
-    pub mixed_state: Option<MixedState>,
-    pub calibration: Option<crate::pipeline::calibrate::Outcome>,
-    pub material_separation: String,
-    pub materials: Vec<MaterialCount>,
-    pub fem_nodes: usize,
-    pub material_points: usize,
-    pub null_points: usize,
-    pub null_point_policy: Outside,
-    pub mapf_smoothing_length: f64,
-    pub min_mp_spacing: f64,
-    pub pwp_range: (f64, f64),
-    pub sigma_yy_range: (f64, f64),
-    pub notes: Vec<String>,
-    pub warnings: Vec<String>,
-    pub timings_ms: Vec<(String, f64)>,
-}
-
-/// Assigns FEM nodes and MPs to groups (GOM material indices) when the FEM has a
-/// region column; returns (node groups, description).
-fn groups(
-    project: &LoadedProject,
-    fem: &FemNodes,
-    material_map: Option<&str>,
-) -> Result<(Option<Vec<u32>>, String), PipelineError> {
-    let Some(regions) = &fem.region else {
-        return Ok((None, "none: the FEM file has no region column, so nodes of every material were used for every MP".into()));
-    };
-    let materials = &project.model.materials;
-    let mut explicit: Vec<(String, u32)> = Vec::new();
-    if let Some(spec) = material_map {
-        for pair in spec.split(',').filter(|s| !s.trim().is_empty()) {
-            let (r, m) = pair
-                .split_once('=')
-                .ok_or_else(|| input_err!("--material-map: `{pair}`: expected region=material"))?;
-            let m = m.trim();
-            let index = m
-                .parse::<u32>()
-                .ok()
-                .filter(|&i| i >= 1 && i as usize <= materials.len())
-                .or_else(|| {
-                    materials
-                        .iter()
-                        .find(|x| x.name.eq_ignore_ascii_case(m))
-                        .map(|x| x.index)
-                })
-                .ok_or_else(|| {
-                    input_err!(
-                        "--material-map: no GOM material `{m}` (materials: {})",
-                        materials
-                            .iter()
-                            .map(|x| x.name.as_str())
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    )
-                })?;
-            explicit.push((r.trim().to_string(), index));
-        }
-    }
-    let resolve = |region: &str| -> Option<u32> {
-        explicit
-            .iter()
-            .find(|(r, _)| r == region)
-            .map(|(_, i)| *i)
-            .or_else(|| {
-                materials
-                    .iter()
-                    .find(|m| m.name.eq_ignore_ascii_case(region))
-                    .map(|m| m.index)
-            })
-            .or_else(|| {
-                region
-                    .parse::<u32>()
-                    .ok()
-                    .filter(|&i| i >= 1 && i as usize <= materials.len())
-            })
-    };
-    let mut out = Vec::with_capacity(regions.len());
-    let mut unknown: Vec<&str> = Vec::new();
-    for r in regions {
-        match resolve(r) {
-            Some(i) => out.push(i),
-            None => {
-                if !unknown.contains(&r.as_str()) {
-                    unknown.push(r);
-                }
-                out.push(0);
-            }
-        }
-    }
-    if !unknown.is_empty() {
-        return Err(input_err!(
-            "FEM regions {} match no GOM material (materials: {}); map them with --material-map region=material",
-            unknown
-                .iter()
-                .map(|s| format!("`{s}`"))
-                .collect::<Vec<_>>()
-                .join(", "),
-            materials
-                .iter()
-                .map(|m| format!("{} {}", m.index, m.name))
-                .collect::<Vec<_>>()
-                .join(", ")
-        ));
-    }
-    Ok((Some(out), "by region: each MP takes only FEM nodes of its own material (no smoothing across material boundaries)".into()))
 }
 
 /// Maps the points whose group is not in `excluded`; excluded points get zero

@@ -10,6 +10,8 @@ pub mod calibrate;
 pub mod fem;
 pub mod map;
 pub mod project;
+mod regions;
+pub mod report;
 pub mod verify;
 pub mod write;
 

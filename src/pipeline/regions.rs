@@ -1,0 +1,101 @@
+//! Material separation: which GOM material each FEM node belongs to, from the
+//! FEM's region column, `--material-map region=material` and name or index
+//! matching. MPs then take only nodes of their own material, so nothing is
+//! smoothed across a material boundary.
+
+use super::{PipelineError, Project};
+use crate::model::FemNodes;
+
+macro_rules! input_err {
+    ($($t:tt)*) => { PipelineError::Input(format!($($t)*)) };
+}
+
+/// Assigns FEM nodes and MPs to groups (GOM material indices) when the FEM has a
+/// region column; returns (node groups, description).
+pub(super) fn groups(
+    project: &Project,
+    fem: &FemNodes,
+    material_map: Option<&str>,
+) -> Result<(Option<Vec<u32>>, String), PipelineError> {
+    let Some(regions) = &fem.region else {
+        return Ok((None, "none: the FEM file has no region column, so nodes of every material were used for every MP".into()));
+    };
+    let materials = &project.model.materials;
+    let mut explicit: Vec<(String, u32)> = Vec::new();
+    if let Some(spec) = material_map {
+        for pair in spec.split(',').filter(|s| !s.trim().is_empty()) {
+            let (r, m) = pair
+                .split_once('=')
+                .ok_or_else(|| input_err!("--material-map: `{pair}`: expected region=material"))?;
+            let m = m.trim();
+            let index = m
+                .parse::<u32>()
+                .ok()
+                .filter(|&i| i >= 1 && i as usize <= materials.len())
+                .or_else(|| {
+                    materials
+                        .iter()
+                        .find(|x| x.name.eq_ignore_ascii_case(m))
+                        .map(|x| x.index)
+                })
+                .ok_or_else(|| {
+                    input_err!(
+                        "--material-map: no GOM material `{m}` (materials: {})",
+                        materials
+                            .iter()
+                            .map(|x| x.name.as_str())
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    )
+                })?;
+            explicit.push((r.trim().to_string(), index));
+        }
+    }
+    let resolve = |region: &str| -> Option<u32> {
+        explicit
+            .iter()
+            .find(|(r, _)| r == region)
+            .map(|(_, i)| *i)
+            .or_else(|| {
+                materials
+                    .iter()
+                    .find(|m| m.name.eq_ignore_ascii_case(region))
+                    .map(|m| m.index)
+            })
+            .or_else(|| {
+                region
+                    .parse::<u32>()
+                    .ok()
+                    .filter(|&i| i >= 1 && i as usize <= materials.len())
+            })
+    };
+    let mut out = Vec::with_capacity(regions.len());
+    let mut unknown: Vec<&str> = Vec::new();
+    for r in regions {
+        match resolve(r) {
+            Some(i) => out.push(i),
+            None => {
+                if !unknown.contains(&r.as_str()) {
+                    unknown.push(r);
+                }
+                out.push(0);
+            }
+        }
+    }
+    if !unknown.is_empty() {
+        return Err(input_err!(
+            "FEM regions {} match no GOM material (materials: {}); map them with --material-map region=material",
+            unknown
+                .iter()
+                .map(|s| format!("`{s}`"))
+                .collect::<Vec<_>>()
+                .join(", "),
+            materials
+                .iter()
+                .map(|m| format!("{} {}", m.index, m.name))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ));
+    }
+    Ok((Some(out), "by region: each MP takes only FEM nodes of its own material (no smoothing across material boundaries)".into()))
+}

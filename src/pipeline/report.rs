@@ -1,0 +1,68 @@
+//! The map report (`report.json`): inputs with their SHA-256, conventions, how
+//! h was chosen, counts, notes, warnings and timings.
+
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use super::PipelineError;
+use super::map::{MixedState, Outside};
+use crate::formats::fem_csv::FemReadReport;
+
+#[derive(Serialize)]
+pub struct InputFile {
+    pub path: PathBuf,
+    pub bytes: u64,
+    pub sha256: String,
+}
+
+pub(super) fn describe(path: &Path) -> Result<InputFile, PipelineError> {
+    use sha2::{Digest, Sha256};
+    let bytes = std::fs::read(path)
+        .map_err(|e| PipelineError::Input(format!("{}: cannot read: {e}", path.display())))?;
+    let digest = Sha256::digest(&bytes);
+    Ok(InputFile {
+        path: path.to_path_buf(),
+        bytes: bytes.len() as u64,
+        sha256: digest.iter().map(|b| format!("{b:02x}")).collect(),
+    })
+}
+
+#[derive(Serialize)]
+pub struct MaterialCount {
+    pub index: u32,
+    pub name: String,
+    pub mps: usize,
+    pub fem_nodes: Option<usize>,
+}
+
+#[derive(Serialize)]
+pub struct MapReport {
+    pub tool: String,
+    pub inputs: Vec<InputFile>,
+    pub fem: Vec<FemReadReport>,
+    pub conventions: Vec<String>,
+    pub kernel: String,
+    pub smoothing_length: f64,
+    pub smoothing_length_rule: String,
+    pub fem_spacing: f64,
+    pub gaussian_truncated_mass: Option<f64>,
+    pub stress_source: String,
+    pub computation_method: crate::model::ComputationMethod,
+    /// MPM-MIXED only: `mean` or `per-mp` (see `--mixed-state`).
+    pub mixed_state: Option<MixedState>,
+    pub calibration: Option<crate::pipeline::calibrate::Outcome>,
+    pub material_separation: String,
+    pub materials: Vec<MaterialCount>,
+    pub fem_nodes: usize,
+    pub material_points: usize,
+    pub null_points: usize,
+    pub null_point_policy: Outside,
+    pub mapf_smoothing_length: f64,
+    pub min_mp_spacing: f64,
+    pub pwp_range: (f64, f64),
+    pub sigma_yy_range: (f64, f64),
+    pub notes: Vec<String>,
+    pub warnings: Vec<String>,
+    pub timings_ms: Vec<(String, f64)>,
+}
