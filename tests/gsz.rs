@@ -144,6 +144,7 @@ fn shipped_sample_maps_end_to_end() {
         out.to_str().unwrap(),
         "--outside",
         "nearest",
+        "--generate-cps",
     ]);
     assert_eq!(code, 0, "{stderr}");
     let report: serde_json::Value =

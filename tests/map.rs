@@ -437,6 +437,7 @@ fn real_geostudio_node_csv_with_mesh_ply() {
         gom.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
+        "--generate-cps",
     ];
     let (code, stderr) = run(&args);
     assert_eq!(code, 0, "{stderr}");
@@ -476,6 +477,7 @@ fn real_geostudio_node_csv_with_mesh_ply() {
         gom.to_str().unwrap(),
         "--out",
         tmp.path().join("x").to_str().unwrap(),
+        "--generate-cps",
     ]);
     assert_eq!(code, 2);
     assert!(

@@ -46,6 +46,8 @@ pub fn load_project(path: &std::path::Path) -> anyhow::Result<LoadedProject> {
     let gom = GomDocument::read(&files.gom)?;
     let cps = files.cps.as_deref().map(CpsDocument::read).transpose()?;
     let (model, mut info) = gom.model()?;
+    // File-naming problems (#14) come first among the warnings.
+    info.warnings.splice(0..0, files.warnings.iter().cloned());
     let points = crate::place::place_material_points(&model).map_err(|errors| {
         let lines: Vec<String> = errors
             .0

@@ -106,6 +106,9 @@ pub struct MapArgs {
     /// Replace an existing output folder.
     #[arg(long)]
     pub force: bool,
+    /// Without a CPS beside the model, write a complete default CPS for the model's version (#14).
+    #[arg(long)]
+    pub generate_cps: bool,
 }
 
 /// FEM nodes read and joined, with the reports of each file.
@@ -468,6 +471,10 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
     let mut timings = Vec::new();
     let t0 = Instant::now();
     let project = load_project(&args.mpm)?;
+    // #14: no CPS → refuse unless --generate-cps.
+    if project.files.cps.is_none() && !args.generate_cps {
+        bail!("{}", crate::formats::project::missing_cps_message(&project.files));
+    }
     timings.push((
         "read model and place MPs".to_string(),
         t0.elapsed().as_secs_f64() * 1e3,
@@ -876,49 +883,35 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
     })
 }
 
-/// The file name Anura3D expects for the GOM of this project.
-fn gom_name(project: &LoadedProject) -> String {
-    match project.files.stage {
-        Some(k) => format!("{}.GOM_stage{k}", project.files.name),
-        None => format!("{}.GOM", project.files.name),
-    }
-}
-
 /// Writes the ready-to-run project and the diagnostics into `out`.
 pub fn write(mapped: &Mapped, out: &OutputDir) -> anyhow::Result<Vec<String>> {
     let project = &mapped.project;
     let name = &project.files.name;
     let dim = project.model.mesh.dimension.n_dim();
     let mut written = Vec::new();
-    out.copy(&project.files.gom, &gom_name(project))?;
-    written.push(gom_name(project));
-    let (cps_name, mut cps) = match &project.files.cps {
-        Some(path) => (
-            path.file_name()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_else(|| format!("{name}.CPS_001")),
-            CpsDocument::read(path)?,
-        ),
-        None => (
-            format!("{name}.CPS_001"),
-            CpsDocument::parse(
-                Path::new("generated.CPS_001"),
-                "### Anura3D_2023 ###\n$$END\n".to_string(),
-            )?,
-        ),
-    };
-    cps.set("$$K0_PROCEDURE", &["0"]);
-    cps.set("$$MP_STRESS_INITIALIZATION_FROMFILE", &["1"]);
-    let text = cps.to_text();
-    out.write(&cps_name, |w| w.write_all(text.as_bytes()))?;
-    written.push(cps_name);
-    if let Some(opd) = &project.files.opd {
-        let file = opd
-            .file_name()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        out.copy(opd, &file)?;
-        written.push(file);
+    // #14: file names as Anura3D will look for them; the model's own CPS with two
+    // switches changed, or a generated one (--generate-cps); a default OPD for a
+    // 2025 CPS without one.
+    let names = project.files.output_names(project.gom.version());
+    out.copy(&project.files.gom, &names.gom)?;
+    written.push(names.gom.clone());
+    let active = project.model.element_material.iter().filter(|&&m| m > 0).count();
+    let text = crate::formats::cps_template::ready_to_run_cps(
+        project.cps.as_ref(),
+        project.gom.version(),
+        dim,
+        active,
+    )?;
+    out.write(&names.cps, |w| w.write_all(text.as_bytes()))?;
+    written.push(names.cps.clone());
+    if let Some(opd_name) = &names.opd {
+        match &project.files.opd {
+            Some(opd) => out.copy(opd, opd_name)?,
+            None => out.write(opd_name, |w| {
+                w.write_all(crate::formats::cps_template::generate_opd().as_bytes())
+            })?,
+        }
+        written.push(opd_name.clone());
     }
     let mapf_name = format!("{name}.MAPF");
     out.write(&mapf_name, |w| {
