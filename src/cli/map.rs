@@ -115,6 +115,8 @@ pub struct MapArgs {
 pub struct LoadedFem {
     pub nodes: FemNodes,
     pub reports: Vec<FemReadReport>,
+    /// Informational sentences (what was read, how rows were joined): not warnings.
+    pub notes: Vec<String>,
 }
 
 /// Reads every `--fem` file with the shared options and joins them.
@@ -144,6 +146,7 @@ pub fn load_fem(args: &FemArgs) -> anyhow::Result<LoadedFem> {
     };
     let mut parts = Vec::new();
     let mut reports = Vec::new();
+    let mut notes = Vec::new();
     let mesh = args
         .fem_mesh
         .as_deref()
@@ -158,8 +161,9 @@ pub fn load_fem(args: &FemArgs) -> anyhow::Result<LoadedFem> {
                 .step
                 .parse()
                 .map_err(|e| anyhow::anyhow!("--step {e}"))?;
-            let (nodes, report, _) =
+            let (nodes, report, note) =
                 crate::formats::gsz::read_step(path, args.analysis.as_deref(), &step, &options)?;
+            notes.push(note);
             parts.push(nodes);
             reports.push(report);
             continue;
@@ -167,7 +171,15 @@ pub fn load_fem(args: &FemArgs) -> anyhow::Result<LoadedFem> {
         let (mut nodes, report) = fem_csv::read_csv(path, &options)?;
         if !report.has_coordinates {
             match &mesh {
-                Some(mesh) => fem_csv::attach_mesh(&mut nodes, path, mesh)?,
+                // #14: join rows to mesh nodes by Node id (a subset of the mesh is fine).
+                Some(mesh) => {
+                    let text = std::fs::read(path).unwrap_or_default();
+                    let rows = crate::formats::gsz::data_row_lines(&text, report.header_line);
+                    let ply = args.fem_mesh.as_deref().unwrap_or(path).display().to_string();
+                    let joined =
+                        crate::formats::gsz::join_mesh(&mut nodes, path, &rows, mesh, &ply)?;
+                    notes.extend(joined.map(|n| format!("{}: {n}", path.display())));
+                }
                 None => bail!(
                     "{}: no X and Y columns; give the GeoStudio mesh with --fem-mesh Mesh.ply",
                     path.display()
@@ -178,7 +190,11 @@ pub fn load_fem(args: &FemArgs) -> anyhow::Result<LoadedFem> {
         reports.push(report);
     }
     let nodes = join(parts, &args.fem)?;
-    Ok(LoadedFem { nodes, reports })
+    Ok(LoadedFem {
+        nodes,
+        reports,
+        notes,
+    })
 }
 
 /// Joins several node files: by id when every file has ids in the same set, the
@@ -640,7 +656,7 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
         .map(|_| points.iter().map(|p| p.material).collect());
     // Dry materials without FEM nodes of their own (e.g. an impermeable base the
     // seepage model left out) get pwp = 0 and no kernel mapping.
-    let mut notes: Vec<String> = Vec::new();
+    let mut notes: Vec<String> = fem.notes.clone();
     let mut dry_without_nodes: Vec<u32> = Vec::new();
     if let (Some(ng), Some(pg)) = (&node_groups, &point_groups) {
         for m in &project.model.materials {
@@ -659,6 +675,21 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
                     );
                 }
             }
+        }
+    }
+    // #14: a FEM that does not reach the model: name the file, both extents, a unit/offset hint.
+    let reached: Vec<[f64; 3]> = (0..positions.len())
+        .filter(|&i| point_groups.as_ref().is_none_or(|g| !dry_without_nodes.contains(&g[i])))
+        .map(|i| positions[i])
+        .collect();
+    if let Some(reach) =
+        crate::diagnose::reach(&fem.nodes.positions, &reached, dim, kernel.support() * h)
+        && reach.is_poor()
+    {
+        let files: Vec<String> = args.fem.fem.iter().map(|p| p.display().to_string()).collect();
+        match args.outside {
+            OutsideArg::Error => bail!("{}", reach.message(&files.join(", "))),
+            _ => warnings.push(reach.message(&files.join(", "))),
         }
     }
     let t2 = Instant::now();
@@ -800,6 +831,11 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
                 saturation: 1.0,
             };
         }
+    }
+    // #14: plausibility of the mapped pwp (warnings, never errors); γw = g·ρw with ρw = 1 t/m³.
+    if stress_source != StressArg::Zero {
+        let found = state::plausibility::check(&positions, &states, dim, g);
+        warnings.extend(found.into_iter().map(|f| f.message));
     }
     if let Some(bad) = states
         .iter()

@@ -7,6 +7,7 @@
 //! material's degree of saturation. The kernel mapping itself lives in `kernel`.
 
 pub mod geostatic;
+pub mod plausibility;
 
 use crate::model::{Material, MpState};
 
