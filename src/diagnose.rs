@@ -23,9 +23,9 @@ impl Extent {
             dim,
         };
         for p in points {
-            for a in 0..3 {
-                e.lo[a] = e.lo[a].min(p[a]);
-                e.hi[a] = e.hi[a].max(p[a]);
+            for (a, v) in p.iter().enumerate() {
+                e.lo[a] = e.lo[a].min(*v);
+                e.hi[a] = e.hi[a].max(*v);
             }
         }
         Some(e)
@@ -90,10 +90,7 @@ pub fn mismatch_hint(fem: &Extent, model: &Extent) -> Option<String> {
     }
     if (ratio - 1.0).abs() < 0.05 {
         let offset: Vec<f64> = (0..dim).map(|a| fem.centre(a) - model.centre(a)).collect();
-        let scale = axes
-            .iter()
-            .map(|&a| model.size(a))
-            .fold(0.0_f64, f64::max);
+        let scale = axes.iter().map(|&a| model.size(a)).fold(0.0_f64, f64::max);
         if offset.iter().any(|d| d.abs() > 0.05 * scale) {
             return Some(format!(
                 "the FEM has the model's size but is offset by ({}) m: do the two use different coordinate origins?",
@@ -112,6 +109,8 @@ pub fn mismatch_hint(fem: &Extent, model: &Extent) -> Option<String> {
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Reach {
     pub fem: Extent,
+    /// The model's mesh (all its nodes).
+    pub model: Extent,
     pub mps: Extent,
     /// MPs outside the FEM box grown by the kernel support: no node can reach them.
     pub outside: usize,
@@ -128,11 +127,12 @@ impl Reach {
     /// The message naming the FEM file(s), both extents and the hint.
     pub fn message(&self, fem_files: &str) -> String {
         format!(
-            "{}: the FEM nodes do not reach the model: {} of {} MPs lie outside the FEM's extent (grown by the kernel support), where no FEM node can reach them. FEM nodes: {}; model MPs: {}{}",
+            "{}: the FEM nodes do not reach the model: {} of {} MPs lie outside the FEM's extent (grown by the kernel support), where no FEM node can reach them. FEM nodes: {}; model mesh: {} (MPs: {}){}",
             fem_files,
             self.outside,
             self.total,
             self.fem,
+            self.model,
             self.mps,
             self.hint
                 .as_deref()
@@ -142,17 +142,23 @@ impl Reach {
     }
 }
 
-/// Compares the FEM nodes with the MPs (`support` = kernel support radius, m).
-pub fn reach(fem: &[[f64; 3]], mps: &[[f64; 3]], dim: usize, support: f64) -> Option<Reach> {
+/// Compares the FEM nodes with the MPs and the model's mesh nodes (`support` =
+/// kernel support radius, m). The unit/offset hint compares the FEM with the mesh.
+pub fn reach(
+    fem: &[[f64; 3]],
+    mesh: &[[f64; 3]],
+    mps: &[[f64; 3]],
+    dim: usize,
+    support: f64,
+) -> Option<Reach> {
     let fem_box = Extent::of(fem, dim)?;
     let mp_box = Extent::of(mps, dim)?;
-    let outside = mps
-        .iter()
-        .filter(|p| !fem_box.contains(p, support))
-        .count();
+    let mesh_box = Extent::of(mesh, dim).unwrap_or(mp_box);
+    let outside = mps.iter().filter(|p| !fem_box.contains(p, support)).count();
     Some(Reach {
-        hint: mismatch_hint(&fem_box, &mp_box),
+        hint: mismatch_hint(&fem_box, &mesh_box),
         fem: fem_box,
+        model: mesh_box,
         mps: mp_box,
         outside,
         total: mps.len(),
@@ -177,33 +183,52 @@ mod tests {
     fn feet_millimetres_and_offsets_are_named() {
         let model = grid(0.0, 0.0, 20.0, 10.0);
         let cases = [
-            (grid(0.0, 0.0, 20.0 / 0.3048, 10.0 / 0.3048), "3.28× larger", "length=ft"),
-            (grid(0.0, 0.0, 20_000.0, 10_000.0), "1000.00× larger", "length=mm"),
-            (grid(0.0, 0.0, 20.0 * 0.3048, 10.0 * 0.3048), "3.28× smaller", "in ft"),
-            (grid(500.0, 100.0, 20.0, 10.0), "offset by (500.000, 100.000)", ""),
+            (
+                grid(0.0, 0.0, 20.0 / 0.3048, 10.0 / 0.3048),
+                "3.28× larger",
+                "length=ft",
+            ),
+            (
+                grid(0.0, 0.0, 20_000.0, 10_000.0),
+                "1000.00× larger",
+                "length=mm",
+            ),
+            (
+                grid(0.0, 0.0, 20.0 * 0.3048, 10.0 * 0.3048),
+                "3.28× smaller",
+                "in ft",
+            ),
+            (
+                grid(500.0, 100.0, 20.0, 10.0),
+                "offset by (500.000, 100.000)",
+                "",
+            ),
         ];
         for (fem, what, unit) in cases {
-            let r = reach(&fem, &model, 2, 0.5).unwrap();
+            let r = reach(&fem, &model, &model, 2, 0.5).unwrap();
             let hint = r.hint.clone().unwrap_or_default();
             assert!(hint.contains(what) && hint.contains(unit), "{what}: {hint}");
         }
-        let far = reach(&grid(500.0, 100.0, 20.0, 10.0), &model, 2, 0.5).unwrap();
+        let far = reach(&grid(500.0, 100.0, 20.0, 10.0), &model, &model, 2, 0.5).unwrap();
         assert!(far.is_poor());
         let m = far.message("seep.csv");
         assert!(m.starts_with("seep.csv: "), "{m}");
-        assert!(m.contains("x 500.000 .. 520.000, y 100.000 .. 110.000 m"), "{m}");
+        assert!(
+            m.contains("x 500.000 .. 520.000, y 100.000 .. 110.000 m"),
+            "{m}"
+        );
         assert!(m.contains("x 0.000 .. 20.000, y 0.000 .. 10.000 m"), "{m}");
     }
 
     #[test]
     fn a_covering_fem_is_fine_and_has_no_hint() {
         let model = grid(0.0, 0.0, 20.0, 10.0);
-        let r = reach(&grid(-1.0, -1.0, 22.0, 12.0), &model, 2, 0.5).unwrap();
+        let r = reach(&grid(-1.0, -1.0, 22.0, 12.0), &model, &model, 2, 0.5).unwrap();
         assert_eq!(r.outside, 0);
         assert!(!r.is_poor());
         assert_eq!(r.hint, None);
         // A FEM covering only a third of the model is no unit error either.
-        let part = reach(&grid(0.0, 0.0, 6.0, 10.0), &model, 2, 0.5).unwrap();
+        let part = reach(&grid(0.0, 0.0, 6.0, 10.0), &model, &model, 2, 0.5).unwrap();
         assert!(part.is_poor());
         assert_eq!(part.hint, None);
     }

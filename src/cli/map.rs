@@ -175,7 +175,12 @@ pub fn load_fem(args: &FemArgs) -> anyhow::Result<LoadedFem> {
                 Some(mesh) => {
                     let text = std::fs::read(path).unwrap_or_default();
                     let rows = crate::formats::gsz::data_row_lines(&text, report.header_line);
-                    let ply = args.fem_mesh.as_deref().unwrap_or(path).display().to_string();
+                    let ply = args
+                        .fem_mesh
+                        .as_deref()
+                        .unwrap_or(path)
+                        .display()
+                        .to_string();
                     let joined =
                         crate::formats::gsz::join_mesh(&mut nodes, path, &rows, mesh, &ply)?;
                     notes.extend(joined.map(|n| format!("{}: {n}", path.display())));
@@ -489,7 +494,10 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
     let project = load_project(&args.mpm)?;
     // #14: no CPS → refuse unless --generate-cps.
     if project.files.cps.is_none() && !args.generate_cps {
-        bail!("{}", crate::formats::project::missing_cps_message(&project.files));
+        bail!(
+            "{}",
+            crate::formats::project::missing_cps_message(&project.files)
+        );
     }
     timings.push((
         "read model and place MPs".to_string(),
@@ -679,14 +687,28 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
     }
     // #14: a FEM that does not reach the model: name the file, both extents, a unit/offset hint.
     let reached: Vec<[f64; 3]> = (0..positions.len())
-        .filter(|&i| point_groups.as_ref().is_none_or(|g| !dry_without_nodes.contains(&g[i])))
+        .filter(|&i| {
+            point_groups
+                .as_ref()
+                .is_none_or(|g| !dry_without_nodes.contains(&g[i]))
+        })
         .map(|i| positions[i])
         .collect();
-    if let Some(reach) =
-        crate::diagnose::reach(&fem.nodes.positions, &reached, dim, kernel.support() * h)
-        && reach.is_poor()
+    let mesh_nodes = &project.model.mesh.nodes;
+    if let Some(reach) = crate::diagnose::reach(
+        &fem.nodes.positions,
+        mesh_nodes,
+        &reached,
+        dim,
+        kernel.support() * h,
+    ) && reach.is_poor()
     {
-        let files: Vec<String> = args.fem.fem.iter().map(|p| p.display().to_string()).collect();
+        let files: Vec<String> = args
+            .fem
+            .fem
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect();
         match args.outside {
             OutsideArg::Error => bail!("{}", reach.message(&files.join(", "))),
             _ => warnings.push(reach.message(&files.join(", "))),
@@ -735,7 +757,7 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
             saturation: state::saturation(material, pwp),
         });
     }
-    let mut notes = Vec::new();
+    // (The notes started above, with the FEM notes and dry materials, continue here.)
     if stress_source == StressArg::Fem
         && dim == 2
         && column(Quantity::TotalStress(StressComponent::Zz)).is_none()
@@ -931,7 +953,12 @@ pub fn write(mapped: &Mapped, out: &OutputDir) -> anyhow::Result<Vec<String>> {
     let names = project.files.output_names(project.gom.version());
     out.copy(&project.files.gom, &names.gom)?;
     written.push(names.gom.clone());
-    let active = project.model.element_material.iter().filter(|&&m| m > 0).count();
+    let active = project
+        .model
+        .element_material
+        .iter()
+        .filter(|&&m| m > 0)
+        .count();
     let text = crate::formats::cps_template::ready_to_run_cps(
         project.cps.as_ref(),
         project.gom.version(),

@@ -278,7 +278,10 @@ mod tests {
         assert_eq!(doc.stage(), 0);
         assert_eq!(doc.get_token("$$NUMBER_OF_ACTIVE_ELEMENTS", 0), Some("7"));
         assert_eq!(doc.get("$$GRAVITY_VECTOR"), Some(vec!["0.0 -1.0 0.0"]));
-        assert_eq!(doc.get_token("$$MP_STRESS_INITIALIZATION_FROMFILE", 0), Some("1"));
+        assert_eq!(
+            doc.get_token("$$MP_STRESS_INITIALIZATION_FROMFILE", 0),
+            Some("1")
+        );
         assert_eq!(doc.get_token("$$K0_PROCEDURE", 0), Some("0"));
         assert!(keywords("2024").iter().all(|k| *k != "$$STAGE"));
     }

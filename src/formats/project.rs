@@ -197,13 +197,13 @@ pub fn discover(path: &Path) -> Result<ProjectFiles, FormatError> {
         return discover_gid(path, &dir, &stem[..stem.len() - 2]);
     }
     if ext == "GOM" || ext.starts_with("GOM_stage") {
-        let gom_stage = match ext.strip_prefix("GOM_stage") {
-            Some(k) => Some(
-                k.parse::<u32>()
-                    .map_err(|_| FormatError::file(path, "expected GOM_stage<k> with a number k"))?,
-            ),
-            None => None,
-        };
+        let gom_stage =
+            match ext.strip_prefix("GOM_stage") {
+                Some(k) => Some(k.parse::<u32>().map_err(|_| {
+                    FormatError::file(path, "expected GOM_stage<k> with a number k")
+                })?),
+                None => None,
+            };
         let name = match undouble(&dir, stem) {
             Some(inner) => {
                 warnings.push(format!(
@@ -560,6 +560,9 @@ mod tests {
         assert!(p.warnings[0].starts_with("no CPS"));
         assert!(missing_cps_message(&p).contains("--generate-cps"));
         let names = p.output_names("2024");
-        assert_eq!((names.gom.as_str(), names.cps.as_str()), ("Z.GOM", "Z.CPS_001"));
+        assert_eq!(
+            (names.gom.as_str(), names.cps.as_str()),
+            ("Z.GOM", "Z.CPS_001")
+        );
     }
 }

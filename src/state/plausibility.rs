@@ -48,12 +48,7 @@ fn describe(worst: &[(usize, [f64; 3], f64, f64)], dim: usize) -> String {
 }
 
 /// Runs both checks. `gamma_w` is the unit weight of water (kN/m³).
-pub fn check(
-    positions: &[[f64; 3]],
-    states: &[MpState],
-    dim: usize,
-    gamma_w: f64,
-) -> Vec<Finding> {
+pub fn check(positions: &[[f64; 3]], states: &[MpState], dim: usize, gamma_w: f64) -> Vec<Finding> {
     let mut findings = Vec::new();
     let (lo, hi) = positions
         .iter()
@@ -169,8 +164,15 @@ mod tests {
         let first = &f[0];
         assert_eq!(first.check, "pwp-exceeds-vertical-stress");
         assert!(first.count > 5 && first.suction > 0, "{first:?}");
-        assert_eq!(first.worst[0].0, 1, "the deepest MP is the worst compressive one");
-        assert!(first.message.contains("MP 1 at (1.000, 0.000)"), "{}", first.message);
+        assert_eq!(
+            first.worst[0].0, 1,
+            "the deepest MP is the worst compressive one"
+        );
+        assert!(
+            first.message.contains("MP 1 at (1.000, 0.000)"),
+            "{}",
+            first.message
+        );
     }
 
     #[test]
