@@ -299,7 +299,7 @@ fn bad_inputs_exit_2_and_leave_no_output() {
             "every_node_outside",
             far,
             vec![],
-            "material point(s) have no FEM node inside the kernel support",
+            "seep.csv: the FEM nodes do not reach the model: 1200 of 1200 MPs",
         ),
         (
             "bad_columns_override",
