@@ -235,6 +235,7 @@ pub fn discover(path: &Path) -> Result<ProjectFiles, FormatError> {
             None => (None, None, gom_stage),
         };
         let opd = find_opd(&dir, &name, stage, cps_version.as_deref(), &mut notes);
+        check_later_stage(&dir, &name, stage, &mut warnings);
         return Ok(ProjectFiles {
             name,
             dir,
@@ -274,6 +275,7 @@ pub fn discover(path: &Path) -> Result<ProjectFiles, FormatError> {
         }
         let version = cps.version().to_string();
         let opd = find_opd(&dir, &name, stage, Some(&version), &mut notes);
+        check_later_stage(&dir, &name, stage, &mut warnings);
         return Ok(ProjectFiles {
             name,
             dir,
@@ -306,7 +308,15 @@ fn discover_gid(path: &Path, dir: &Path, name: &str) -> Result<ProjectFiles, For
         format!("GiD export: GiD writes the GOM to {name}-2.dat and the CPS to {name}-1.dat"),
     ];
     let mut warnings = Vec::new();
-    let chosen = if gid_cps.exists() {
+    // Older problem types write other things to `-1.dat`: only a file with an
+    // Anura3D header is taken as the CPS.
+    let is_cps = std::fs::read(&gid_cps).is_ok_and(|b| b.starts_with(b"### Anura3D_"));
+    if gid_cps.exists() && !is_cps && path != gid_cps {
+        notes.push(format!(
+            "{name}-1.dat has no Anura3D header: not a CPS, looking for {name}.CPS_<nnn>"
+        ));
+    }
+    let chosen = if gid_cps.exists() && (is_cps || path == gid_cps) {
         let doc = CpsDocument::read(&gid_cps)?;
         notes.push(format!("CPS: {}", gid_cps.display()));
         Some((gid_cps, doc))
@@ -327,6 +337,7 @@ fn discover_gid(path: &Path, dir: &Path, name: &str) -> Result<ProjectFiles, For
         None => (None, None, None),
     };
     let opd = find_opd(dir, name, stage, cps_version.as_deref(), &mut notes);
+    check_later_stage(dir, name, stage, &mut warnings);
     Ok(ProjectFiles {
         name: name.to_string(),
         dir: dir.to_path_buf(),
@@ -364,6 +375,22 @@ fn find_opd(
         )),
     }
     found
+}
+
+/// A 2025 run of stage k > 0 also opens `<name>.GOM_stage0` (for the dimension),
+/// and continues from the restart files of the earlier stages.
+fn check_later_stage(dir: &Path, name: &str, stage: Option<u32>, warnings: &mut Vec<String>) {
+    if let Some(k) = stage.filter(|&k| k > 0) {
+        let stage0 = format!("{name}.GOM_stage0");
+        warnings.push(format!(
+            "stage {k}: Anura3D also opens {stage0}{} and starts from the restart files of the earlier stages; a MAPF is read only at the first load step",
+            if dir.join(&stage0).exists() {
+                ""
+            } else {
+                ", which is not here"
+            }
+        ));
+    }
 }
 
 /// For a GOM, the CPS that drives it: the lowest-numbered CPS whose stage
@@ -520,6 +547,42 @@ mod tests {
         assert_eq!(names.gom, "Dam.GOM_stage0");
         assert_eq!(names.opd.as_deref(), Some("Dam.OPD_stage0"));
         assert_eq!(names.cps, "Dam.CPS_001");
+    }
+
+    #[test]
+    fn older_gid_folder_keeps_its_cps_beside_the_dat_files() {
+        // As in upstream tutorial folders: -2.dat (GOM), -3.dat and .dat (batch
+        // files), and the CPS under its Anura3D name.
+        let tmp = tempfile::tempdir().unwrap();
+        let gid = tmp.path().join("Oedo.gid");
+        std::fs::create_dir(&gid).unwrap();
+        write(&gid, "Oedo-2.dat", GOM);
+        write(&gid, "Oedo-3.dat", "\"Anura3D_2023.exe\" \"Oedo\"\nPAUSE\n");
+        write(&gid, "Oedo-1.dat", "\"Anura3D_2023.exe\"\nPAUSE\n");
+        write(&gid, "Oedo.dat", "PAUSE\n");
+        let cps = write(&gid, "Oedo.CPS_001", CPS_2024);
+        let p = discover(&gid).unwrap();
+        assert_eq!(p.name, "Oedo");
+        assert_eq!(p.cps, Some(cps));
+        assert!(p.notes.iter().any(|n| n.contains("no Anura3D header")));
+    }
+
+    #[test]
+    fn a_later_stage_names_stage0_and_the_restart() {
+        let tmp = tempfile::tempdir().unwrap();
+        let gom = write(tmp.path(), "C.GOM_stage1", GOM);
+        write(
+            tmp.path(),
+            "C.CPS_002",
+            "### Anura3D_2025 ###\n$$STAGE\n1\n$$END\n",
+        );
+        let p = discover(&gom).unwrap();
+        assert_eq!(p.stage, Some(1));
+        assert!(p.warnings[0].contains("C.GOM_stage0, which is not here"));
+        let names = p.output_names("2025");
+        assert_eq!(names.gom, "C.GOM_stage1");
+        assert_eq!(names.cps, "C.CPS_002");
+        assert!(names.needs_gom_stage0);
     }
 
     #[test]
