@@ -124,6 +124,19 @@ impl Reach {
         self.total > 0 && 2 * self.outside >= self.total
     }
 
+    /// Both extents and the hint, for a message about MPs without FEM nodes.
+    pub fn extents(&self) -> String {
+        format!(
+            "FEM nodes: {}; model mesh: {}{}",
+            self.fem,
+            self.model,
+            self.hint
+                .as_deref()
+                .map(|h| format!("; {h}"))
+                .unwrap_or_default()
+        )
+    }
+
     /// The message naming the FEM file(s), both extents and the hint.
     pub fn message(&self, fem_files: &str) -> String {
         format!(
@@ -140,6 +153,15 @@ impl Reach {
                 .unwrap_or_default()
         )
     }
+}
+
+/// The FEM files as a message names them: `a.csv, b.csv`.
+pub fn file_list(paths: &[std::path::PathBuf]) -> String {
+    paths
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>()
+        .join(", ")
 }
 
 /// Compares the FEM nodes with the MPs and the model's mesh nodes (`support` =

@@ -438,6 +438,41 @@ fn fem_in_feet_is_named_with_both_extents_and_the_factor() {
     assert_eq!(code, 0, "{stderr}");
 }
 
+/// Class 4, partly covered: the mapper's refusal also names the file and both extents.
+#[test]
+fn fem_covering_part_of_the_model_names_file_and_extents() {
+    let tmp = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(real("site-m.csv")).unwrap();
+    let part: String = text
+        .lines()
+        .filter(|l| {
+            l.starts_with('X') || l.split(',').next().unwrap().parse::<f64>().unwrap() <= 1007.0
+        })
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let fem = tmp.path().join("part.csv");
+    std::fs::write(&fem, part).unwrap();
+    let (code, _, stderr) = run(&[
+        "map",
+        "--mpm",
+        s(&real("offset/Site.GOM")),
+        "--fem",
+        s(&fem),
+        "--out",
+        s(&tmp.path().join("out")),
+    ]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("part.csv: "), "{stderr}");
+    assert!(
+        stderr.contains("have no FEM node inside the kernel support"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("FEM nodes: x 1000.000 .. 1007.000, y 200.000 .. 205.000 m; model mesh: x 1000.000 .. 1010.000"),
+        "{stderr}"
+    );
+}
+
 /// Class 5: plausibility warnings (psf read as kPa, a flipped sign), none on the
 /// valid file; each warning names its path once.
 #[test]

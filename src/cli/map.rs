@@ -694,24 +694,18 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
         })
         .map(|i| positions[i])
         .collect();
-    let mesh_nodes = &project.model.mesh.nodes;
-    if let Some(reach) = crate::diagnose::reach(
+    let reach = crate::diagnose::reach(
         &fem.nodes.positions,
-        mesh_nodes,
+        &project.model.mesh.nodes,
         &reached,
         dim,
         kernel.support() * h,
-    ) && reach.is_poor()
-    {
-        let files: Vec<String> = args
-            .fem
-            .fem
-            .iter()
-            .map(|p| p.display().to_string())
-            .collect();
+    );
+    let files = crate::diagnose::file_list(&args.fem.fem);
+    if let Some(r) = reach.as_ref().filter(|r| r.is_poor()) {
         match args.outside {
-            OutsideArg::Error => bail!("{}", reach.message(&files.join(", "))),
-            _ => warnings.push(reach.message(&files.join(", "))),
+            OutsideArg::Error => bail!("{}", r.message(&files)),
+            _ => warnings.push(r.message(&files)),
         }
     }
     let t2 = Instant::now();
@@ -721,7 +715,11 @@ pub fn compute(args: &MapArgs) -> anyhow::Result<Mapped> {
         point_groups.as_deref(),
         &settings,
         &dry_without_nodes,
-    )?;
+    )
+    .map_err(|e| match &reach {
+        Some(r) => anyhow::anyhow!("{files}: {e} ({})", r.extents()),
+        None => e,
+    })?;
     timings.push((
         "kernel mapping".to_string(),
         t2.elapsed().as_secs_f64() * 1e3,
