@@ -148,7 +148,7 @@ fn cps_files(dir: &Path, name: &str) -> Vec<(u64, PathBuf)> {
             let file = file_name(&entry.path());
             if let Some((stem, ext)) = split_ext(&file)
                 && stem == name
-                && let Some(step) = cps_step(ext)
+                && let Some(step) = cps_step(&ext.to_ascii_uppercase())
             {
                 out.push((step, entry.path()));
             }
@@ -193,6 +193,16 @@ pub fn discover(path: &Path) -> Result<ProjectFiles, FormatError> {
     };
     let mut notes = Vec::new();
     let mut warnings = Vec::new();
+    // `x.gom`, `x.Cps_001`: Anura3D's names are case-sensitive on Linux.
+    let upper = ext.to_ascii_uppercase();
+    let ext = if !is_anura3d_ext(ext) && is_anura3d_ext(&upper) {
+        warnings.push(format!(
+            "{file}: Anura3D looks for {stem}.{upper} (file names are case-sensitive on Linux); the run would fail as named. a3d-init writes {stem}.{upper}"
+        ));
+        upper.as_str()
+    } else {
+        ext
+    };
     if ext == "dat" && (stem.ends_with("-2") || stem.ends_with("-1")) {
         return discover_gid(path, &dir, &stem[..stem.len() - 2]);
     }
@@ -442,9 +452,9 @@ fn choose_cps(
 fn gom_candidate(dir: &Path, path: &Path) -> Option<(String, PathBuf, u8)> {
     let file = file_name(path);
     let (stem, ext) = split_ext(&file)?;
-    let rank = match ext {
-        "GOM" | "GOM_stage0" => 0,
-        "dat" if stem.ends_with("-2") => 1,
+    let rank = match ext.to_ascii_uppercase().as_str() {
+        "GOM" | "GOM_STAGE0" => 0,
+        "DAT" if stem.ends_with("-2") => 1,
         _ => return None,
     };
     let name = match rank {
@@ -601,6 +611,27 @@ mod tests {
         assert_eq!(p.output_names("2025").gom, "X.GOM_stage0");
         // The folder finds the same project.
         assert_eq!(discover(tmp.path()).unwrap().name, "X");
+    }
+
+    #[test]
+    fn lower_case_extensions_are_read_and_reported() {
+        let tmp = tempfile::tempdir().unwrap();
+        let gom = write(tmp.path(), "L.gom", GOM);
+        write(tmp.path(), "L.cps_001", CPS_2024);
+        let p = discover(&gom).unwrap();
+        assert_eq!(p.name, "L");
+        assert!(p.cps.is_some());
+        assert!(
+            p.warnings[0].contains("Anura3D looks for L.GOM"),
+            "{:?}",
+            p.warnings
+        );
+        let names = p.output_names("2024");
+        assert_eq!(
+            (names.gom.as_str(), names.cps.as_str()),
+            ("L.GOM", "L.CPS_001")
+        );
+        assert_eq!(discover(tmp.path()).unwrap().name, "L");
     }
 
     #[test]
