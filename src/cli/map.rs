@@ -168,7 +168,7 @@ pub fn load_fem(args: &FemArgs) -> anyhow::Result<LoadedFem> {
             reports.push(report);
             continue;
         }
-        let (mut nodes, report) = fem_csv::read_csv(path, &options)?;
+        let (mut nodes, mut report) = fem_csv::read_csv(path, &options)?;
         if !report.has_coordinates {
             match &mesh {
                 // #14: join rows to mesh nodes by Node id (a subset of the mesh is fine).
@@ -184,6 +184,14 @@ pub fn load_fem(args: &FemArgs) -> anyhow::Result<LoadedFem> {
                     let joined =
                         crate::formats::gsz::join_mesh(&mut nodes, path, &rows, mesh, &ply)?;
                     notes.extend(joined.map(|n| format!("{}: {n}", path.display())));
+                    // With the mesh given, "no coordinate columns" is information, not a warning.
+                    report
+                        .warnings
+                        .retain(|w| !w.starts_with("no coordinate columns"));
+                    notes.push(format!(
+                        "{}: coordinates from {ply} (node k = PLY node k − 1)",
+                        path.display()
+                    ));
                 }
                 None => bail!(
                     "{}: no X and Y columns; give the GeoStudio mesh with --fem-mesh Mesh.ply",

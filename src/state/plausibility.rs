@@ -4,8 +4,10 @@
 //!
 //! * a pore pressure whose magnitude exceeds 1.5 × the total vertical stress at
 //!   the same MP (+ 10 kPa): compressive ones almost always mean a unit or sign
-//!   error; suctions are counted apart, and only when they also exceed the
-//!   hydrostatic suction of a water table at the model's bottom;
+//!   error, beyond what free water up to the model's top (a reservoir, which
+//!   loads the pore water but not the overburden) could add; suctions are
+//!   counted apart, and only when they also exceed the hydrostatic suction of a
+//!   water table at the model's bottom;
 //! * a compressive pore pressure implying a water level above the model's top
 //!   (y + |p|/γw above the highest MP by more than 0.5 m + 5 % of the height).
 //!
@@ -56,13 +58,20 @@ pub fn check(positions: &[[f64; 3]], states: &[MpState], dim: usize, gamma_w: f6
             (a.min(p[1]), b.max(p[1]))
         });
     // 1. |pwp| against the total vertical stress. A suction is counted only when it
-    // also exceeds the hydrostatic suction of a water table at the model's bottom.
+    // also exceeds the hydrostatic suction of a water table at the model's bottom;
+    // a compressive pwp only beyond what water up to the model's top could add.
     let mut bad: Vec<(f64, usize)> = Vec::new();
     let mut suction = 0;
     for (i, s) in states.iter().enumerate() {
         let sv = s.total[1].abs();
-        let hydrostatic = gamma_w * (positions[i][1] - lo) + SLACK;
-        if s.pwp.abs() > RATIO * sv + SLACK && (s.pwp < 0.0 || s.pwp > hydrostatic) {
+        let y = positions[i][1];
+        // Water standing above the ground (a reservoir) loads the pore water but
+        // not the soil's overburden: compressive pwp may add γw·(top − y).
+        let bound = match s.pwp < 0.0 {
+            true => RATIO * sv + SLACK + gamma_w * (hi - y).max(0.0),
+            false => (RATIO * sv).max(gamma_w * (y - lo)) + SLACK,
+        };
+        if s.pwp.abs() > bound {
             bad.push((s.pwp.abs() - sv, i));
             if s.pwp > 0.0 {
                 suction += 1;
@@ -85,7 +94,7 @@ pub fn check(positions: &[[f64; 3]], states: &[MpState], dim: usize, gamma_w: f6
             count: bad.len(),
             suction,
             message: format!(
-                "{} of {} MPs have a pore pressure whose magnitude exceeds {RATIO}× the total vertical stress there (+{SLACK} kPa): {} compressive, {suction} suction (large suction can be genuine). A sign or unit error? check --fem-sign and --fem-units. Worst: {}",
+                "{} of {} MPs have a pore pressure whose magnitude exceeds {RATIO}× the total vertical stress there (+{SLACK} kPa, + the weight of water up to the model's top for compressive ones): {} compressive, {suction} suction (large suction can be genuine). A sign or unit error? check --fem-sign and --fem-units. Worst: {}",
                 bad.len(),
                 states.len(),
                 bad.len() - suction,
