@@ -172,27 +172,13 @@ pub fn load_fem(args: &FemArgs) -> anyhow::Result<LoadedFem> {
         if !report.has_coordinates {
             match &mesh {
                 // #14: join rows to mesh nodes by Node id (a subset of the mesh is fine).
-                Some(mesh) => {
-                    let text = std::fs::read(path).unwrap_or_default();
-                    let rows = crate::formats::gsz::data_row_lines(&text, report.header_line);
-                    let ply = args
-                        .fem_mesh
-                        .as_deref()
-                        .unwrap_or(path)
-                        .display()
-                        .to_string();
-                    let joined =
-                        crate::formats::gsz::join_mesh(&mut nodes, path, &rows, mesh, &ply)?;
-                    notes.extend(joined.map(|n| format!("{}: {n}", path.display())));
-                    // With the mesh given, "no coordinate columns" is information, not a warning.
-                    report
-                        .warnings
-                        .retain(|w| !w.starts_with("no coordinate columns"));
-                    notes.push(format!(
-                        "{}: coordinates from {ply} (node k = PLY node k − 1)",
-                        path.display()
-                    ));
-                }
+                Some(mesh) => notes.extend(crate::formats::gsz::attach_mesh_by_id(
+                    &mut nodes,
+                    &mut report,
+                    path,
+                    mesh,
+                    args.fem_mesh.as_deref().unwrap_or(path),
+                )?),
                 None => bail!(
                     "{}: no X and Y columns; give the GeoStudio mesh with --fem-mesh Mesh.ply",
                     path.display()

@@ -363,6 +363,32 @@ pub fn read_step(
     Ok((nodes, report, note))
 }
 
+/// For a `node.csv` read on its own with `--fem-mesh`: joins its rows to the
+/// mesh nodes by id ([`join_mesh`], errors at the table's lines) and returns the
+/// notes to report. The reader's "no coordinate columns" warning becomes a note.
+pub fn attach_mesh_by_id(
+    nodes: &mut FemNodes,
+    report: &mut FemReadReport,
+    csv_path: &Path,
+    mesh: &[[f64; 3]],
+    mesh_path: &Path,
+) -> Result<Vec<String>, FormatError> {
+    let text = std::fs::read(csv_path).map_err(|e| FormatError::io(csv_path, e))?;
+    let rows = data_row_lines(&text, report.header_line);
+    let mesh_name = mesh_path.display().to_string();
+    let subset = join_mesh(nodes, csv_path, &rows, mesh, &mesh_name)?;
+    report
+        .warnings
+        .retain(|w| !w.starts_with("no coordinate columns"));
+    report.dim = nodes.dim;
+    let mut notes = vec![format!(
+        "{}: coordinates from {mesh_name} (node k = PLY node k − 1)",
+        csv_path.display()
+    )];
+    notes.extend(subset.map(|n| format!("{}: {n}", csv_path.display())));
+    Ok(notes)
+}
+
 /// 1-based line numbers of the data rows of a node table: the non-blank lines
 /// after the header line, in order (the reader stops at the first bad row, so
 /// row i of the nodes is the i-th of these).
