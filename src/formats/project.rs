@@ -214,36 +214,39 @@ pub fn discover(path: &Path) -> Result<ProjectFiles, FormatError> {
                 })?),
                 None => None,
             };
-        let name = match undouble(&dir, stem) {
-            Some(inner) => {
-                warnings.push(format!(
-                    "{file} has a doubled extension: run as project {inner}, Anura3D will look for {inner}.{ext}, and run as project {stem} it finds no CPS; the run would fail with the files as named. a3d-init reads it as project {inner} and writes {inner}.{ext}"
-                ));
-                inner
-            }
-            None => stem.to_string(),
-        };
+        let doubled = undouble(&dir, stem);
+        let name = doubled.clone().unwrap_or_else(|| stem.to_string());
+        let renamed = file != format!("{stem}.{ext}");
         let chosen = choose_cps(&dir, &name, gom_stage, &mut notes, &mut warnings)?;
         notes.insert(0, format!("GOM: {}", path.display()));
-        let (cps, cps_version, stage) = match chosen {
-            Some((p, doc)) => {
-                let stage = doc.is_staged().then(|| doc.stage());
-                let expected = if doc.is_staged() {
-                    format!("{name}.GOM_stage{}", doc.stage())
-                } else {
-                    format!("{name}.GOM")
-                };
-                if file != expected && warnings.is_empty() {
-                    warnings.push(format!(
-                        "found GOM {file}, but {} is version {}: Anura3D will look for {expected}; the run would fail with the files as named. a3d-init writes {expected}",
-                        file_name(&p),
-                        doc.version()
-                    ));
-                }
-                (Some(p), Some(doc.version().to_string()), stage)
-            }
+        let (cps, cps_version, stage) = match &chosen {
+            Some((p, doc)) => (
+                Some(p.clone()),
+                Some(doc.version().to_string()),
+                doc.is_staged().then(|| doc.stage()),
+            ),
             None => (None, None, gom_stage),
         };
+        // The name Anura3D will open: decided by the CPS, else by the file's own extension.
+        let expected = match (&chosen, stage) {
+            (Some((_, doc)), _) if !doc.is_staged() => format!("{name}.GOM"),
+            (_, Some(k)) => format!("{name}.GOM_stage{k}"),
+            (_, None) => format!("{name}.GOM"),
+        };
+        if doubled.is_some() {
+            warnings.push(format!(
+                "{file} has a doubled extension: run as project {name}, Anura3D will look for {expected} (and run as project {stem} it finds no CPS); the run would fail with the files as named. a3d-init reads it as project {name} and writes {expected}"
+            ));
+        } else if let Some((p, doc)) = &chosen
+            && file != expected
+            && !renamed
+        {
+            warnings.push(format!(
+                "found GOM {file}, but {} is version {}: Anura3D will look for {expected}; the run would fail with the files as named. a3d-init writes {expected}",
+                file_name(p),
+                doc.version()
+            ));
+        }
         let opd = find_opd(&dir, &name, stage, cps_version.as_deref(), &mut notes);
         check_later_stage(&dir, &name, stage, &mut warnings);
         return Ok(ProjectFiles {
@@ -632,6 +635,21 @@ mod tests {
             ("L.GOM", "L.CPS_001")
         );
         assert_eq!(discover(tmp.path()).unwrap().name, "L");
+    }
+
+    #[test]
+    fn doubled_extension_with_an_older_cps_names_the_gom() {
+        let tmp = tempfile::tempdir().unwrap();
+        let gom = write(tmp.path(), "W.GOM.GOM_stage0", GOM);
+        write(tmp.path(), "W.CPS_001", CPS_2024);
+        let p = discover(&gom).unwrap();
+        assert_eq!(p.name, "W");
+        assert!(
+            p.warnings[0].contains("will look for W.GOM "),
+            "{:?}",
+            p.warnings
+        );
+        assert_eq!(p.output_names("2024").gom, "W.GOM");
     }
 
     #[test]
