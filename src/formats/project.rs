@@ -451,7 +451,8 @@ fn choose_cps(
 }
 
 /// A GOM-like file in a folder: (project name, path, rank) — lower rank wins
-/// when two files belong to the same project.
+/// when two files belong to the same project: 0 Anura3D's own names, 1 a GiD
+/// `-2.dat`, 2 a misnamed file.
 fn gom_candidate(dir: &Path, path: &Path) -> Option<(String, PathBuf, u8)> {
     let file = file_name(path);
     let (stem, ext) = split_ext(&file)?;
@@ -460,11 +461,15 @@ fn gom_candidate(dir: &Path, path: &Path) -> Option<(String, PathBuf, u8)> {
         "DAT" if stem.ends_with("-2") => 1,
         _ => return None,
     };
-    let name = match rank {
-        1 => stem[..stem.len() - 2].to_string(),
-        _ => undouble(dir, stem).unwrap_or_else(|| stem.to_string()),
-    };
-    Some((name, path.to_path_buf(), rank))
+    if rank == 1 {
+        return Some((stem[..stem.len() - 2].to_string(), path.to_path_buf(), 1));
+    }
+    // Misnamed files (doubled or lower-case extensions) come after correct names.
+    let misnamed = !matches!(ext, "GOM" | "GOM_stage0");
+    match undouble(dir, stem) {
+        Some(inner) => Some((inner, path.to_path_buf(), 2)),
+        None => Some((stem.to_string(), path.to_path_buf(), 2 * misnamed as u8)),
+    }
 }
 
 fn discover_dir(dir: &Path) -> Result<ProjectFiles, FormatError> {
@@ -650,6 +655,17 @@ mod tests {
             p.warnings
         );
         assert_eq!(p.output_names("2024").gom, "W.GOM");
+    }
+
+    #[test]
+    fn a_folder_prefers_the_correctly_named_gom() {
+        let tmp = tempfile::tempdir().unwrap();
+        write(tmp.path(), "V.GOM.GOM_stage0", GOM);
+        let good = write(tmp.path(), "V.GOM_stage0", GOM);
+        write(tmp.path(), "V.CPS_001", CPS_2025);
+        let p = discover(tmp.path()).unwrap();
+        assert_eq!(p.gom, good);
+        assert!(p.warnings.is_empty(), "{:?}", p.warnings);
     }
 
     #[test]
