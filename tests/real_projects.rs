@@ -100,6 +100,10 @@ fn gid_project_folder_maps_with_its_own_cps() {
     assert_eq!(code, 0, "{stderr}");
     assert!(stdout.contains("Block-1.dat"), "{stdout}");
     assert!(
+        stdout.contains("names      map writes Block.GOM, Block.CPS_001 (CPS header 2024"),
+        "{stdout}"
+    );
+    assert!(
         stdout.contains("CPS Anura3D_2024") || stdout.contains("CPS 2024"),
         "{stdout}"
     );

@@ -227,6 +227,20 @@ fn print_summary(out: &mut impl Write, s: &Summary<'_>) -> std::io::Result<()> {
             .map(|v| format!(", CPS {v}"))
             .unwrap_or_default()
     )?;
+    // #14: the names the ready-to-run project uses, and why.
+    let names = s.files.output_names(s.version);
+    writeln!(
+        out,
+        "names      map writes {}, {}{} ({})",
+        names.gom,
+        names.cps,
+        names
+            .opd
+            .as_deref()
+            .map(|o| format!(", {o}"))
+            .unwrap_or_default(),
+        names.reason
+    )?;
     writeln!(out, "dimension  {} ({})", s.dimension, s.element_type)?;
     if let Some(f) = s.formulation {
         writeln!(out, "formulation {f}")?;
