@@ -228,6 +228,42 @@ fn no_cps_refuses_map_unless_a_cps_is_generated() {
     assert!(out.join("Bare.GOM").exists());
 }
 
+/// The generated CPS holds every keyword of the sample CPS files, among them the
+/// kernel-written `K0_phreaticSurf_File.CPS_002`.
+#[test]
+fn generated_cps_covers_the_sample_cps_files() {
+    use a3d_init::formats::cps::CpsDocument;
+    use a3d_init::formats::cps_template::generate_cps;
+    let mut checked = 0;
+    for dir in std::fs::read_dir(fixture("anura3d")).unwrap() {
+        let dir = dir.unwrap().path();
+        if !dir.is_dir() {
+            continue;
+        }
+        for f in std::fs::read_dir(&dir).unwrap() {
+            let f = f.unwrap().path();
+            if !f.to_string_lossy().contains(".CPS_") {
+                continue;
+            }
+            let sample = CpsDocument::read(&f).unwrap();
+            let generated = generate_cps(sample.version(), 2, 1);
+            let generated = CpsDocument::parse(Path::new("g.CPS_001"), generated).unwrap();
+            for block in sample.document().blocks() {
+                let k = &block.keyword;
+                if k.starts_with("$$") && k != "$$END" {
+                    assert!(
+                        generated.get(k).is_some(),
+                        "{}: {k} is not in the generated CPS",
+                        f.display()
+                    );
+                    checked += 1;
+                }
+            }
+        }
+    }
+    assert!(checked > 300, "{checked}");
+}
+
 /// Class 3: `X.GOM.GOM_stage0` beside `X.CPS_001` is project X.
 #[test]
 fn misnamed_project_file_is_reported_and_the_obvious_project_used() {
