@@ -323,7 +323,11 @@ fn discover_gid(path: &Path, dir: &Path, name: &str) -> Result<ProjectFiles, For
     let mut warnings = Vec::new();
     // Older problem types write other things to `-1.dat`: only a file with an
     // Anura3D header is taken as the CPS.
-    let is_cps = std::fs::read(&gid_cps).is_ok_and(|b| b.starts_with(b"### Anura3D_"));
+    let is_cps = std::fs::read(&gid_cps).is_ok_and(|b| {
+        b.strip_prefix(b"\xEF\xBB\xBF".as_slice())
+            .unwrap_or(&b)
+            .starts_with(b"### Anura3D_")
+    });
     if gid_cps.exists() && !is_cps && path != gid_cps {
         notes.push(format!(
             "{name}-1.dat has no Anura3D header: not a CPS, looking for {name}.CPS_<nnn>"
