@@ -16,6 +16,7 @@
 
 pub mod calibrate;
 pub mod cli;
+pub mod diagnose;
 pub mod element;
 pub mod formats;
 pub mod kernel;

@@ -334,7 +334,7 @@ fn dry_materials_carry_no_pore_water() {
     let fem = tmp.path().join("seep.csv");
     std::fs::write(&fem, csv).unwrap();
     let out = tmp.path().join("out");
-    map(&project, &fem, &out, &[]);
+    map(&project, &fem, &out, &["--generate-cps"]);
     let (_, states) = mps_table::read_states(&out.join("mps.csv")).unwrap();
     for s in &states {
         assert_eq!(s.pwp, 0.0);

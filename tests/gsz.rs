@@ -144,6 +144,7 @@ fn shipped_sample_maps_end_to_end() {
         out.to_str().unwrap(),
         "--outside",
         "nearest",
+        "--generate-cps",
     ]);
     assert_eq!(code, 0, "{stderr}");
     let report: serde_json::Value =
@@ -245,12 +246,13 @@ fn corrupted_archives_exit_2() {
             "unsupported PLY format `ascii`",
         ),
         (
-            "node_count_mismatch",
+            // A table may list a subset of the mesh (#14), but not a node outside it.
+            "node_outside_mesh",
             vec![
                 ("SEEP&3W Drawdown/Mesh.ply", ply_bytes(&nodes[..3], None)),
                 ("SEEP&3W Drawdown/001/node.csv", csv.clone()),
             ],
-            "4 nodes, but SEEP&3W Drawdown/Mesh.ply has 3: node count mismatch",
+            "001/node.csv:5:1: node 4 is not in the mesh: SEEP&3W Drawdown/Mesh.ply has 3 nodes",
         ),
         (
             "no_results",

@@ -304,7 +304,7 @@ fn bad_inputs_exit_2_and_leave_no_output() {
             "every_node_outside",
             far,
             vec![],
-            "material point(s) have no FEM node inside the kernel support",
+            "seep.csv: the FEM nodes do not reach the model: 1200 of 1200 MPs",
         ),
         (
             "bad_columns_override",
@@ -442,6 +442,7 @@ fn real_geostudio_node_csv_with_mesh_ply() {
         gom.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
+        "--generate-cps",
     ];
     let (code, stderr) = run(&args);
     assert_eq!(code, 0, "{stderr}");
@@ -481,6 +482,7 @@ fn real_geostudio_node_csv_with_mesh_ply() {
         gom.to_str().unwrap(),
         "--out",
         tmp.path().join("x").to_str().unwrap(),
+        "--generate-cps",
     ]);
     assert_eq!(code, 2);
     assert!(

@@ -63,6 +63,7 @@ fn mapped_block(dir: &Path) -> PathBuf {
         gom.to_str().unwrap(),
         "--out",
         out.to_str().unwrap(),
+        "--generate-cps",
     ]);
     assert_eq!(code, 0, "{text}");
     out

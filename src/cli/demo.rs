@@ -106,6 +106,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         mixed_state: MixedState::Mean,
         out: Some(args.out.clone()),
         force: args.force,
+        generate_cps: false,
     };
     let mapped = map::compute(
         &map_args,

@@ -390,6 +390,11 @@ fn files_of(dir: &Path) -> anyhow::Result<BTreeMap<String, PathBuf>> {
 pub fn run(args: DiffArgs) -> anyhow::Result<()> {
     let mut diffs = Vec::new();
     let mut notes = Vec::new();
+    for path in [&args.a, &args.b] {
+        if !path.exists() {
+            bail!("{}: no such file or folder", path.display());
+        }
+    }
     match (args.a.is_dir(), args.b.is_dir()) {
         (true, true) => {
             let (fa, fb) = (files_of(&args.a)?, files_of(&args.b)?);
@@ -404,15 +409,13 @@ pub fn run(args: DiffArgs) -> anyhow::Result<()> {
             }
         }
         (false, false) => {
-            if !args.a.exists() {
-                bail!("{}: no such file", args.a.display());
-            }
-            if !args.b.exists() {
-                bail!("{}: no such file", args.b.display());
-            }
             diffs.push(diff_files(&args.a, &args.b, &args)?);
         }
-        _ => bail!("compare two files or two folders, not a file with a folder"),
+        (a_is_dir, _) => bail!(
+            "{} is a folder and {} a file: compare two files or two folders",
+            if a_is_dir { &args.a } else { &args.b }.display(),
+            if a_is_dir { &args.b } else { &args.a }.display()
+        ),
     }
     let equal = notes.is_empty() && diffs.iter().all(|d| d.equal);
     let mut out = std::io::stdout().lock();

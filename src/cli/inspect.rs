@@ -171,6 +171,20 @@ fn print_summary(out: &mut impl Write, s: &Summary<'_>) -> std::io::Result<()> {
             .map(|v| format!(", CPS {v}"))
             .unwrap_or_default()
     )?;
+    // #14: the names the ready-to-run project uses, and why.
+    let names = s.files.output_names(s.version);
+    writeln!(
+        out,
+        "names      map writes {}, {}{} ({})",
+        names.gom,
+        names.cps,
+        names
+            .opd
+            .as_deref()
+            .map(|o| format!(", {o}"))
+            .unwrap_or_default(),
+        names.reason
+    )?;
     writeln!(out, "dimension  {} ({})", s.dimension, s.element_type)?;
     if let Some(f) = s.formulation {
         writeln!(out, "formulation {f}")?;
@@ -261,7 +275,14 @@ fn inspect_fem(args: &InspectArgs) -> anyhow::Result<()> {
             writeln!(out, "  warning: {w}")?;
         }
     }
+    for n in &fem.notes {
+        writeln!(out, "note       {n}")?;
+    }
     let nodes = &fem.nodes;
+    // #14: the coordinate range of the table.
+    if let Some(extent) = crate::diagnose::Extent::of(&nodes.positions, nodes.dim) {
+        writeln!(out, "extent     {extent}")?;
+    }
     for (q, v) in &nodes.fields {
         let (lo, hi) = v
             .iter()
@@ -284,12 +305,52 @@ fn inspect_fem(args: &InspectArgs) -> anyhow::Result<()> {
 
 fn inspect_gsz(path: &std::path::Path, json: bool) -> anyhow::Result<()> {
     let project = crate::formats::gsz::read_project(path)?;
+    // The last saved step of every analysis with a mesh is read, so that an
+    // archive whose results cannot be read is an error (exit 2, #14).
+    let steps: Vec<_> = project
+        .analyses
+        .iter()
+        .map(|a| {
+            let last = a.steps.last().filter(|_| a.has_mesh)?;
+            Some(crate::formats::gsz::read_step(
+                path,
+                Some(&a.index.to_string()),
+                &crate::formats::gsz::StepChoice::Number(last.number),
+                &Default::default(),
+            ))
+        })
+        .collect();
     let mut out = std::io::stdout().lock();
     if json {
         serde_json::to_writer_pretty(&mut out, &project)?;
         writeln!(out)?;
-        return Ok(());
+    } else {
+        print_gsz(&mut out, path, &project, &steps)?;
     }
+    match steps.into_iter().flatten().find_map(Result::err) {
+        Some(e) => Err(anyhow::Error::new(e).context(format!(
+            "{}: the archive lists results that cannot be read",
+            path.display()
+        ))),
+        None => Ok(()),
+    }
+}
+
+type StepRead = Result<
+    (
+        crate::model::FemNodes,
+        crate::formats::fem_csv::FemReadReport,
+        String,
+    ),
+    crate::formats::FormatError,
+>;
+
+fn print_gsz(
+    out: &mut impl Write,
+    path: &std::path::Path,
+    project: &crate::formats::gsz::GszProject,
+    steps: &[Option<StepRead>],
+) -> anyhow::Result<()> {
     let (length, pressure) = if project.unit_system.eq_ignore_ascii_case("Imperial") {
         ("ft", "psf")
     } else {
@@ -301,7 +362,7 @@ fn inspect_gsz(path: &std::path::Path, json: bool) -> anyhow::Result<()> {
         "units      {} base units: length {length}, pressure {pressure}, time s",
         project.unit_system
     )?;
-    for a in &project.analyses {
+    for (a, step) in project.analyses.iter().zip(steps) {
         writeln!(
             out,
             "analysis   {} `{}`: {} {}, folder `{}`, mesh {}",
@@ -329,15 +390,17 @@ fn inspect_gsz(path: &std::path::Path, json: bool) -> anyhow::Result<()> {
             a.steps.len(),
             times.join(", ")
         )?;
-        if let Some(last) = a.steps.last() {
-            let step = crate::formats::gsz::StepChoice::Number(last.number);
-            match crate::formats::gsz::read_step(
-                path,
-                Some(&a.index.to_string()),
-                &step,
-                &Default::default(),
-            ) {
-                Ok((nodes, _, _)) => writeln!(
+        let Some(last) = a.steps.last() else {
+            continue;
+        };
+        match step {
+            None => writeln!(
+                out,
+                "  no Mesh.ply in `{}`: its results cannot be placed",
+                a.folder
+            )?,
+            Some(Ok((nodes, _, note))) => {
+                writeln!(
                     out,
                     "  step {}: {} nodes ({}D), fields: {}",
                     last.folder,
@@ -349,9 +412,15 @@ fn inspect_gsz(path: &std::path::Path, json: bool) -> anyhow::Result<()> {
                         .map(|(q, _)| q.name())
                         .collect::<Vec<_>>()
                         .join(", ")
-                )?,
-                Err(e) => writeln!(out, "  step {}: unreadable: {e}", last.folder)?,
+                )?;
+                if let Some(extent) = crate::diagnose::Extent::of(&nodes.positions, nodes.dim) {
+                    writeln!(out, "  extent {extent}")?;
+                }
+                if let Some((_, subset)) = note.split_once("; the table lists") {
+                    writeln!(out, "  note: the table lists{subset}")?;
+                }
             }
+            Some(Err(e)) => writeln!(out, "  step {}: unreadable: {e}", last.folder)?,
         }
     }
     Ok(())

@@ -51,6 +51,9 @@ pub struct MapArgs {
     /// Replace an existing output folder.
     #[arg(long)]
     pub force: bool,
+    /// Without a CPS beside the model, write a complete default CPS for the model's version (#14).
+    #[arg(long)]
+    pub generate_cps: bool,
 }
 
 impl MapArgs {
@@ -89,6 +92,13 @@ impl MapArgs {
 pub fn compute(args: &MapArgs, h: Option<SmoothingLength>) -> anyhow::Result<Mapped> {
     let t0 = Instant::now();
     let project = Project::load(&args.mpm)?;
+    // No CPS → refuse unless --generate-cps (#14).
+    if project.files.cps.is_none() && !args.generate_cps {
+        anyhow::bail!(
+            "{}",
+            crate::formats::project::missing_cps_message(&project.files)
+        );
+    }
     let t_model = t0.elapsed().as_secs_f64() * 1e3;
     let t1 = Instant::now();
     let fem = args.fem.load()?;

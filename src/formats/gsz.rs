@@ -10,7 +10,7 @@
 use std::io::Read;
 use std::path::Path;
 
-use super::error::FormatError;
+use super::error::{FormatError, ParseError};
 use super::fem_csv::{self, CsvOptions, FemReadReport, UnitOverride};
 use super::ply;
 use crate::model::FemNodes;
@@ -326,17 +326,8 @@ pub fn read_step(
     };
     let csv_label = path.join(&csv_name);
     let (mut nodes, mut report) = fem_csv::parse_csv(&csv_label, &csv, &options)?;
-    if nodes.len() != mesh.len() {
-        return Err(FormatError::file(
-            &csv_label,
-            format!(
-                "{} nodes, but {mesh_name} has {}: node count mismatch",
-                nodes.len(),
-                mesh.len()
-            ),
-        ));
-    }
-    fem_csv::attach_mesh(&mut nodes, &csv_label, &mesh)?;
+    let rows = data_row_lines(&csv, report.header_line);
+    let subset = join_mesh(&mut nodes, &csv_label, &rows, &mesh, &mesh_name)?;
     if length == "ft" {
         for p in &mut nodes.positions {
             for v in p.iter_mut() {
@@ -350,7 +341,7 @@ pub fn read_step(
         .warnings
         .retain(|w| !w.starts_with("no coordinate columns"));
     let note = format!(
-        "{}: analysis {} `{}` ({} {}), step {}{}; unit system {} ({length}, {pressure}{})",
+        "{}: analysis {} `{}` ({} {}), step {}{}; unit system {} ({length}, {pressure}{}){}",
         path.display(),
         chosen.index,
         chosen.name,
@@ -366,8 +357,117 @@ pub fn read_step(
             "; converted to m and kPa"
         } else {
             ""
-        }
+        },
+        subset.map(|s| format!("; {s}")).unwrap_or_default()
     );
-    report.warnings.push(note.clone());
     Ok((nodes, report, note))
+}
+
+/// For a `node.csv` read on its own with `--fem-mesh`: joins its rows to the
+/// mesh nodes by id ([`join_mesh`], errors at the table's lines) and returns the
+/// notes to report. The reader's "no coordinate columns" warning becomes a note.
+pub fn attach_mesh_by_id(
+    nodes: &mut FemNodes,
+    report: &mut FemReadReport,
+    csv_path: &Path,
+    mesh: &[[f64; 3]],
+    mesh_path: &Path,
+) -> Result<Vec<String>, FormatError> {
+    let text = std::fs::read(csv_path).map_err(|e| FormatError::io(csv_path, e))?;
+    let rows = data_row_lines(&text, report.header_line);
+    let mesh_name = mesh_path.display().to_string();
+    let subset = join_mesh(nodes, csv_path, &rows, mesh, &mesh_name)?;
+    report
+        .warnings
+        .retain(|w| !w.starts_with("no coordinate columns"));
+    report.dim = nodes.dim;
+    let mut notes = vec![format!(
+        "{}: coordinates from {mesh_name} (node k = PLY node k − 1)",
+        csv_path.display()
+    )];
+    notes.extend(subset.map(|n| format!("{}: {n}", csv_path.display())));
+    Ok(notes)
+}
+
+/// 1-based line numbers of the data rows of a node table: the non-blank lines
+/// after the header line, in order (the reader stops at the first bad row, so
+/// row i of the nodes is the i-th of these).
+pub fn data_row_lines(text: &[u8], header_line: usize) -> Vec<usize> {
+    text.split(|&b| b == b'\n')
+        .enumerate()
+        .skip(header_line)
+        .filter(|(_, l)| l.iter().any(|b| !b.is_ascii_whitespace()))
+        .map(|(i, _)| i + 1)
+        .collect()
+}
+
+/// Gives each row of a GeoStudio `node.csv` the coordinates of its mesh node:
+/// row `Node = k` ↔ PLY node k − 1. GeoStudio leaves out the nodes outside an
+/// analysis's region, so the table may list a subset of the mesh (ids with
+/// gaps); that is fine and reported in the returned sentence. Ids not in the
+/// mesh and duplicate ids are errors at their line (`row_lines[i]` is the line of
+/// row i; row numbers are used when it is shorter). `mesh_name` names the mesh
+/// in messages.
+pub fn join_mesh(
+    nodes: &mut FemNodes,
+    csv_path: &Path,
+    row_lines: &[usize],
+    mesh: &[[f64; 3]],
+    mesh_name: &str,
+) -> Result<Option<String>, FormatError> {
+    let line_of = |i: usize| -> usize {
+        if row_lines.len() == nodes.ids.len() {
+            row_lines[i]
+        } else {
+            i + 2
+        }
+    };
+    let mut first_row: Vec<Option<usize>> = vec![None; mesh.len()];
+    let mut errors: Vec<ParseError> = Vec::new();
+    for (i, &k) in nodes.ids.iter().enumerate() {
+        if k < 1 || k as usize > mesh.len() {
+            errors.push(ParseError::at(
+                csv_path,
+                line_of(i),
+                1,
+                format!(
+                    "node {k} is not in the mesh: {mesh_name} has {} nodes (ids 1..={})",
+                    mesh.len(),
+                    mesh.len()
+                ),
+            ));
+            continue;
+        }
+        let slot = &mut first_row[k as usize - 1];
+        match slot {
+            Some(j) => errors.push(ParseError::at(
+                csv_path,
+                line_of(i),
+                1,
+                format!("duplicate node id {k} (also on line {})", line_of(*j)),
+            )),
+            None => *slot = Some(i),
+        }
+        if errors.len() >= 20 {
+            break;
+        }
+    }
+    if let Some(e) = FormatError::from_list(errors) {
+        return Err(e);
+    }
+    for (i, &k) in nodes.ids.iter().enumerate() {
+        nodes.positions[i] = mesh[k as usize - 1];
+    }
+    nodes.dim = if nodes.positions.iter().all(|p| p[2] == 0.0) {
+        2
+    } else {
+        3
+    };
+    let listed = nodes.ids.len();
+    Ok((listed < mesh.len()).then(|| {
+        format!(
+            "the table lists {listed} of the {} mesh nodes (GeoStudio leaves out nodes outside the analysis's region); rows were joined to mesh nodes by their Node id",
+            mesh.len()
+        )
+    }))
 }

@@ -1,7 +1,15 @@
 //! Finding the files of an Anura3D project from whatever the user points at:
-//! a `.GOM`, a `.GOM_stage<k>`, a GiD `-2.dat` export, a `.CPS_<nnn>`, or a
-//! project directory. Anura3D's own rule decides the GOM for a CPS: a 2025 CPS
-//! reads `<project>.GOM_stage<STAGE>`, every older version `<project>.GOM`.
+//! a `.GOM`, a `.GOM_stage<k>`, a GiD export (`-2.dat` GOM, `-1.dat` CPS), a
+//! `.CPS_<nnn>`, or a project directory (also a GiD `name.gid/` folder), and the
+//! file names Anura3D will look for in the project a3d-init writes.
+//!
+//! Anura3D's own rule decides the GOM for a CPS: a 2025 CPS reads
+//! `<project>.GOM_stage<STAGE>` (and `<project>.OPD_stage<STAGE>`, and always
+//! `<project>.GOM_stage0`), every older version `<project>.GOM`. Files named
+//! otherwise (a GiD `-1.dat`/`-2.dat` pair, a doubled extension such as
+//! `X.GOM.GOM_stage0`, a `.GOM` driven by a 2025 CPS) are read, reported in
+//! [`ProjectFiles::warnings`], and written under the names Anura3D expects
+//! ([`ProjectFiles::output_names`]). Spec: `formats/gom.md` (file names).
 
 use std::path::{Path, PathBuf};
 
@@ -16,12 +24,88 @@ pub struct ProjectFiles {
     pub dir: PathBuf,
     pub gom: PathBuf,
     pub cps: Option<PathBuf>,
+    /// Version of the CPS header (`2025`, `2024`, …), when there is a CPS.
+    pub cps_version: Option<String>,
     /// The OPD of the stage (2025 projects only).
     pub opd: Option<PathBuf>,
     /// Stage number for staged (2025) projects.
     pub stage: Option<u32>,
     /// Sentences saying which files were chosen and why.
     pub notes: Vec<String>,
+    /// Problems with the files as named: Anura3D would not find them, or a CPS
+    /// is missing. The project a3d-init writes uses the right names.
+    pub warnings: Vec<String>,
+}
+
+/// File names of the ready-to-run project, as Anura3D will look for them.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct OutputNames {
+    pub gom: String,
+    pub cps: String,
+    /// `<project>.OPD_stage<k>` for a 2025 CPS.
+    pub opd: Option<String>,
+    /// True when the stage is above 0: a 2025 run also opens `<project>.GOM_stage0`.
+    pub needs_gom_stage0: bool,
+    /// Why these names.
+    pub reason: String,
+}
+
+impl ProjectFiles {
+    /// The names Anura3D will look for, decided by the CPS version (`gom_version`
+    /// is used for a generated CPS, which takes the model's own header).
+    pub fn output_names(&self, gom_version: &str) -> OutputNames {
+        let version = self.cps_version.as_deref().unwrap_or(gom_version);
+        let name = &self.name;
+        let cps = self
+            .cps
+            .as_deref()
+            .map(file_name)
+            .filter(|f| {
+                split_ext(f).is_some_and(|(stem, ext)| stem == name && cps_step(ext).is_some())
+            })
+            .unwrap_or_else(|| format!("{name}.CPS_001"));
+        if version == "2025" {
+            let k = self.stage.unwrap_or(0);
+            OutputNames {
+                gom: format!("{name}.GOM_stage{k}"),
+                cps,
+                opd: Some(format!("{name}.OPD_stage{k}")),
+                needs_gom_stage0: k > 0,
+                reason: format!(
+                    "CPS header 2025: Anura3D reads {name}.GOM_stage{k} and {name}.OPD_stage{k}{}",
+                    if k > 0 {
+                        format!(", and {name}.GOM_stage0 for the dimension")
+                    } else {
+                        String::new()
+                    }
+                ),
+            }
+        } else {
+            OutputNames {
+                gom: format!("{name}.GOM"),
+                cps,
+                opd: None,
+                needs_gom_stage0: false,
+                reason: format!("CPS header {version} (before 2025): Anura3D reads {name}.GOM"),
+            }
+        }
+    }
+}
+
+/// The message `map` gives when a project has no CPS and none is to be generated.
+pub fn missing_cps_message(files: &ProjectFiles) -> String {
+    format!(
+        "{}: no CPS for project {} (looked for {name}.CPS_<nnn>{gid} in {}): Anura3D cannot run without one. Put the model's CPS beside the GOM, or pass --generate-cps to write a complete default CPS for the model's version",
+        files.gom.display(),
+        files.name,
+        files.dir.display(),
+        name = files.name,
+        gid = if is_gid_gom(&files.gom) {
+            format!(" and {}-1.dat", files.name)
+        } else {
+            String::new()
+        },
+    )
 }
 
 fn file_name(path: &Path) -> String {
@@ -36,6 +120,26 @@ fn split_ext(name: &str) -> Option<(&str, &str)> {
     Some((&name[..dot], &name[dot + 1..]))
 }
 
+/// `CPS_001` → 1.
+fn cps_step(ext: &str) -> Option<u64> {
+    ext.strip_prefix("CPS_")?.parse().ok()
+}
+
+/// True for an extension Anura3D gives its project files.
+fn is_anura3d_ext(ext: &str) -> bool {
+    ext == "GOM"
+        || ext == "MAPF"
+        || ext
+            .strip_prefix("GOM_stage")
+            .or_else(|| ext.strip_prefix("OPD_stage"))
+            .is_some_and(|k| k.parse::<u32>().is_ok())
+        || cps_step(ext).is_some()
+}
+
+fn is_gid_gom(path: &Path) -> bool {
+    file_name(path).ends_with("-2.dat")
+}
+
 /// CPS files of project `name` in `dir`, sorted by step number.
 fn cps_files(dir: &Path, name: &str) -> Vec<(u64, PathBuf)> {
     let mut out = Vec::new();
@@ -44,7 +148,7 @@ fn cps_files(dir: &Path, name: &str) -> Vec<(u64, PathBuf)> {
             let file = file_name(&entry.path());
             if let Some((stem, ext)) = split_ext(&file)
                 && stem == name
-                && let Some(step) = ext.strip_prefix("CPS_").and_then(|s| s.parse::<u64>().ok())
+                && let Some(step) = cps_step(&ext.to_ascii_uppercase())
             {
                 out.push((step, entry.path()));
             }
@@ -52,6 +156,17 @@ fn cps_files(dir: &Path, name: &str) -> Vec<(u64, PathBuf)> {
     }
     out.sort();
     out
+}
+
+/// For a stem with a doubled extension (`X.GOM` of `X.GOM.GOM_stage0`), the
+/// project Anura3D users mean: `X`, unless `X.GOM` is itself consistent (its own
+/// CPS files exist beside it).
+fn undouble(dir: &Path, stem: &str) -> Option<String> {
+    let (inner, ext) = split_ext(stem)?;
+    if inner.is_empty() || !is_anura3d_ext(ext) || !cps_files(dir, stem).is_empty() {
+        return None;
+    }
+    Some(inner.to_string())
 }
 
 /// Resolves `path` to a project.
@@ -67,45 +182,88 @@ pub fn discover(path: &Path) -> Result<ProjectFiles, FormatError> {
         dir
     };
     let file = file_name(path);
-    let Some((stem, ext)) = split_ext(&file) else {
-        return Err(FormatError::file(
+    let not_anura3d = || {
+        FormatError::file(
             path,
-            "not an Anura3D file: expected .GOM, .GOM_stage<k>, -2.dat or .CPS_<nnn>",
-        ));
+            "not an Anura3D file: expected .GOM, .GOM_stage<k>, .CPS_<nnn>, or a GiD -2.dat (GOM) / -1.dat (CPS)",
+        )
+    };
+    let Some((stem, ext)) = split_ext(&file) else {
+        return Err(not_anura3d());
     };
     let mut notes = Vec::new();
-    if ext == "GOM" || ext.starts_with("GOM_stage") || (ext == "dat" && stem.ends_with("-2")) {
-        let (name, stage) = if ext == "dat" {
-            notes.push(format!(
-                "{file} is a GiD export of the GOM (GiD writes the GOM to -2.dat)"
-            ));
-            (stem.trim_end_matches("-2").to_string(), None)
-        } else if let Some(k) = ext.strip_prefix("GOM_stage") {
-            let k = k
-                .parse::<u32>()
-                .map_err(|_| FormatError::file(path, "expected GOM_stage<k> with a number k"))?;
-            (stem.to_string(), Some(k))
-        } else {
-            (stem.to_string(), None)
-        };
-        let cps = choose_cps(&dir, &name, stage, &mut notes)?;
-        let opd = stage
-            .map(|k| dir.join(format!("{name}.OPD_stage{k}")))
-            .filter(|p| p.exists());
+    let mut warnings = Vec::new();
+    // `x.gom`, `x.Cps_001`: Anura3D's names are case-sensitive on Linux.
+    let upper = ext.to_ascii_uppercase();
+    let ext = if !is_anura3d_ext(ext) && is_anura3d_ext(&upper) {
+        warnings.push(format!(
+            "{file}: Anura3D looks for {stem}.{upper} (file names are case-sensitive on Linux); the run would fail as named. a3d-init writes {stem}.{upper}"
+        ));
+        upper.as_str()
+    } else {
+        ext
+    };
+    if ext == "dat" && (stem.ends_with("-2") || stem.ends_with("-1")) {
+        return discover_gid(path, &dir, &stem[..stem.len() - 2]);
+    }
+    if ext == "GOM" || ext.starts_with("GOM_stage") {
+        let gom_stage =
+            match ext.strip_prefix("GOM_stage") {
+                Some(k) => Some(k.parse::<u32>().map_err(|_| {
+                    FormatError::file(path, "expected GOM_stage<k> with a number k")
+                })?),
+                None => None,
+            };
+        let doubled = undouble(&dir, stem);
+        let name = doubled.clone().unwrap_or_else(|| stem.to_string());
+        let renamed = file != format!("{stem}.{ext}");
+        let chosen = choose_cps(&dir, &name, gom_stage, &mut notes, &mut warnings)?;
         notes.insert(0, format!("GOM: {}", path.display()));
+        let (cps, cps_version, stage) = match &chosen {
+            Some((p, doc)) => (
+                Some(p.clone()),
+                Some(doc.version().to_string()),
+                doc.is_staged().then(|| doc.stage()),
+            ),
+            None => (None, None, gom_stage),
+        };
+        // The name Anura3D will open: decided by the CPS, else by the file's own extension.
+        let expected = match (&chosen, stage) {
+            (Some((_, doc)), _) if !doc.is_staged() => format!("{name}.GOM"),
+            (_, Some(k)) => format!("{name}.GOM_stage{k}"),
+            (_, None) => format!("{name}.GOM"),
+        };
+        if doubled.is_some() {
+            warnings.push(format!(
+                "{file} has a doubled extension: run as project {name}, Anura3D will look for {expected} (and run as project {stem} it finds no CPS); the run would fail with the files as named. a3d-init reads it as project {name} and writes {expected}"
+            ));
+        } else if let Some((p, doc)) = &chosen
+            && file != expected
+            && !renamed
+        {
+            warnings.push(format!(
+                "found GOM {file}, but {} is version {}: Anura3D will look for {expected}; the run would fail with the files as named. a3d-init writes {expected}",
+                file_name(p),
+                doc.version()
+            ));
+        }
+        let opd = find_opd(&dir, &name, stage, cps_version.as_deref(), &mut notes);
+        check_later_stage(&dir, &name, stage, &mut warnings);
         return Ok(ProjectFiles {
             name,
             dir,
             gom: path.to_path_buf(),
             cps,
+            cps_version,
             opd,
             stage,
             notes,
+            warnings,
         });
     }
-    if ext.starts_with("CPS_") {
+    if cps_step(ext).is_some() {
         let cps = CpsDocument::read(path)?;
-        let name = stem.to_string();
+        let name = undouble(&dir, stem).unwrap_or_else(|| stem.to_string());
         let (gom, stage) = if cps.is_staged() {
             let k = cps.stage();
             (dir.join(format!("{name}.GOM_stage{k}")), Some(k))
@@ -117,39 +275,153 @@ pub fn discover(path: &Path) -> Result<ProjectFiles, FormatError> {
             cps.version(),
             file_name(&gom)
         ));
+        if name != stem {
+            warnings.push(format!(
+                "{file} has a doubled extension: Anura3D, run as project {name}, will look for {name}.{ext}; a3d-init writes {name}.{ext}"
+            ));
+        }
         if !gom.exists() {
             return Err(FormatError::file(
                 &gom,
                 format!("the GOM that {file} needs does not exist"),
             ));
         }
-        let opd = stage
-            .map(|k| dir.join(format!("{name}.OPD_stage{k}")))
-            .filter(|p| p.exists());
+        let version = cps.version().to_string();
+        let opd = find_opd(&dir, &name, stage, Some(&version), &mut notes);
+        check_later_stage(&dir, &name, stage, &mut warnings);
         return Ok(ProjectFiles {
             name,
             dir,
             gom,
             cps: Some(path.to_path_buf()),
+            cps_version: Some(version),
             opd,
             stage,
             notes,
+            warnings,
         });
     }
-    Err(FormatError::file(
-        path,
-        "not an Anura3D file: expected .GOM, .GOM_stage<k>, -2.dat or .CPS_<nnn>",
-    ))
+    Err(not_anura3d())
 }
 
-/// For a GOM, the CPS that drives it: the lowest-numbered CPS whose stage matches.
+/// A GiD export: `name-2.dat` (GOM) and `name-1.dat` (CPS) in `name.gid/`.
+fn discover_gid(path: &Path, dir: &Path, name: &str) -> Result<ProjectFiles, FormatError> {
+    let gom = dir.join(format!("{name}-2.dat"));
+    let gid_cps = dir.join(format!("{name}-1.dat"));
+    if !gom.exists() {
+        return Err(FormatError::file(
+            &gom,
+            format!(
+                "the GiD GOM of project {name} does not exist (GiD writes the GOM to {name}-2.dat and the CPS to {name}-1.dat)"
+            ),
+        ));
+    }
+    let mut notes = vec![
+        format!("GOM: {}", gom.display()),
+        format!("GiD export: GiD writes the GOM to {name}-2.dat and the CPS to {name}-1.dat"),
+    ];
+    let mut warnings = Vec::new();
+    // Older problem types write other things to `-1.dat`: only a file with an
+    // Anura3D header is taken as the CPS.
+    let is_cps = std::fs::read(&gid_cps).is_ok_and(|b| {
+        b.strip_prefix(b"\xEF\xBB\xBF".as_slice())
+            .unwrap_or(&b)
+            .starts_with(b"### Anura3D_")
+    });
+    if gid_cps.exists() && !is_cps && path != gid_cps {
+        notes.push(format!(
+            "{name}-1.dat has no Anura3D header: not a CPS, looking for {name}.CPS_<nnn>"
+        ));
+    }
+    let chosen = if gid_cps.exists() && (is_cps || path == gid_cps) {
+        let doc = CpsDocument::read(&gid_cps)?;
+        notes.push(format!("CPS: {}", gid_cps.display()));
+        Some((gid_cps, doc))
+    } else {
+        if path == gid_cps {
+            return Err(FormatError::io(
+                path,
+                std::io::Error::from(std::io::ErrorKind::NotFound),
+            ));
+        }
+        choose_cps(dir, name, None, &mut notes, &mut warnings)?
+    };
+    let (cps, cps_version, stage) = match chosen {
+        Some((p, doc)) => {
+            let stage = doc.is_staged().then(|| doc.stage());
+            (Some(p), Some(doc.version().to_string()), stage)
+        }
+        None => (None, None, None),
+    };
+    let opd = find_opd(dir, name, stage, cps_version.as_deref(), &mut notes);
+    check_later_stage(dir, name, stage, &mut warnings);
+    Ok(ProjectFiles {
+        name: name.to_string(),
+        dir: dir.to_path_buf(),
+        gom,
+        cps,
+        cps_version,
+        opd,
+        stage,
+        notes,
+        warnings,
+    })
+}
+
+/// The OPD of a 2025 stage: beside the GOM, or (GiD) in the sibling `name.A3D/`.
+fn find_opd(
+    dir: &Path,
+    name: &str,
+    stage: Option<u32>,
+    cps_version: Option<&str>,
+    notes: &mut Vec<String>,
+) -> Option<PathBuf> {
+    if cps_version != Some("2025") {
+        return None;
+    }
+    let file = format!("{name}.OPD_stage{}", stage.unwrap_or(0));
+    let mut places = vec![dir.join(&file)];
+    if let Some(parent) = dir.parent() {
+        places.push(parent.join(format!("{name}.A3D")).join(&file));
+    }
+    let found = places.into_iter().find(|p| p.exists());
+    match &found {
+        Some(p) => notes.push(format!("OPD: {}", p.display())),
+        None => notes.push(format!(
+            "no {file} beside the GOM (nor in {name}.A3D/): a 2025 CPS needs one; a3d-init writes a default (every output on)"
+        )),
+    }
+    found
+}
+
+/// A 2025 run of stage k > 0 also opens `<name>.GOM_stage0` (for the dimension),
+/// and continues from the restart files of the earlier stages.
+fn check_later_stage(dir: &Path, name: &str, stage: Option<u32>, warnings: &mut Vec<String>) {
+    if let Some(k) = stage.filter(|&k| k > 0) {
+        let stage0 = format!("{name}.GOM_stage0");
+        warnings.push(format!(
+            "stage {k}: Anura3D also opens {stage0}{} and starts from the restart files of the earlier stages; a MAPF is read only at the first load step",
+            if dir.join(&stage0).exists() {
+                ""
+            } else {
+                ", which is not here"
+            }
+        ));
+    }
+}
+
+/// For a GOM, the CPS that drives it: the lowest-numbered CPS whose stage
+/// matches the GOM's name; failing that, the lowest-numbered CPS of the project
+/// (its version then decides the names, and a warning says so).
 fn choose_cps(
     dir: &Path,
     name: &str,
     stage: Option<u32>,
     notes: &mut Vec<String>,
-) -> Result<Option<PathBuf>, FormatError> {
+    warnings: &mut Vec<String>,
+) -> Result<Option<(PathBuf, CpsDocument)>, FormatError> {
     let candidates = cps_files(dir, name);
+    let mut first = None;
     for (_, path) in &candidates {
         let cps = CpsDocument::read(path)?;
         let matches = match stage {
@@ -158,42 +430,81 @@ fn choose_cps(
         };
         if matches {
             notes.push(format!("CPS: {}", path.display()));
-            return Ok(Some(path.clone()));
+            return Ok(Some((path.clone(), cps)));
+        }
+        if first.is_none() && (stage.is_none() || stage == Some(0)) {
+            first = Some((path.clone(), cps));
         }
     }
-    notes.push(match candidates.is_empty() {
-        true => format!(
-            "no {name}.CPS_<nnn> next to the GOM: defaults are used where a CPS value is needed"
+    if let Some((path, cps)) = first {
+        notes.push(format!("CPS: {}", path.display()));
+        return Ok(Some((path, cps)));
+    }
+    warnings.push(match candidates.is_empty() {
+        true => format!("no CPS: no {name}.CPS_<nnn> beside the GOM"),
+        false => format!(
+            "no CPS of project {name} matches this GOM's stage ({})",
+            candidates
+                .iter()
+                .map(|(_, p)| file_name(p))
+                .collect::<Vec<_>>()
+                .join(", ")
         ),
-        false => "no CPS matches this GOM's stage: defaults are used where a CPS value is needed"
-            .to_string(),
     });
     Ok(None)
 }
 
+/// A GOM-like file in a folder: (project name, path, rank) — lower rank wins
+/// when two files belong to the same project: 0 Anura3D's own names, 1 a GiD
+/// `-2.dat`, 2 a misnamed file.
+fn gom_candidate(dir: &Path, path: &Path) -> Option<(String, PathBuf, u8)> {
+    let file = file_name(path);
+    let (stem, ext) = split_ext(&file)?;
+    let rank = match ext.to_ascii_uppercase().as_str() {
+        "GOM" | "GOM_STAGE0" => 0,
+        "DAT" if stem.ends_with("-2") => 1,
+        _ => return None,
+    };
+    if rank == 1 {
+        return Some((stem[..stem.len() - 2].to_string(), path.to_path_buf(), 1));
+    }
+    // Misnamed files (doubled or lower-case extensions) come after correct names.
+    let misnamed = !matches!(ext, "GOM" | "GOM_stage0");
+    match undouble(dir, stem) {
+        Some(inner) => Some((inner, path.to_path_buf(), 2)),
+        None => Some((stem.to_string(), path.to_path_buf(), 2 * misnamed as u8)),
+    }
+}
+
 fn discover_dir(dir: &Path) -> Result<ProjectFiles, FormatError> {
-    let mut goms: Vec<PathBuf> = Vec::new();
+    let mut goms: Vec<(String, PathBuf, u8)> = Vec::new();
     let entries = std::fs::read_dir(dir).map_err(|e| FormatError::io(dir, e))?;
     for entry in entries.flatten() {
-        let file = file_name(&entry.path());
-        if let Some((stem, ext)) = split_ext(&file)
-            && (ext == "GOM" || ext == "GOM_stage0" || (ext == "dat" && stem.ends_with("-2")))
-        {
-            goms.push(entry.path());
+        if let Some(c) = gom_candidate(dir, &entry.path()) {
+            goms.push(c);
         }
     }
-    goms.sort();
-    match goms.len() {
+    goms.sort_by(|a, b| (&a.0, a.2, &a.1).cmp(&(&b.0, b.2, &b.1)));
+    let mut names: Vec<&str> = goms.iter().map(|g| g.0.as_str()).collect();
+    names.dedup();
+    match names.len() {
         0 => Err(FormatError::file(
             dir,
-            "no Anura3D project here: no .GOM, .GOM_stage0 or -2.dat file",
+            "no Anura3D project here: no .GOM, .GOM_stage0 or GiD -2.dat file",
         )),
         1 => {
-            let mut found = discover(&goms[0])?;
+            let mut found = discover(&goms[0].1)?;
             found.notes.insert(
                 0,
                 format!("directory {}: one project, {}", dir.display(), found.name),
             );
+            for other in &goms[1..] {
+                found.notes.push(format!(
+                    "also here and not used: {} (same project; {} was preferred)",
+                    file_name(&other.1),
+                    file_name(&goms[0].1)
+                ));
+            }
             Ok(found)
         }
         _ => Err(FormatError::file(
@@ -201,10 +512,189 @@ fn discover_dir(dir: &Path) -> Result<ProjectFiles, FormatError> {
             format!(
                 "several projects here ({}): name the GOM or CPS file",
                 goms.iter()
-                    .map(|p| file_name(p))
+                    .map(|g| file_name(&g.1))
                     .collect::<Vec<_>>()
                     .join(", ")
             ),
         )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+        let p = dir.join(name);
+        std::fs::write(&p, text).unwrap();
+        p
+    }
+
+    const GOM: &str = "### Anura3D_2024 ###\n$$FINISH\n";
+    const CPS_2024: &str = "### Anura3D_2024 ###\n$$K0_PROCEDURE\n1\n$$END\n";
+    const CPS_2025: &str = "### Anura3D_2025 ###\n$$STAGE\n0\n$$END\n";
+
+    #[test]
+    fn gid_folder_reads_minus_one_dat_as_the_cps() {
+        let tmp = tempfile::tempdir().unwrap();
+        let gid = tmp.path().join("Dam.gid");
+        std::fs::create_dir(&gid).unwrap();
+        write(&gid, "Dam-2.dat", GOM);
+        write(&gid, "Dam-1.dat", CPS_2024);
+        let p = discover(&gid).unwrap();
+        assert_eq!(p.name, "Dam");
+        assert_eq!(p.cps.as_deref(), Some(gid.join("Dam-1.dat").as_path()));
+        let names = p.output_names("2024");
+        assert_eq!(
+            (names.gom.as_str(), names.cps.as_str(), names.opd),
+            ("Dam.GOM", "Dam.CPS_001", None)
+        );
+        // The CPS file itself leads to the same project.
+        assert_eq!(discover(&gid.join("Dam-1.dat")).unwrap().gom, p.gom);
+    }
+
+    #[test]
+    fn gid_2025_names_are_staged_and_the_opd_is_found_in_the_a3d_folder() {
+        let tmp = tempfile::tempdir().unwrap();
+        let gid = tmp.path().join("Dam.gid");
+        let a3d = tmp.path().join("Dam.A3D");
+        std::fs::create_dir(&gid).unwrap();
+        std::fs::create_dir(&a3d).unwrap();
+        write(&gid, "Dam-2.dat", GOM);
+        write(&gid, "Dam-1.dat", CPS_2025);
+        write(&a3d, "Dam.OPD_stage0", "$$END\n");
+        let p = discover(&gid.join("Dam-2.dat")).unwrap();
+        assert_eq!(p.opd.as_deref(), Some(a3d.join("Dam.OPD_stage0").as_path()));
+        let names = p.output_names("2024");
+        assert_eq!(names.gom, "Dam.GOM_stage0");
+        assert_eq!(names.opd.as_deref(), Some("Dam.OPD_stage0"));
+        assert_eq!(names.cps, "Dam.CPS_001");
+    }
+
+    #[test]
+    fn older_gid_folder_keeps_its_cps_beside_the_dat_files() {
+        // As in upstream tutorial folders: -2.dat (GOM), -3.dat and .dat (batch
+        // files), and the CPS under its Anura3D name.
+        let tmp = tempfile::tempdir().unwrap();
+        let gid = tmp.path().join("Oedo.gid");
+        std::fs::create_dir(&gid).unwrap();
+        write(&gid, "Oedo-2.dat", GOM);
+        write(&gid, "Oedo-3.dat", "\"Anura3D_2023.exe\" \"Oedo\"\nPAUSE\n");
+        write(&gid, "Oedo-1.dat", "\"Anura3D_2023.exe\"\nPAUSE\n");
+        write(&gid, "Oedo.dat", "PAUSE\n");
+        let cps = write(&gid, "Oedo.CPS_001", CPS_2024);
+        let p = discover(&gid).unwrap();
+        assert_eq!(p.name, "Oedo");
+        assert_eq!(p.cps, Some(cps));
+        assert!(p.notes.iter().any(|n| n.contains("no Anura3D header")));
+    }
+
+    #[test]
+    fn a_later_stage_names_stage0_and_the_restart() {
+        let tmp = tempfile::tempdir().unwrap();
+        let gom = write(tmp.path(), "C.GOM_stage1", GOM);
+        write(
+            tmp.path(),
+            "C.CPS_002",
+            "### Anura3D_2025 ###\n$$STAGE\n1\n$$END\n",
+        );
+        let p = discover(&gom).unwrap();
+        assert_eq!(p.stage, Some(1));
+        assert!(p.warnings[0].contains("C.GOM_stage0, which is not here"));
+        let names = p.output_names("2025");
+        assert_eq!(names.gom, "C.GOM_stage1");
+        assert_eq!(names.cps, "C.CPS_002");
+        assert!(names.needs_gom_stage0);
+    }
+
+    #[test]
+    fn doubled_extension_picks_the_obvious_project() {
+        let tmp = tempfile::tempdir().unwrap();
+        let gom = write(tmp.path(), "X.GOM.GOM_stage0", GOM);
+        write(tmp.path(), "X.CPS_001", CPS_2025);
+        let p = discover(&gom).unwrap();
+        assert_eq!(p.name, "X");
+        assert!(p.cps.is_some());
+        assert!(
+            p.warnings[0].contains("will look for X.GOM_stage0"),
+            "{:?}",
+            p.warnings
+        );
+        assert_eq!(p.output_names("2025").gom, "X.GOM_stage0");
+        // The folder finds the same project.
+        assert_eq!(discover(tmp.path()).unwrap().name, "X");
+    }
+
+    #[test]
+    fn lower_case_extensions_are_read_and_reported() {
+        let tmp = tempfile::tempdir().unwrap();
+        let gom = write(tmp.path(), "L.gom", GOM);
+        write(tmp.path(), "L.cps_001", CPS_2024);
+        let p = discover(&gom).unwrap();
+        assert_eq!(p.name, "L");
+        assert!(p.cps.is_some());
+        assert!(
+            p.warnings[0].contains("Anura3D looks for L.GOM"),
+            "{:?}",
+            p.warnings
+        );
+        let names = p.output_names("2024");
+        assert_eq!(
+            (names.gom.as_str(), names.cps.as_str()),
+            ("L.GOM", "L.CPS_001")
+        );
+        assert_eq!(discover(tmp.path()).unwrap().name, "L");
+    }
+
+    #[test]
+    fn doubled_extension_with_an_older_cps_names_the_gom() {
+        let tmp = tempfile::tempdir().unwrap();
+        let gom = write(tmp.path(), "W.GOM.GOM_stage0", GOM);
+        write(tmp.path(), "W.CPS_001", CPS_2024);
+        let p = discover(&gom).unwrap();
+        assert_eq!(p.name, "W");
+        assert!(
+            p.warnings[0].contains("will look for W.GOM "),
+            "{:?}",
+            p.warnings
+        );
+        assert_eq!(p.output_names("2024").gom, "W.GOM");
+    }
+
+    #[test]
+    fn a_folder_prefers_the_correctly_named_gom() {
+        let tmp = tempfile::tempdir().unwrap();
+        write(tmp.path(), "V.GOM.GOM_stage0", GOM);
+        let good = write(tmp.path(), "V.GOM_stage0", GOM);
+        write(tmp.path(), "V.CPS_001", CPS_2025);
+        let p = discover(tmp.path()).unwrap();
+        assert_eq!(p.gom, good);
+        assert!(p.warnings.is_empty(), "{:?}", p.warnings);
+    }
+
+    #[test]
+    fn a_gom_named_for_the_wrong_version_is_reported() {
+        let tmp = tempfile::tempdir().unwrap();
+        let gom = write(tmp.path(), "Y.GOM", GOM);
+        write(tmp.path(), "Y.CPS_001", CPS_2025);
+        let p = discover(&gom).unwrap();
+        assert_eq!(p.stage, Some(0));
+        assert!(p.warnings[0].contains("will look for Y.GOM_stage0"));
+        assert_eq!(p.output_names("2024").gom, "Y.GOM_stage0");
+    }
+
+    #[test]
+    fn no_cps_is_a_warning_and_the_map_message_names_the_files() {
+        let tmp = tempfile::tempdir().unwrap();
+        let gom = write(tmp.path(), "Z.GOM", GOM);
+        let p = discover(&gom).unwrap();
+        assert!(p.cps.is_none());
+        assert!(p.warnings[0].starts_with("no CPS"));
+        assert!(missing_cps_message(&p).contains("--generate-cps"));
+        let names = p.output_names("2024");
+        assert_eq!(
+            (names.gom.as_str(), names.cps.as_str()),
+            ("Z.GOM", "Z.CPS_001")
+        );
     }
 }

@@ -54,6 +54,8 @@ pub struct LoadedFem {
     pub paths: Vec<PathBuf>,
     /// The sign convention the values were converted from.
     pub sign: crate::formats::fem_csv::SignConvention,
+    /// Informational sentences (what was read, how rows were joined): not warnings.
+    pub notes: Vec<String>,
 }
 
 /// Reads every file of `options` through its reader and joins them.
@@ -65,6 +67,7 @@ pub fn load(options: &FemOptions) -> Result<LoadedFem, PipelineError> {
     }
     let mut parts = Vec::new();
     let mut reports = Vec::new();
+    let mut notes = Vec::new();
     let mesh = options
         .mesh
         .as_deref()
@@ -73,20 +76,28 @@ pub fn load(options: &FemOptions) -> Result<LoadedFem, PipelineError> {
     for path in &options.paths {
         match reader_for(path) {
             FemReader::Gsz => {
-                let (nodes, report, _) = crate::formats::gsz::read_step(
+                let (nodes, report, note) = crate::formats::gsz::read_step(
                     path,
                     options.analysis.as_deref(),
                     &options.step,
                     &options.csv,
                 )?;
+                notes.push(note);
                 parts.push(nodes);
                 reports.push(report);
             }
             FemReader::Csv => {
-                let (mut nodes, report) = fem_csv::read_csv(path, &options.csv)?;
+                let (mut nodes, mut report) = fem_csv::read_csv(path, &options.csv)?;
                 if !report.has_coordinates {
                     match &mesh {
-                        Some(mesh) => fem_csv::attach_mesh(&mut nodes, path, mesh)?,
+                        // Rows join mesh nodes by `Node` id: a subset of the mesh is fine (#14).
+                        Some(mesh) => notes.extend(crate::formats::gsz::attach_mesh_by_id(
+                            &mut nodes,
+                            &mut report,
+                            path,
+                            mesh,
+                            options.mesh.as_deref().unwrap_or(path),
+                        )?),
                         None => {
                             return Err(PipelineError::Input(format!(
                                 "{}: no X and Y columns; give the GeoStudio mesh with --fem-mesh Mesh.ply",
@@ -106,6 +117,7 @@ pub fn load(options: &FemOptions) -> Result<LoadedFem, PipelineError> {
         reports,
         paths: options.paths.clone(),
         sign: options.csv.sign,
+        notes,
     })
 }
 

@@ -344,7 +344,7 @@ pub fn map(project: Project, fem: LoadedFem, config: &MapConfig) -> Result<Mappe
         .map(|_| points.iter().map(|p| p.material).collect());
     // Dry materials without FEM nodes of their own (e.g. an impermeable base the
     // seepage model left out) get pwp = 0 and no kernel mapping.
-    let mut notes: Vec<String> = Vec::new();
+    let mut notes: Vec<String> = fem.notes.clone();
     let mut dry_without_nodes: Vec<u32> = Vec::new();
     if let (Some(ng), Some(pg)) = (&node_groups, &point_groups) {
         for m in &project.model.materials {
@@ -365,6 +365,30 @@ pub fn map(project: Project, fem: LoadedFem, config: &MapConfig) -> Result<Mappe
             }
         }
     }
+    // A FEM that does not reach the model: name the file, both extents and a
+    // unit or offset hint (#14).
+    let reached: Vec<[f64; 3]> = (0..positions.len())
+        .filter(|&i| {
+            point_groups
+                .as_ref()
+                .is_none_or(|g| !dry_without_nodes.contains(&g[i]))
+        })
+        .map(|i| positions[i])
+        .collect();
+    let reach = crate::diagnose::reach(
+        &fem.nodes.positions,
+        &project.model.mesh.nodes,
+        &reached,
+        dim,
+        kernel.support() * h,
+    );
+    let files = crate::diagnose::file_list(&fem.paths);
+    if let Some(r) = reach.as_ref().filter(|r| r.is_poor()) {
+        match config.outside {
+            Outside::Error => return Err(input_err!("{}", r.message(&files))),
+            _ => warnings.push(r.message(&files)),
+        }
+    }
     let t2 = Instant::now();
     let result = map_subset(
         &cloud,
@@ -372,7 +396,11 @@ pub fn map(project: Project, fem: LoadedFem, config: &MapConfig) -> Result<Mappe
         point_groups.as_deref(),
         &settings,
         &dry_without_nodes,
-    )?;
+    )
+    .map_err(|e| match &reach {
+        Some(r) => input_err!("{files}: {e} ({})", r.extents()),
+        None => e,
+    })?;
     timings.push((
         "kernel mapping".to_string(),
         t2.elapsed().as_secs_f64() * 1e3,
@@ -520,6 +548,11 @@ pub fn map(project: Project, fem: LoadedFem, config: &MapConfig) -> Result<Mappe
                 saturation: 1.0,
             };
         }
+    }
+    // Plausibility of the mapped pwp: warnings, never errors (#14).
+    if stress_source != StressSource::Zero {
+        let found = state::plausibility::check(&positions, &states, dim, g);
+        warnings.extend(found.into_iter().map(|f| f.message));
     }
     let mixed = if project.method == crate::model::ComputationMethod::MpmMixed {
         let fully_filled = state::mixed::fully_filled_elements(&project.model, points);

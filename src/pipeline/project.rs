@@ -30,7 +30,9 @@ impl Project {
         let files = project::discover(path)?;
         let gom = GomDocument::read(&files.gom)?;
         let cps = files.cps.as_deref().map(CpsDocument::read).transpose()?;
-        let (model, info) = gom.model()?;
+        let (model, mut info) = gom.model()?;
+        // File-naming problems (#14) come first among the warnings.
+        info.warnings.splice(0..0, files.warnings.iter().cloned());
         let method = match &cps {
             Some(cps) => {
                 let text = cps.computation_method();

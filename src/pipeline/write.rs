@@ -7,9 +7,7 @@ use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use super::PipelineError;
-use super::Project as LoadedProject;
 use super::map::Mapped;
-use crate::formats::cps::CpsDocument;
 use crate::formats::{mapf, mps_table, vtu};
 
 /// A folder files are written into.
@@ -42,14 +40,6 @@ impl Folder<'_> {
     }
 }
 
-/// The file name Anura3D expects for the GOM of this project.
-fn gom_name(project: &LoadedProject) -> String {
-    match project.files.stage {
-        Some(k) => format!("{}.GOM_stage{k}", project.files.name),
-        None => format!("{}.GOM", project.files.name),
-    }
-}
-
 /// Writes the ready-to-run project and the diagnostics into the folder `dir`;
 /// returns the file names written.
 pub fn write_project(mapped: &Mapped, dir: &Path) -> Result<Vec<String>, PipelineError> {
@@ -58,35 +48,34 @@ pub fn write_project(mapped: &Mapped, dir: &Path) -> Result<Vec<String>, Pipelin
     let name = &project.files.name;
     let dim = project.model.mesh.dimension.n_dim();
     let mut written = Vec::new();
-    out.copy(&project.files.gom, &gom_name(project))?;
-    written.push(gom_name(project));
-    let (cps_name, mut cps) = match &project.files.cps {
-        Some(path) => (
-            path.file_name()
-                .map(|s| s.to_string_lossy().into_owned())
-                .unwrap_or_else(|| format!("{name}.CPS_001")),
-            CpsDocument::read(path)?,
-        ),
-        None => (
-            format!("{name}.CPS_001"),
-            CpsDocument::parse(
-                Path::new("generated.CPS_001"),
-                "### Anura3D_2023 ###\n$$END\n".to_string(),
-            )?,
-        ),
-    };
-    cps.set("$$K0_PROCEDURE", &["0"]);
-    cps.set("$$MP_STRESS_INITIALIZATION_FROMFILE", &["1"]);
-    let text = cps.to_text();
-    out.write(&cps_name, |w| w.write_all(text.as_bytes()))?;
-    written.push(cps_name);
-    if let Some(opd) = &project.files.opd {
-        let file = opd
-            .file_name()
-            .map(|s| s.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        out.copy(opd, &file)?;
-        written.push(file);
+    // File names as Anura3D will look for them; the model's own CPS with two
+    // switches changed, or a generated one (--generate-cps); a default OPD for a
+    // 2025 CPS without one (#14).
+    let names = project.files.output_names(project.gom.version());
+    out.copy(&project.files.gom, &names.gom)?;
+    written.push(names.gom.clone());
+    let active = project
+        .model
+        .element_material
+        .iter()
+        .filter(|&&m| m > 0)
+        .count();
+    let text = crate::formats::cps_template::ready_to_run_cps(
+        project.cps.as_ref(),
+        project.gom.version(),
+        dim,
+        active,
+    )?;
+    out.write(&names.cps, |w| w.write_all(text.as_bytes()))?;
+    written.push(names.cps.clone());
+    if let Some(opd_name) = &names.opd {
+        match &project.files.opd {
+            Some(opd) => out.copy(opd, opd_name)?,
+            None => out.write(opd_name, |w| {
+                w.write_all(crate::formats::cps_template::generate_opd().as_bytes())
+            })?,
+        }
+        written.push(opd_name.clone());
     }
     let mapf_name = format!("{name}.MAPF");
     out.write(&mapf_name, |w| {

@@ -8,6 +8,7 @@
 
 pub mod geostatic;
 pub mod mixed;
+pub mod plausibility;
 
 use crate::model::{Material, MaterialPoint, MpState};
 
