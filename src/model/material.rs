@@ -19,8 +19,16 @@ impl RetentionCurve {
     /// Degree of saturation for a suction `s` (kPa, positive = suction).
     /// Returns 1 for s ≤ 0.
     pub fn saturation(&self, s: f64) -> f64 {
+        self.anura3d_saturation(s).1
+    }
+
+    /// Anura3D's retention routines at suction `s` (gas pressure 0): the Sr the
+    /// kernel uses in σ' = σ − Sr·p, and the Sr it stores on the MP. They
+    /// differ only for the linear curve past full desaturation, where the
+    /// kernel clamps the stored value at 0 but not the one it uses.
+    pub fn anura3d_saturation(&self, s: f64) -> (f64, f64) {
         if s <= 0.0 {
-            return 1.0;
+            return (1.0, 1.0);
         }
         match *self {
             RetentionCurve::VanGenuchten {
@@ -30,9 +38,13 @@ impl RetentionCurve {
                 lambda,
             } => {
                 let n = 1.0 / (1.0 - lambda);
-                s_min + (s_max - s_min) * (1.0 + (s / p0).powf(n)).powf(-lambda)
+                let sr = s_min + (s_max - s_min) * (1.0 + (s / p0).powf(n)).powf(-lambda);
+                (sr, sr)
             }
-            RetentionCurve::Linear { av } => (1.0 - av * s).clamp(0.0, 1.0),
+            RetentionCurve::Linear { av } => {
+                let sr = 1.0 - av * s;
+                (sr, sr.max(0.0))
+            }
         }
     }
 }

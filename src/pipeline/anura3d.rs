@@ -23,7 +23,7 @@
 use crate::formats::cps::CpsDocument;
 use crate::formats::mapf::MapfTable;
 use crate::kernel::neighbours::NeighbourIndex;
-use crate::model::{Material, MaterialPoint, MpState, RetentionCurve};
+use crate::model::{Material, MaterialPoint, MpState};
 
 use super::{PipelineError, Project};
 
@@ -78,35 +78,6 @@ fn kernel_value(q: f64) -> f64 {
         (2.0 - q).powi(3) / 6.0
     } else {
         2.0 / 3.0 - q * 2.0 + 0.5 * q * 3.0
-    }
-}
-
-/// Required MAPF columns for the kernel's reader, in kernel-id order.
-fn required(n_dim: usize) -> &'static [&'static str] {
-    if n_dim == 2 {
-        &[
-            "X[m]",
-            "Y[m]",
-            "Pwp[kPa]",
-            "SigX[kPa]",
-            "SigY[kPa]",
-            "SigXY[kPa]",
-            "SmoothLength[m]",
-        ]
-    } else {
-        &[
-            "X[m]",
-            "Y[m]",
-            "Z[m]",
-            "Pwp[kPa]",
-            "SigX[kPa]",
-            "SigY[kPa]",
-            "SigZ[kPa]",
-            "SigXY[kPa]",
-            "SigXZ[kPa]",
-            "SigYZ[kPa]",
-            "SmoothLength[m]",
-        ]
     }
 }
 
@@ -178,13 +149,13 @@ pub fn initial_state(
         )));
     };
     let mut col = Vec::new();
-    for h in required(n_dim) {
+    for h in crate::formats::mapf::headers(n_dim) {
         match table.column(h) {
             Some(c) => col.push(c),
             None => {
                 return Err(PipelineError::Input(format!(
                     "{mapf_name}: no `{h}` column; Anura3D's reader needs {} in {n_dim}D (and always indexes Pwp[kPa])",
-                    required(n_dim).join(" ")
+                    crate::formats::mapf::headers(n_dim).join(" ")
                 )));
             }
         }
@@ -258,7 +229,7 @@ pub fn initial_state(
         if unsaturated {
             match material.and_then(|m| m.retention.as_ref()) {
                 Some(curve) => {
-                    let (sr, stored) = kernel_saturation(curve, pwp);
+                    let (sr, stored) = curve.anura3d_saturation(pwp);
                     sr_local = sr;
                     degree = stored;
                 }
@@ -326,31 +297,6 @@ pub fn initial_state(
         carried_saturation: carried,
         notes,
     })
-}
-
-/// (Sr used in σ', DegreeSaturation stored) for Anura3D's retention routines
-/// at suction = pwp (gas pressure 0 at initialisation).
-fn kernel_saturation(curve: &RetentionCurve, pwp: f64) -> (f64, f64) {
-    match *curve {
-        RetentionCurve::VanGenuchten {
-            s_min,
-            s_max,
-            p0,
-            lambda,
-        } => {
-            let sr = if pwp <= 0.0 {
-                1.0
-            } else {
-                let e = 1.0 / (1.0 - lambda);
-                s_min + (s_max - s_min) * (1.0 + (pwp / p0).powf(e)).powf(-lambda)
-            };
-            (sr, sr)
-        }
-        RetentionCurve::Linear { av } => {
-            let sr = if pwp <= 0.0 { 1.0 } else { 1.0 - av * pwp };
-            (sr, if sr < 0.0 { 0.0 } else { sr })
-        }
-    }
 }
 
 /// The MPs (1-based ids) whose state differs between `a` and `b` by more than
