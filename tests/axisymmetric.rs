@@ -9,8 +9,8 @@
 //! MPs come from the real placement (`place`), so their volumes and masses are
 //! per radian (weight × det J × radius), as in Anura3D.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
+use common::{fixture, run as cli};
 
 use a3d_init::formats::gom::GomDocument;
 use a3d_init::model::{AnuraModel, Dimension, MaterialPoint, MpState, gamma_water};
@@ -34,12 +34,6 @@ fn k0() -> f64 {
 /// Dry unit weight (kN/m³).
 fn gamma() -> f64 {
     (1.0 - POROSITY) * RHO_S * G / 1000.0
-}
-
-fn fixture(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(rel)
 }
 
 /// A `width` × 10 m column of `nx` × 20 cells, both sides on rollers, base
@@ -310,17 +304,6 @@ fn cc_axi_sample_confined_is_in_equilibrium() {
         report.initial_residual_ratio
     );
     assert!(report.verdict.is_equilibrium(), "{:?}", report.verdict);
-}
-
-fn cli(args: &[&str]) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_a3d-init"))
-        .args(args)
-        .output()
-        .expect("runs");
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr),
-    )
 }
 
 /// `map` then `verify` on the shipped sample as it is: a free-standing,

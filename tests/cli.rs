@@ -1,36 +1,17 @@
 //! The real binary, run in temporary folders: exit codes, positioned errors on
 //! stderr, and output files that are complete or absent.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_a3d-init"))
-}
-
-fn fixture(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(rel)
-}
-
-fn run(args: &[&str]) -> (i32, String, String) {
-    let out = bin().args(args).output().unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
+mod common;
+use common::*;
 
 #[test]
 fn inspect_a_sample_project() {
     let dir = fixture("anura3d/K0_phreaticSurf_Geom");
-    let (code, stdout, stderr) = run(&["inspect", dir.to_str().unwrap()]);
+    let (code, stdout, stderr) = run_split(&["inspect", dir.to_str().unwrap()]);
     assert_eq!(code, 0, "{stderr}");
     assert!(stdout.contains("MPs        993"), "{stdout}");
     assert!(stdout.contains("K0_phreaticSurf_Geom.CPS_001"));
-    let (code, json, _) = run(&[
+    let (code, json, _) = run_split(&[
         "inspect",
         "--json",
         dir.join("K0_phreaticSurf_Geom.CPS_001").to_str().unwrap(),
@@ -46,7 +27,7 @@ fn inspect_writes_the_mp_table_and_refuses_to_overwrite() {
     let tmp = tempfile::tempdir().unwrap();
     let csv = tmp.path().join("mps.csv");
     let gom = fixture("anura3d/test-1005_3D/test-1005_3D.GOM");
-    let (code, _, stderr) = run(&[
+    let (code, _, stderr) = run_split(&[
         "inspect",
         gom.to_str().unwrap(),
         "--mps",
@@ -56,7 +37,7 @@ fn inspect_writes_the_mp_table_and_refuses_to_overwrite() {
     let text = std::fs::read_to_string(&csv).unwrap();
     assert_eq!(text.lines().count(), 241);
     assert!(text.starts_with("id,element,material,local,x,y,z,volume\n1,"));
-    let (code, _, stderr) = run(&[
+    let (code, _, stderr) = run_split(&[
         "inspect",
         gom.to_str().unwrap(),
         "--mps",
@@ -92,7 +73,7 @@ fn malformed_inputs_exit_2_with_a_positioned_message() {
         std::fs::create_dir(&dir).unwrap();
         let gom = dir.join("TwoMat.GOM");
         std::fs::write(&gom, text).unwrap();
-        let (code, _, stderr) = run(&[
+        let (code, _, stderr) = run_split(&[
             "inspect",
             gom.to_str().unwrap(),
             "--mps",
@@ -113,9 +94,9 @@ fn malformed_inputs_exit_2_with_a_positioned_message() {
 
 #[test]
 fn unknown_file_kind_and_missing_file_exit_2() {
-    let (code, _, stderr) = run(&["inspect", "/nonexistent/x.GOM"]);
+    let (code, _, stderr) = run_split(&["inspect", "/nonexistent/x.GOM"]);
     assert_eq!(code, 2);
     assert!(stderr.starts_with("error: /nonexistent/x.GOM"), "{stderr}");
-    let (code, _, _) = run(&["inspect", fixture("anura3d/README.md").to_str().unwrap()]);
+    let (code, _, _) = run_split(&["inspect", fixture("anura3d/README.md").to_str().unwrap()]);
     assert_eq!(code, 2);
 }

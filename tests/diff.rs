@@ -1,14 +1,11 @@
 //! `a3d-init diff`: identical inputs, numbers below and above tolerance, a
 //! reordered GOM block (equal), a changed keyword, MAPF rows swapped, folders.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
+use common::*;
 
-fn fixture(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(rel)
-}
+use std::path::Path;
+use std::process::Command;
 
 fn diff(args: &[&str]) -> (i32, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_a3d-init"))

@@ -5,29 +5,15 @@
 //! kernel would refuse them. The real kernel, where built, is the oracle
 //! (`anura3d_kernel_holds_what_verify_says`).
 
+mod common;
+use common::*;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use a3d_init::formats::gom::write::model_to_text;
 use a3d_init::formats::{mapf, mps_table};
 use a3d_init::model::generate::{self, MaterialSpec};
-
-fn fixture(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(rel)
-}
-
-fn run(args: &[&str]) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_a3d-init"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr),
-    )
-}
 
 fn saturated_spec() -> MaterialSpec {
     MaterialSpec {

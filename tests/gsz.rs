@@ -1,8 +1,11 @@
 //! GeoStudio `.gsz` projects read directly: the shipped sample end to end, a
 //! hand-made archive in imperial units, and corrupted archives (exit code 2).
 
+mod common;
+use common::*;
+
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 use a3d_init::formats::fem_csv::CsvOptions;
@@ -10,23 +13,6 @@ use a3d_init::formats::gom::write::model_to_text;
 use a3d_init::formats::gsz::{StepChoice, read_project, read_step};
 use a3d_init::model::Quantity;
 use a3d_init::model::generate::{self, MaterialSpec};
-
-fn fixture(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(rel)
-}
-
-fn run(args: &[&str]) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_a3d-init"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
 
 fn ply_bytes(nodes: &[[f64; 3]], header_override: Option<&str>) -> Vec<u8> {
     let header = header_override.map(str::to_string).unwrap_or_else(|| {

@@ -2,31 +2,15 @@
 //! Anura3D sample (MAPF parsed back row by row, CPS changed in two keywords only,
 //! GOM byte-identical), and bad inputs that exit 2 and leave nothing behind.
 
+mod common;
+use common::*;
+
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use a3d_init::formats::cps::CpsDocument;
 use a3d_init::formats::gom::write::model_to_text;
 use a3d_init::formats::{mapf, mps_table};
 use a3d_init::model::generate::{self, MaterialSpec};
-
-fn bin() -> Command {
-    Command::new(env!("CARGO_BIN_EXE_a3d-init"))
-}
-
-fn fixture(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(rel)
-}
-
-fn run(args: &[&str]) -> (i32, String) {
-    let out = bin().args(args).output().unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
-}
 
 const GAMMA_W: f64 = 9.807;
 

@@ -3,7 +3,8 @@
 //! shipped Anura3D run, and property tests over random elements for every
 //! supported count (inside the element, volumes sum to its measure).
 
-use std::path::{Path, PathBuf};
+mod common;
+use common::*;
 
 use a3d_init::formats::gom::GomDocument;
 use a3d_init::model::{AnuraModel, Dimension, ElementType, Mesh};
@@ -11,12 +12,6 @@ use a3d_init::place::{
     self, PlaceError, element_measure, local_points, place_material_points, point_in_element,
 };
 use proptest::prelude::*;
-
-fn fixture(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(rel)
-}
 
 fn model_of(rel: &str) -> AnuraModel {
     GomDocument::read(&fixture(rel)).unwrap().model().unwrap().0

@@ -5,18 +5,14 @@
 //! pressures, and the small CLI fixes (`inspect --fem` extent, unreadable `.gsz`,
 //! `diff` with a missing path).
 
+mod common;
+use common::*;
+
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use a3d_init::formats::gom::write::model_to_text;
 use a3d_init::model::generate::{self, MaterialSpec};
-
-fn fixture(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(rel)
-}
 
 fn real(rel: &str) -> PathBuf {
     fixture("real-projects").join(rel)
@@ -24,19 +20,6 @@ fn real(rel: &str) -> PathBuf {
 
 fn s(p: &Path) -> &str {
     p.to_str().unwrap()
-}
-
-/// Runs the binary: (exit code, stdout, stderr).
-fn run(args: &[&str]) -> (i32, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_a3d-init"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned(),
-        String::from_utf8_lossy(&out.stderr).into_owned(),
-    )
 }
 
 /// The fixture GOMs: a 10 × 5 m saturated block (1 m TRI3 cells, 3 MPs each)
@@ -96,7 +79,7 @@ fn lines(text: &str) -> Vec<&str> {
 fn gid_project_folder_maps_with_its_own_cps() {
     let tmp = tempfile::tempdir().unwrap();
     let gid = real("Block.gid");
-    let (code, stdout, stderr) = run(&["inspect", s(&gid)]);
+    let (code, stdout, stderr) = run_split(&["inspect", s(&gid)]);
     assert_eq!(code, 0, "{stderr}");
     assert!(stdout.contains("Block-1.dat"), "{stdout}");
     assert!(
@@ -108,7 +91,7 @@ fn gid_project_folder_maps_with_its_own_cps() {
         "{stdout}"
     );
     let out = tmp.path().join("out");
-    let (code, _, stderr) = run(&[
+    let (code, _, stderr) = run_split(&[
         "map",
         "--mpm",
         s(&gid),
@@ -162,7 +145,7 @@ fn gid_project_folder_maps_with_its_own_cps() {
 fn gid_project_folder_2025_uses_staged_names() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("out");
-    let (code, _, stderr) = run(&[
+    let (code, _, stderr) = run_split(&[
         "map",
         "--mpm",
         s(&real("Stage.gid/Stage-2.dat")),
@@ -196,12 +179,13 @@ fn no_cps_refuses_map_unless_a_cps_is_generated() {
     let gom = real("bare/Bare.GOM");
     let fem = real("hydrostatic.csv");
     let out = tmp.path().join("out");
-    let (code, _, stderr) = run(&["map", "--mpm", s(&gom), "--fem", s(&fem), "--out", s(&out)]);
+    let (code, _, stderr) =
+        run_split(&["map", "--mpm", s(&gom), "--fem", s(&fem), "--out", s(&out)]);
     assert_eq!(code, 2, "{stderr}");
     assert!(stderr.contains("Bare.GOM: no CPS"), "{stderr}");
     assert!(stderr.contains("--generate-cps"), "{stderr}");
     assert!(!out.exists());
-    let (code, _, stderr) = run(&[
+    let (code, _, stderr) = run_split(&[
         "map",
         "--mpm",
         s(&gom),
@@ -269,7 +253,7 @@ fn generated_cps_covers_the_sample_cps_files() {
 fn misnamed_project_file_is_reported_and_the_obvious_project_used() {
     let tmp = tempfile::tempdir().unwrap();
     let gom = real("misnamed/X.GOM.GOM_stage0");
-    let (code, stdout, stderr) = run(&["inspect", s(&gom)]);
+    let (code, stdout, stderr) = run_split(&["inspect", s(&gom)]);
     assert_eq!(code, 0, "{stderr}");
     assert!(stdout.starts_with("project    X\n"), "{stdout}");
     assert!(stdout.contains("X.CPS_001"), "{stdout}");
@@ -279,11 +263,11 @@ fn misnamed_project_file_is_reported_and_the_obvious_project_used() {
         "{stdout}"
     );
     // The folder finds the same project.
-    let (code, stdout, _) = run(&["inspect", s(&real("misnamed"))]);
+    let (code, stdout, _) = run_split(&["inspect", s(&real("misnamed"))]);
     assert_eq!(code, 0);
     assert!(stdout.starts_with("project    X\n"), "{stdout}");
     let out = tmp.path().join("out");
-    let (code, _, stderr) = run(&[
+    let (code, _, stderr) = run_split(&[
         "map",
         "--mpm",
         s(&gom),
@@ -326,7 +310,7 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
     let tmp = tempfile::tempdir().unwrap();
     let node = real("subset/node.csv");
     let mesh = rd_mesh();
-    let (code, stdout, stderr) = run(&["inspect", "--fem", s(&node), "--fem-mesh", s(&mesh)]);
+    let (code, stdout, stderr) = run_split(&["inspect", "--fem", s(&node), "--fem-mesh", s(&mesh)]);
     assert_eq!(code, 0, "{stderr}");
     assert!(stdout.contains("nodes      492 (2D)"), "{stdout}");
     assert!(
@@ -334,7 +318,7 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
         "{stdout}"
     );
     let cal = tmp.path().join("cal");
-    let (code, _, stderr) = run(&[
+    let (code, _, stderr) = run_split(&[
         "calibrate",
         "--fem",
         s(&node),
@@ -346,7 +330,7 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
     assert_eq!(code, 0, "{stderr}");
     let out = tmp.path().join("out");
     let gom = fixture("anura3d-rapid-drawdown/rapid_drawdown.GOM");
-    let (code, _, stderr) = run(&[
+    let (code, _, stderr) = run_split(&[
         "map",
         "--mpm",
         s(&gom),
@@ -370,11 +354,11 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
         &std::fs::read(&node).unwrap(),
         &std::fs::read(&mesh).unwrap(),
     );
-    let (code, stdout, stderr) = run(&["inspect", s(&gsz)]);
+    let (code, stdout, stderr) = run_split(&["inspect", s(&gsz)]);
     assert_eq!(code, 0, "{stderr}");
     assert!(stdout.contains("492 nodes (2D)"), "{stdout}");
     let out2 = tmp.path().join("out2");
-    let (code, _, stderr) = run(&[
+    let (code, _, stderr) = run_split(&[
         "map",
         "--mpm",
         s(&gom),
@@ -403,7 +387,8 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
             "node-duplicate-id.csv:12:1: duplicate node id 4 (also on line 5)",
         ),
     ] {
-        let (code, _, stderr) = run(&["inspect", "--fem", s(&real(file)), "--fem-mesh", s(&mesh)]);
+        let (code, _, stderr) =
+            run_split(&["inspect", "--fem", s(&real(file)), "--fem-mesh", s(&mesh)]);
         assert_eq!(code, 2, "{stderr}");
         assert!(stderr.contains(message), "{stderr}");
         let bad = tmp.path().join("bad.gsz");
@@ -412,9 +397,9 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
             &std::fs::read(real(file)).unwrap(),
             &std::fs::read(&mesh).unwrap(),
         );
-        let (code, _, stderr) = run(&["inspect", s(&bad)]);
+        let (code, _, stderr) = run_split(&["inspect", s(&bad)]);
         assert_eq!(code, 2, "{stderr}");
-        let (code, _, stderr) = run(&[
+        let (code, _, stderr) = run_split(&[
             "map",
             "--mpm",
             s(&gom),
@@ -436,7 +421,7 @@ fn fem_in_feet_is_named_with_both_extents_and_the_factor() {
     let tmp = tempfile::tempdir().unwrap();
     let gom = real("offset/Site.GOM");
     let fem = real("site-ft.csv");
-    let (code, _, stderr) = run(&[
+    let (code, _, stderr) = run_split(&[
         "map",
         "--mpm",
         s(&gom),
@@ -454,7 +439,7 @@ fn fem_in_feet_is_named_with_both_extents_and_the_factor() {
     ] {
         assert!(stderr.contains(part), "{part}: {stderr}");
     }
-    let (code, _, stderr) = run(&[
+    let (code, _, stderr) = run_split(&[
         "map",
         "--mpm",
         s(&gom),
@@ -466,7 +451,7 @@ fn fem_in_feet_is_named_with_both_extents_and_the_factor() {
         s(&tmp.path().join("b")),
     ]);
     assert_eq!(code, 0, "{stderr}");
-    let (code, _, stderr) = run(&[
+    let (code, _, stderr) = run_split(&[
         "calibrate",
         "--fem",
         s(&fem),
@@ -492,7 +477,7 @@ fn fem_covering_part_of_the_model_names_file_and_extents() {
         .collect();
     let fem = tmp.path().join("part.csv");
     std::fs::write(&fem, part).unwrap();
-    let (code, _, stderr) = run(&[
+    let (code, _, stderr) = run_split(&[
         "map",
         "--mpm",
         s(&real("offset/Site.GOM")),
@@ -520,7 +505,7 @@ fn implausible_pore_pressures_are_warned_not_refused() {
     let tmp = tempfile::tempdir().unwrap();
     let gid = real("Block.gid");
     let map = |fem: &str, out: &str| {
-        run(&[
+        run_split(&[
             "map",
             "--mpm",
             s(&gid),
@@ -551,7 +536,7 @@ fn implausible_pore_pressures_are_warned_not_refused() {
 
 #[test]
 fn inspect_fem_prints_the_coordinate_range() {
-    let (code, stdout, stderr) = run(&["inspect", "--fem", s(&real("site-m.csv"))]);
+    let (code, stdout, stderr) = run_split(&["inspect", "--fem", s(&real("site-m.csv"))]);
     assert_eq!(code, 0, "{stderr}");
     assert!(
         stdout.contains("extent     x 1000.000 .. 1010.000, y 200.000 .. 205.000 m"),
@@ -568,11 +553,11 @@ fn inspect_on_an_unreadable_gsz_exits_2() {
     // The header and 10 of the 553 nodes.
     let header_end = mesh.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
     make_gsz(&gsz, &node, &mesh[..header_end + 4 + 240]);
-    let (code, stdout, stderr) = run(&["inspect", s(&gsz)]);
+    let (code, stdout, stderr) = run_split(&["inspect", s(&gsz)]);
     assert_eq!(code, 2, "{stdout}\n{stderr}");
     assert!(stdout.contains("unreadable"), "{stdout}");
     assert!(stderr.contains("truncated PLY"), "{stderr}");
-    let (code, _, _) = run(&["inspect", "--json", s(&gsz)]);
+    let (code, _, _) = run_split(&["inspect", "--json", s(&gsz)]);
     assert_eq!(code, 2);
 }
 
@@ -584,7 +569,7 @@ fn diff_with_a_missing_path_says_so() {
         [s(&real("Block.gid")), s(&missing)],
         [s(&missing), s(&real("hydrostatic.csv"))],
     ] {
-        let (code, _, stderr) = run(&["diff", args[0], args[1]]);
+        let (code, _, stderr) = run_split(&["diff", args[0], args[1]]);
         assert_eq!(code, 2, "{stderr}");
         assert!(
             stderr.contains(&format!("{}: no such file or folder", missing.display())),

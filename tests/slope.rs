@@ -3,14 +3,10 @@
 //! the dry clay base without FEM nodes takes pwp = 0, the calibrated h/l lies in
 //! the paper's 0.7–1.0 range for the cubic kernel, and no MP is a null point.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
+use common::*;
 
-fn fixture(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(rel)
-}
+use std::process::Command;
 
 #[test]
 fn slope_fixture_maps_with_calibrated_h() {

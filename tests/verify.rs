@@ -3,28 +3,13 @@
 //! out of balance with the places named (exit 1); a state from another model is
 //! refused (exit 2).
 
+mod common;
+use common::*;
+
 use std::path::{Path, PathBuf};
-use std::process::Command;
 
 use a3d_init::formats::gom::write::model_to_text;
 use a3d_init::model::generate::{self, MaterialSpec};
-
-fn fixture(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(rel)
-}
-
-fn run(args: &[&str]) -> (i32, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_a3d-init"))
-        .args(args)
-        .output()
-        .unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        String::from_utf8_lossy(&out.stdout).into_owned() + &String::from_utf8_lossy(&out.stderr),
-    )
-}
 
 fn mapped_block(dir: &Path) -> PathBuf {
     let mesh = generate::structured_tri_mesh(0.0, 0.0, 4.0, 10.0, 4, 10);
