@@ -62,6 +62,7 @@ struct Summary<'a> {
     dimension: &'static str,
     element_type: &'static str,
     formulation: Option<&'a str>,
+    computation_method: &'static str,
     nodes: usize,
     elements: usize,
     active_elements: usize,
@@ -125,6 +126,7 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
         dimension: mesh.dimension.gom_name(),
         element_type: mesh.element_type.gom_name(),
         formulation: p.info.formulation.as_deref(),
+        computation_method: p.method.cps_name(),
         nodes: mesh.n_nodes(),
         elements: mesh.n_elements(),
         active_elements: p.model.element_material.iter().filter(|&&m| m > 0).count(),
@@ -186,6 +188,16 @@ fn print_summary(out: &mut impl Write, s: &Summary<'_>) -> std::io::Result<()> {
         names.reason
     )?;
     writeln!(out, "dimension  {} ({})", s.dimension, s.element_type)?;
+    writeln!(
+        out,
+        "method     {}{}",
+        s.computation_method,
+        match s.computation_method {
+            "FEM" | "UL-FEM" => ": one MP per active element at the mean of its corners, whatever the GOM's counts",
+            "MPM-MIXED" => ": fully filled elements are integrated at one point (their MPs share MP 1's state after the first step)",
+            _ => "",
+        }
+    )?;
     if let Some(f) = s.formulation {
         writeln!(out, "formulation {f}")?;
     }
