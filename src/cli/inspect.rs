@@ -193,8 +193,10 @@ fn print_summary(out: &mut impl Write, s: &Summary<'_>) -> std::io::Result<()> {
         "method     {}{}",
         s.computation_method,
         match s.computation_method {
-            "FEM" | "UL-FEM" => ": one MP per active element at the mean of its corners, whatever the GOM's counts",
-            "MPM-MIXED" => ": fully filled elements are integrated at one point (their MPs share MP 1's state after the first step)",
+            "FEM" | "UL-FEM" =>
+                ": one MP per active element at the mean of its corners, whatever the GOM's counts",
+            "MPM-MIXED" =>
+                ": fully filled elements are integrated at one point (their MPs share MP 1's state after the first step)",
             _ => "",
         }
     )?;

@@ -21,13 +21,16 @@
 
 pub mod grid;
 pub mod material;
+pub mod mohr_coulomb;
+mod principal;
 pub mod run;
 pub mod shape;
 pub mod step;
 #[doc(hidden)]
 pub mod testing;
 
-pub use material::{Elasticity, MohrCoulomb, ReturnKind, ReturnMap, SolidModel};
+pub use material::{Elasticity, SolidModel};
+pub use mohr_coulomb::{MohrCoulomb, ReturnKind, ReturnMap};
 pub use run::{
     ElementScore, Reason, RunOutput, RunReport, Snapshot, StepRecord, StopReason, Verdict, run,
     verify,
