@@ -214,3 +214,21 @@ fn elastic_materials_are_left_alone_and_named() {
     assert_eq!(report.unreduced_materials[0].name, "base");
     assert_eq!(report.unreduced_materials[0].model, "linear_elasticity");
 }
+
+/// `a3d-init fos` without inputs is a usage error (exit 2) that says what to
+/// give; `verify --fos` takes the same route.
+#[test]
+fn fos_command_without_inputs_is_a_usage_error() {
+    for args in [vec!["fos"], vec!["verify", "--fos"]] {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_a3d-init"))
+            .args(&args)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            stderr.contains("give a folder written by `map`"),
+            "{stderr}"
+        );
+    }
+}

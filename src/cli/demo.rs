@@ -169,6 +169,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         damping: None,
         out: Some(target.join("verify")),
         force: true,
+        fos: false,
     };
     let (report, verify_dir) = verify::verify_core(&verify_args)?;
     println!(

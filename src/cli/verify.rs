@@ -39,6 +39,9 @@ pub struct VerifyArgs {
     pub out: Option<PathBuf>,
     #[arg(long)]
     pub force: bool,
+    /// Find the factor of safety by strength reduction instead (as `a3d-init fos`).
+    #[arg(long)]
+    pub fos: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -190,6 +193,9 @@ fn history_plot(path: &Path, report: &mpm::RunReport) -> anyhow::Result<()> {
 }
 
 pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
+    if args.fos {
+        return super::fos::run(super::fos::FosArgs::from_verify(&args));
+    }
     let (report, target) = verify_core(&args)?;
     print_report(&report, &target);
     if report.verdict.is_equilibrium() {
