@@ -23,15 +23,17 @@
 //! * **does not settle** as soon as any MP has moved more than
 //!   [`FosSettings::failure_fraction`] × H, or an MP leaves the mesh;
 //! * otherwise, at t = W, with Δu₃ and Δu₄ the largest MP movements over the
-//!   third and the fourth quarter of the window: **does not settle** when
-//!   Δu₄ > [`FosSettings::growth_ratio`] × Δu₃ and Δu₄ >
-//!   [`FosSettings::noise_fraction`] × H (the motion is not dying out: a
-//!   mechanism keeps moving as fast or faster, Δu₄ ≥ Δu₃, while a settling
-//!   state's motion decays); **settles** otherwise. Slow creep near the limit
-//!   counts as not settling, which errs on the safe side.
+//!   third and the fourth quarter of the window and q = Δu₄/Δu₃: the motion
+//!   **settles** when Δu₄ ≤ [`FosSettings::noise_fraction`] × H (at rest);
+//!   it **does not settle** when q > [`FosSettings::growth_ratio`] (0.9: the
+//!   motion is not dying out; a mechanism keeps moving as fast or faster,
+//!   q ≥ 1), or when the decaying motion, extrapolated geometrically,
+//!   u∞ = u(W) + Δu₄·q/(1 − q), would still pass the failure displacement;
+//!   it **settles** otherwise.
 //!
-//! The factor is bracketed from F = [`FosSettings::start`] by doubling or
-//! halving, then bisected until the bracket (last settling F, first F that does
+//! The factor is bracketed from F = [`FosSettings::start`] by multiplying or
+//! dividing by [`FosSettings::step`] (1.25: slopes of interest lie near
+//! F = 1, and every settling trial costs a full window), then bisected until the bracket (last settling F, first F that does
 //! not settle) is at most 2 × [`FosSettings::tolerance`] wide; the reported
 //! factor is its midpoint. Each trial starts from the same state, so the
 //! result is bit-identical for any number of threads (the runner is). This
@@ -65,6 +67,8 @@ pub struct FosSettings {
     pub tolerance: f64,
     /// First trial factor (default 1).
     pub start: f64,
+    /// Factor between successive trials of the bracket search (default 1.25).
+    pub step: f64,
     /// The bracket search stops below `f_min` and above `f_max`
     /// (defaults 1/64 and 64).
     pub f_min: f64,
@@ -74,8 +78,8 @@ pub struct FosSettings {
     /// A trial does not settle once an MP has moved this fraction of H
     /// (default 0.01).
     pub failure_fraction: f64,
-    /// Largest accepted ratio of the last-quarter movement to the
-    /// third-quarter movement (default 0.5).
+    /// Largest accepted ratio q of the last-quarter movement to the
+    /// third-quarter movement (default 0.9).
     pub growth_ratio: f64,
     /// Last-quarter movement below this fraction of H always counts as
     /// settled (default 1e-4).
@@ -96,11 +100,12 @@ impl Default for FosSettings {
             },
             tolerance: 0.01,
             start: 1.0,
+            step: 1.25,
             f_min: 1.0 / 64.0,
             f_max: 64.0,
             window: None,
             failure_fraction: 0.01,
-            growth_ratio: 0.5,
+            growth_ratio: 0.9,
             noise_fraction: 1e-4,
             tied_nodes: Vec::new(),
         }
@@ -126,6 +131,9 @@ impl FosSettings {
                 self.start, self.f_min, self.f_max
             ));
         }
+        if !(self.step > 1.0 && self.step.is_finite()) {
+            return bad(format!("step {} must be > 1", self.step));
+        }
         if self.window.is_some_and(|w| !positive(w)) {
             return bad("window must be > 0".into());
         }
@@ -148,6 +156,9 @@ pub enum TrialEnd {
     Growing,
     /// An MP moved more than the failure displacement.
     DisplacementLimit,
+    /// The motion decays, but so slowly that its geometric extrapolation
+    /// passes the failure displacement.
+    ProjectedLimit,
     /// An MP left the mesh.
     LostPoints,
 }
@@ -308,7 +319,7 @@ pub fn strength_reduction(
             if factor >= settings.f_max {
                 break FosOutcome::AboveRange;
             }
-            factor = (2.0 * factor).min(settings.f_max);
+            factor = (settings.step * factor).min(settings.f_max);
         } else {
             upper = Some(factor);
             if lower.is_some() {
@@ -317,7 +328,7 @@ pub fn strength_reduction(
             if factor <= settings.f_min {
                 break FosOutcome::BelowRange;
             }
-            factor = (0.5 * factor).max(settings.f_min);
+            factor = (factor / settings.step).max(settings.f_min);
         }
     };
     // Bisect.
@@ -470,12 +481,18 @@ fn trial(
         (Some(end), _) => end,
         // Window not completed (step cap): no evidence that it settled.
         (None, None) => TrialEnd::Growing,
-        (None, Some((third, fourth)))
-            if fourth > limits.growth_ratio * third && fourth > limits.noise =>
-        {
+        (None, Some((_, fourth))) if fourth <= limits.noise => TrialEnd::Settled,
+        (None, Some((third, fourth))) if fourth > limits.growth_ratio * third => {
             TrialEnd::Growing
         }
-        (None, Some(_)) => TrialEnd::Settled,
+        (None, Some((third, fourth))) => {
+            let q = fourth / third;
+            if max_displacement + fourth * q / (1.0 - q) > limits.failure {
+                TrialEnd::ProjectedLimit
+            } else {
+                TrialEnd::Settled
+            }
+        }
     };
     let trial = Trial {
         factor,
