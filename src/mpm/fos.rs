@@ -482,9 +482,7 @@ fn trial(
         // Window not completed (step cap): no evidence that it settled.
         (None, None) => TrialEnd::Growing,
         (None, Some((_, fourth))) if fourth <= limits.noise => TrialEnd::Settled,
-        (None, Some((third, fourth))) if fourth > limits.growth_ratio * third => {
-            TrialEnd::Growing
-        }
+        (None, Some((third, fourth))) if fourth > limits.growth_ratio * third => TrialEnd::Growing,
         (None, Some((third, fourth))) => {
             let q = fourth / third;
             if max_displacement + fourth * q / (1.0 - q) > limits.failure {
