@@ -308,8 +308,7 @@ pub fn print_report(report: &FosReport, target: &Path, elapsed: f64) {
     if let Some(m) = &report.mechanism {
         println!(
             "mechanism  F = {:.4}: {} MPs in motion (fos_mechanism.svg, fos_mechanism.vtu)",
-            m.factor,
-            m.in_motion.iter().filter(|&&b| b).count()
+            m.factor, m.points_in_motion
         );
     }
     println!(

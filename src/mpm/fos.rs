@@ -204,18 +204,28 @@ pub enum FosOutcome {
 
 /// The state at the end of the first trial that did not settle (the smallest
 /// such F): the failure mechanism.
+/// The per-MP arrays are left out of the serialised form (they are for
+/// plots and VTU files).
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Mechanism {
     pub factor: f64,
     pub time: f64,
+    /// Number of MPs in motion.
+    pub points_in_motion: usize,
     /// Current MP positions (z = 0 in 2D).
+    #[serde(skip)]
     pub positions: Vec<[f64; 3]>,
+    #[serde(skip)]
     pub displacements: Vec<[f64; 3]>,
+    #[serde(skip)]
     pub velocities: Vec<[f64; 3]>,
     /// Effective stress σ′ (kPa).
+    #[serde(skip)]
     pub stresses: Vec<[f64; 6]>,
+    #[serde(skip)]
     pub plastic: Vec<bool>,
     /// MPs in motion: speed at least 10 % of the largest MP speed.
+    #[serde(skip)]
     pub in_motion: Vec<bool>,
 }
 
@@ -513,15 +523,17 @@ fn capture(simulation: &Simulation, factor: f64) -> Mechanism {
         .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
         .collect();
     let top = speed.iter().copied().fold(0.0, f64::max);
+    let in_motion: Vec<bool> = speed.iter().map(|&s| top > 0.0 && s >= 0.1 * top).collect();
     Mechanism {
         factor,
         time: simulation.time(),
+        points_in_motion: in_motion.iter().filter(|&&b| b).count(),
         positions: simulation.positions(),
         displacements: simulation.displacements(),
         velocities,
         stresses: simulation.effective_stresses(),
         plastic: simulation.plastic_flags(),
-        in_motion: speed.iter().map(|&s| top > 0.0 && s >= 0.1 * top).collect(),
+        in_motion,
     }
 }
 
