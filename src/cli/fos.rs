@@ -322,6 +322,39 @@ pub fn print_report(report: &FosReport, target: &Path, elapsed: f64) {
     );
 }
 
+/// The demo's two analyses of one mapped state: with every pore pressure set
+/// to zero, and with the mapped pore pressures. Writes `fos_zero_pwp/` and
+/// `fos_mapped/` under `target`; returns both reports with their folders.
+pub fn zero_and_mapped(
+    model: &AnuraModel,
+    points: &[MaterialPoint],
+    states: &[MpState],
+    cps: Option<&CpsDocument>,
+    target: &Path,
+) -> anyhow::Result<[(FosReport, PathBuf); 2]> {
+    let settings = settings(cps, None, 0.01, None);
+    let inputs: Vec<&Path> = Vec::new();
+    let zero = analyse_and_write(
+        model,
+        points,
+        &without_pore_pressure(states),
+        &settings,
+        &target.join("fos_zero_pwp"),
+        true,
+        &inputs,
+    )?;
+    let mapped = analyse_and_write(
+        model,
+        points,
+        states,
+        &settings,
+        &target.join("fos_mapped"),
+        true,
+        &inputs,
+    )?;
+    Ok([zero, mapped])
+}
+
 pub fn run(args: FosArgs) -> anyhow::Result<()> {
     let started = std::time::Instant::now();
     let Loaded {
