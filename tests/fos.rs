@@ -18,11 +18,20 @@ const PHI: f64 = 35.0;
 const THICKNESS: f64 = 1.0;
 
 fn layer(saturated_soil: bool) -> (AnuraModel, Vec<MaterialPoint>, Vec<MpState>, FosSettings) {
-    // Associated flow (ψ = φ′): the infinite-slope references assume slip on
-    // planes parallel to the surface with τ/σ′n = tan φ′ there, which is the
-    // continuum collapse state only for an associated material; with ψ = 0
-    // the continuum fails at τ/σ′n = sin φ′ (Davis 1968).
-    let dry = mohr_coulomb_material(2e4, 0.3, 2650.0, 0.4, PHI, 0.0, PHI);
+    layer_with_dilatancy(saturated_soil, PHI)
+}
+
+/// A periodic layer 1 m thick (0.25 m long, 2 × 8 cells) at β = 20° on a
+/// fixed base, φ′ = 35°, c′ = 0, with the exact infinite-slope stresses.
+fn layer_with_dilatancy(
+    saturated_soil: bool,
+    dilatancy: f64,
+) -> (AnuraModel, Vec<MaterialPoint>, Vec<MpState>, FosSettings) {
+    // The limit-equilibrium references assume slip on planes parallel to the
+    // surface with τ/σ′n = tan φ′ there: the continuum collapse state of an
+    // associated material (ψ = φ′). With ψ = 0 the continuum fails at
+    // τ/σ′n = sin φ′ instead (Davis 1968), which has its own test.
+    let dry = mohr_coulomb_material(2e4, 0.3, 2650.0, 0.4, PHI, 0.0, dilatancy);
     let material = if saturated_soil { saturated(dry) } else { dry };
     let (model, tied) = inclined_layer_tri3(BETA, THICKNESS, 0.25, 2, 8, material);
     let points = place_points(&model);
@@ -72,6 +81,24 @@ fn dry_infinite_slope_matches_tan_phi_over_tan_beta() {
     assert!(
         (report.factor / reference - 1.0).abs() < 0.05,
         "FS = {} vs tan φ′/tan β = {reference}\n{}",
+        report.factor,
+        show(&report)
+    );
+}
+
+/// Reference: the same dry slope of a non-associated material (ψ = 0)
+/// collapses in simple shear at τ/σ′n = sin φ′_F on planes parallel to the
+/// surface (Davis 1968, "Theories of plasticity and the failure of soil
+/// masses"): sin φ′_F = tan β, so FS = tan φ′ / tan(asin(tan β)). Within 5 %.
+#[test]
+fn non_associated_infinite_slope_matches_davis() {
+    let (model, points, states, settings) = layer_with_dilatancy(false, 0.0);
+    let report = strength_reduction(&model, &points, &states, &settings).unwrap();
+    let reference = PHI.to_radians().tan() / BETA.to_radians().tan().asin().tan();
+    assert_eq!(report.outcome, FosOutcome::Bracketed);
+    assert!(
+        (report.factor / reference - 1.0).abs() < 0.05,
+        "FS = {} vs tan φ′/tan(asin(tan β)) = {reference}\n{}",
         report.factor,
         show(&report)
     );
