@@ -1,6 +1,7 @@
 //! `a3d-init demo` on the shipped slope: counts, no null points, the calibrated
-//! h/l in the paper's range, one MAPF row per MP, readable plots, and a folder
-//! that `inspect` reads back without warnings.
+//! h/l in the paper's range, one MAPF row per MP, readable plots, the two
+//! factors of safety printed as measured, and a folder that `inspect` reads
+//! back without warnings.
 
 use std::process::Command;
 
@@ -40,9 +41,26 @@ fn demo_runs_the_whole_chain() {
         "calibration.svg",
         "verify/verify.json",
         "verify/verify_history.svg",
+        "fos_zero_pwp/fos.json",
+        "fos_zero_pwp/fos_mechanism.svg",
+        "fos_mapped/fos.json",
+        "fos_mapped/fos_mechanism.svg",
     ] {
         let text = std::fs::read_to_string(out.join(f)).unwrap_or_default();
         assert!(text.len() > 1000, "{f} is written");
+    }
+    // Step 5 prints the two measured factors, the same as in fos.json (#18).
+    for (name, label) in [("fos_zero_pwp", "zero pwp:"), ("fos_mapped", "mapped pwp:")] {
+        let fos: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.join(name).join("fos.json")).unwrap(),
+        )
+        .unwrap();
+        let factor = fos["factor"].as_f64().unwrap();
+        let line = stdout.lines().find(|l| l.contains(label)).unwrap_or("");
+        assert!(
+            line.contains(&format!("FS = {factor:.2}")),
+            "{label} FS {factor} printed: {stdout}"
+        );
     }
     let svg = std::fs::read_to_string(out.join("pwp.svg")).unwrap();
     assert!(

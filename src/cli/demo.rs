@@ -28,6 +28,9 @@ pub struct DemoArgs {
     /// Replace an existing output folder.
     #[arg(long)]
     pub force: bool,
+    /// Skip step 5, the two factors of safety (strength reduction, about 30 s).
+    #[arg(long)]
+    pub no_fos: bool,
 }
 
 fn fixture_dir() -> anyhow::Result<PathBuf> {
@@ -180,6 +183,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         damping: None,
         out: Some(target.join("verify")),
         force: true,
+        fos: false,
     };
     let (outcome, verify_dir) = verify::verify_core(&verify_args)?;
     match &outcome.run {
@@ -210,6 +214,24 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
             d.affected, d.outside_because_of_defect
         );
     }
+    // 5. Factor of safety by strength reduction: zero pwp, then the mapped pwp.
+    if !args.no_fos {
+        let [(zero, _), (with_pwp, _)] = super::fos::zero_and_mapped(
+            &mapped.project.model,
+            pts,
+            &mapped.states,
+            mapped.project.cps.as_ref(),
+            &target,
+        )?;
+        println!(
+            "5 fos        zero pwp:   {}",
+            super::fos::factor_line(&zero)
+        );
+        println!(
+            "             mapped pwp: {}",
+            super::fos::factor_line(&with_pwp)
+        );
+    }
     println!(
         "\nfiles in {}/ ({:.1} s):",
         target.display(),
@@ -224,6 +246,11 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         "  MPM check        {}/verify.json, verify_history.svg, mps_start.vtu, mps_end.vtu",
         verify_dir.display()
     );
+    if !args.no_fos {
+        println!(
+            "  factor of safety fos_zero_pwp/, fos_mapped/ (fos.json, fos_trials.svg, fos_mechanism.svg, fos_mechanism.vtu)"
+        );
+    }
     println!(
         "  run-out          a3d-init run {} --time 2 --snapshots 0.3,0.8,1.2,2.0",
         target.display()

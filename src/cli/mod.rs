@@ -8,6 +8,7 @@ mod bench;
 pub mod calibrate;
 mod demo;
 mod diff;
+mod fos;
 mod inspect;
 pub mod map;
 pub mod output;
@@ -42,6 +43,8 @@ pub enum Command {
     Demo(demo::DemoArgs),
     /// Check with the built-in explicit MPM solver that a mapped state is in equilibrium under gravity.
     Verify(verify::VerifyArgs),
+    /// Factor of safety of a mapped state by strength reduction on the built-in MPM solver.
+    Fos(fos::FosArgs),
     /// Keep the explicit MPM solver going for a given time, with snapshots (run-out demonstration).
     Run(verify::RunArgs),
 }
@@ -92,5 +95,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Verify(args) => verify::run_verify(args),
         Command::Demo(args) => demo::run(args),
         Command::Run(args) => verify::run_run(args),
+        Command::Fos(args) => fos::run(args),
     }
 }

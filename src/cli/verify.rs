@@ -40,6 +40,9 @@ pub struct VerifyArgs {
     pub out: Option<PathBuf>,
     #[arg(long)]
     pub force: bool,
+    /// Find the factor of safety by strength reduction instead (as `a3d-init fos`).
+    #[arg(long)]
+    pub fos: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -372,6 +375,9 @@ pub fn verify_core(args: &VerifyArgs) -> anyhow::Result<(VerifyOutcome, PathBuf)
 }
 
 pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
+    if args.fos {
+        return super::fos::run(super::fos::FosArgs::from_verify(&args));
+    }
     let (outcome, target) = verify_core(&args)?;
     print_outcome(&outcome, &target);
     if outcome.equilibrium {

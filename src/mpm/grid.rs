@@ -141,6 +141,78 @@ impl<const D: usize, const NC: usize> Grid<D, NC> {
         count
     }
 
+    /// Ties mesh nodes together: in every pair (primary, secondary), 0-based
+    /// mesh node indices, the secondary node's corners are redirected to the
+    /// primary node, so both share one set of degrees of freedom (a periodic
+    /// boundary). The element shapes keep their own coordinates; fixities are
+    /// combined. Chains (a ← b ← c) resolve to their first node. An element
+    /// that would then use one node twice, or a node that is not an element
+    /// corner, is an error. Face neighbours are not joined: a material point
+    /// that crosses a tied boundary leaves the mesh.
+    pub fn tie(&mut self, pairs: &[(u32, u32)]) -> Result<(), MpmError> {
+        if pairs.is_empty() {
+            return Ok(());
+        }
+        let mut compact = HashMap::with_capacity(self.mesh_node.len());
+        for (c, &n) in self.mesh_node.iter().enumerate() {
+            compact.insert(n, c as u32);
+        }
+        let lookup = |n: u32| {
+            compact.get(&n).copied().ok_or_else(|| {
+                MpmError::InvalidMesh(format!(
+                    "tied node {} is not an element corner",
+                    n as u64 + 1
+                ))
+            })
+        };
+        let mut target: Vec<u32> = (0..self.mesh_node.len() as u32).collect();
+        for &(primary, secondary) in pairs {
+            let (p, s) = (lookup(primary)?, lookup(secondary)?);
+            target[s as usize] = p;
+        }
+        // Resolve chains; a cycle longer than the node count is an error.
+        let n = target.len();
+        let mut resolved = target.clone();
+        for (c, slot) in resolved.iter_mut().enumerate() {
+            let mut r = c as u32;
+            for _ in 0..=n {
+                if target[r as usize] == r {
+                    break;
+                }
+                r = target[r as usize];
+            }
+            if target[r as usize] != r {
+                return Err(MpmError::InvalidMesh("tied nodes form a cycle".into()));
+            }
+            *slot = r;
+        }
+        for c in 0..n {
+            let r = resolved[c] as usize;
+            if r != c {
+                for d in 0..D {
+                    let fixed = self.fixed[c][d];
+                    self.fixed[r][d] |= fixed;
+                }
+            }
+        }
+        for (e, element) in self.elements.iter_mut().enumerate() {
+            for k in 0..NC {
+                element.corners[k] = resolved[element.corners[k] as usize];
+            }
+            for a in 0..NC {
+                for b in a + 1..NC {
+                    if element.corners[a] == element.corners[b] {
+                        return Err(MpmError::InvalidMesh(format!(
+                            "element {} would use one node twice after tying",
+                            e + 1
+                        )));
+                    }
+                }
+            }
+        }
+        Ok(())
+    }
+
     pub fn n_nodes(&self) -> usize {
         self.mesh_node.len()
     }

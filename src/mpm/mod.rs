@@ -15,10 +15,12 @@
 //! Entry points: [`verify`] runs a damped simulation until the state settles (or
 //! a step/time limit) and returns a [`RunReport`] with a [`Verdict`]; [`run()`]
 //! runs the same solver and can also return [`Snapshot`]s; [`Simulation`] gives
-//! step-by-step control. The module is pure: it consumes [`crate::model`] data,
+//! step-by-step control; [`fos`] finds a factor of safety by strength
+//! reduction on the same runner. The module is pure: it consumes [`crate::model`] data,
 //! does no I/O and prints nothing; it knows nothing about file formats or the
 //! mapping kernels.
 
+pub mod fos;
 pub mod grid;
 pub mod material;
 pub mod mohr_coulomb;
@@ -29,6 +31,7 @@ pub mod step;
 #[doc(hidden)]
 pub mod testing;
 
+pub use fos::{FosError, FosOutcome, FosReport, FosSettings, strength_reduction};
 pub use material::{Elasticity, SolidModel};
 pub use mohr_coulomb::{MohrCoulomb, ReturnKind, ReturnMap};
 pub use run::{

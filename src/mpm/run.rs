@@ -410,7 +410,7 @@ fn snapshot(simulation: &Simulation) -> Snapshot {
 }
 
 /// y-extent of the nodes of active elements (all elements if none is active).
-fn model_height(model: &AnuraModel) -> f64 {
+pub(crate) fn model_height(model: &AnuraModel) -> f64 {
     let mesh = &model.mesh;
     let mut low = f64::INFINITY;
     let mut high = f64::NEG_INFINITY;

@@ -717,6 +717,28 @@ impl Simulation {
         with_solver!(&self.inner, s => s.particles.iter().map(|p| p.stress).collect())
     }
 
+    /// MP velocities (m/s; z = 0 in 2D).
+    pub fn velocities(&self) -> Vec<[f64; 3]> {
+        with_solver!(&self.inner, s => s.particles.iter().map(|p| widen(&p.velocity)).collect())
+    }
+
+    /// Number of MPs that left the mesh.
+    pub fn lost_points(&self) -> usize {
+        with_solver!(&self.inner, s => s.particles.iter().filter(|p| p.lost).count())
+    }
+
+    /// Ties pairs of mesh nodes (0-based: primary, secondary) so that they
+    /// share their degrees of freedom, e.g. the two ends of a periodic layer;
+    /// see [`super::grid::Grid::tie`]. Call it before the first step.
+    pub fn tie_nodes(&mut self, pairs: &[(u32, u32)]) -> Result<(), MpmError> {
+        if self.steps() > 0 {
+            return Err(MpmError::InvalidSettings(
+                "nodes can only be tied before the first step".into(),
+            ));
+        }
+        with_solver!(&mut self.inner, s => s.grid.tie(pairs))
+    }
+
     /// Per MP: yielded in any step so far.
     pub fn plastic_flags(&self) -> Vec<bool> {
         with_solver!(&self.inner, s => s.particles.iter().map(|p| p.plastic).collect())

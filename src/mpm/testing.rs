@@ -13,6 +13,13 @@
 //!   rule with volume V/4. A stand-in for the real placement module.
 //! * [`geostatic_states`]: σ′v = −γ′·depth, σ′h = K0·σ′v, hydrostatic pore
 //!   pressure below an optional water table.
+//! * [`inclined_layer_tri3`]: a periodic layer parallel to a slope of angle β
+//!   on a fixed base (its two ends tied node to node), with
+//!   [`infinite_slope_states`], the exact infinite-slope stresses with
+//!   optional seepage parallel to the surface.
+//! * [`vertical_cut_tri3`]: a vertical cut on a foundation, each square cell
+//!   split into four triangles through its centre, with
+//!   [`cut_geostatic_states`].
 //!
 //! Nothing here reads files; it is plain data construction.
 
@@ -341,4 +348,188 @@ pub fn zero_states(points: &[MaterialPoint]) -> Vec<MpState> {
         };
         points.len()
     ]
+}
+
+/// A layer of thickness `thickness` (measured normal to the surface) and
+/// length `length` along a slope of angle `beta_deg` (falling towards +x),
+/// meshed with `nx` × `ny` cells of two TRI3 each in the slope's own frame.
+/// The base is fixed; the end columns of nodes are tied node to node (mesh
+/// node (nx, j) to (0, j)), which makes the layer periodic: an infinite
+/// slope. Returns the model and the tied pairs (0-based mesh nodes).
+pub fn inclined_layer_tri3(
+    beta_deg: f64,
+    thickness: f64,
+    length: f64,
+    nx: usize,
+    ny: usize,
+    material: Material,
+) -> (AnuraModel, Vec<(u32, u32)>) {
+    let (sin, cos) = beta_deg.to_radians().sin_cos();
+    let mut model = column_tri3(length, thickness, nx, ny, material);
+    // Map (s, n) of the rectangle to x = s·e_s + n·e_n with e_s = (cos β, −sin β)
+    // and e_n = (sin β, cos β): a rotation, so orientation is kept.
+    for (node, fixity) in model.mesh.nodes.iter_mut().zip(&mut model.solid_fixity) {
+        let (s, n) = (node[0], node[1]);
+        *node = [s * cos + n * sin, -s * sin + n * cos, 0.0];
+        *fixity = if n == 0.0 {
+            [true, true, false]
+        } else {
+            [false; 3]
+        };
+    }
+    let tied = (0..=ny)
+        .map(|j| ((j * (nx + 1)) as u32, (j * (nx + 1) + nx) as u32))
+        .collect();
+    (model, tied)
+}
+
+/// The exact stress of an infinite slope of angle `beta_deg` whose surface
+/// passes through (0, `surface_y0`) (falling towards +x): at depth d normal
+/// to the surface, σnn = −γ·d·cos β and τ = γ·d·sin β (γ at S = 1), the
+/// effective stress along the slope and out of plane K·σ′nn. With
+/// `seepage`, flow parallel to the surface with the water table at the
+/// surface: p = −γw·z·cos²β (z the vertical depth), otherwise p = 0.
+pub fn infinite_slope_states(
+    model: &AnuraModel,
+    points: &[MaterialPoint],
+    beta_deg: f64,
+    surface_y0: f64,
+    k: f64,
+    gravity: f64,
+    seepage: bool,
+) -> Vec<MpState> {
+    let (sin, cos) = beta_deg.to_radians().sin_cos();
+    let gamma_w = crate::model::gamma_water(gravity);
+    let e_s = [cos, -sin];
+    let e_n = [sin, cos];
+    points
+        .iter()
+        .map(|p| {
+            let gamma = model.materials[p.material as usize - 1].gamma_at_saturation(1.0, gravity);
+            let (x, y) = (p.position[0], p.position[1]);
+            let z = (surface_y0 - x * sin / cos - y).max(0.0);
+            let d = z * cos;
+            let pwp = if seepage {
+                -gamma_w * z * cos * cos
+            } else {
+                0.0
+            };
+            let normal = -gamma * d * cos;
+            let shear = gamma * d * sin;
+            let along = k * (normal - pwp) + pwp;
+            // σ = σss e_s⊗e_s + σnn e_n⊗e_n + τ (e_s⊗e_n + e_n⊗e_s)
+            let t = |a: usize, b: usize| {
+                along * e_s[a] * e_s[b]
+                    + normal * e_n[a] * e_n[b]
+                    + shear * (e_s[a] * e_n[b] + e_n[a] * e_s[b])
+            };
+            MpState {
+                pwp,
+                total: [t(0, 0), t(1, 1), along, t(0, 1), 0.0, 0.0],
+                saturation: 1.0,
+            }
+        })
+        .collect()
+}
+
+/// A vertical cut of height `height` in plane strain: ground at y = height
+/// for x < `behind`, at y = 0 for `behind` < x < `behind` + `front`, on a
+/// foundation down to y = −`depth`. Square cells of size `cell` (the
+/// lengths must be multiples of it), each split into four TRI3 through its
+/// centre (crossed diagonals, free of volumetric locking in plane strain);
+/// the cells above the ground in front of the cut are material 0, so the
+/// mechanism can move into them. Base fixed, sides on rollers.
+pub fn vertical_cut_tri3(
+    height: f64,
+    behind: f64,
+    front: f64,
+    depth: f64,
+    cell: f64,
+    material: Material,
+) -> AnuraModel {
+    let count = |l: f64| (l / cell).round() as usize;
+    let (nb, nf, nh, nd) = (count(behind), count(front), count(height), count(depth));
+    let (nx, ny) = (nb + nf, nd + nh);
+    let width = cell * nx as f64;
+    let corner = |i: usize, j: usize| (j * (nx + 1) + i) as u32;
+    let mut nodes = Vec::new();
+    for j in 0..=ny {
+        for i in 0..=nx {
+            nodes.push([cell * i as f64, cell * j as f64 - depth, 0.0]);
+        }
+    }
+    let mut connectivity = Vec::new();
+    let mut element_material = Vec::new();
+    for j in 0..ny {
+        for i in 0..nx {
+            let centre = nodes.len() as u32;
+            nodes.push([
+                cell * (i as f64 + 0.5),
+                cell * (j as f64 + 0.5) - depth,
+                0.0,
+            ]);
+            let (a, b, c, d) = (
+                corner(i, j),
+                corner(i + 1, j),
+                corner(i + 1, j + 1),
+                corner(i, j + 1),
+            );
+            let active = i < nb || j < nd;
+            for (p, q) in [(a, b), (b, c), (c, d), (d, a)] {
+                connectivity.extend_from_slice(&[p, q, centre]);
+                element_material.push(u32::from(active));
+            }
+        }
+    }
+    let fixity = nodes
+        .iter()
+        .map(|p| {
+            let base = p[1] <= -depth + 1e-9 * cell;
+            let side = p[0] <= 1e-9 * cell || p[0] >= width - 1e-9 * cell;
+            [side || base, base, false]
+        })
+        .collect();
+    let n_elements = connectivity.len() / 3;
+    let mut model = finish(
+        Mesh {
+            dimension: Dimension::PlaneStrain,
+            element_type: ElementType::Tri3,
+            nodes,
+            connectivity,
+        },
+        material,
+        fixity,
+        n_elements,
+        3,
+    );
+    for (e, &m) in element_material.iter().enumerate() {
+        model.element_material[e] = m;
+        model.mp_counts[e] = (if m == 0 { 0 } else { 3 }, 0);
+    }
+    model
+}
+
+/// Geostatic state of [`vertical_cut_tri3`]: σv = −γ·(ground − y) with the
+/// ground at `height` for x < `behind` and at 0 beyond, σh = K0·σv, dry.
+pub fn cut_geostatic_states(
+    model: &AnuraModel,
+    points: &[MaterialPoint],
+    height: f64,
+    behind: f64,
+    k0: f64,
+    gravity: f64,
+) -> Vec<MpState> {
+    points
+        .iter()
+        .map(|p| {
+            let gamma = model.materials[p.material as usize - 1].gamma_at_saturation(1.0, gravity);
+            let ground = if p.position[0] < behind { height } else { 0.0 };
+            let v = -gamma * (ground - p.position[1]).max(0.0);
+            MpState {
+                pwp: 0.0,
+                total: [k0 * v, v, k0 * v, 0.0, 0.0, 0.0],
+                saturation: 1.0,
+            }
+        })
+        .collect()
 }

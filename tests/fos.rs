@@ -1,0 +1,261 @@
+//! Strength reduction (`mpm::fos`, issue #18) against closed-form stability
+//! references: dry and seeping infinite slopes (periodic layers on a fixed
+//! base) and the critical height of a vertical cut in a cohesive soil; and the
+//! same factor on one and two threads.
+
+use a3d_init::model::{AnuraModel, MaterialPoint, MpState};
+use a3d_init::mpm::testing::{
+    cut_geostatic_states, inclined_layer_tri3, infinite_slope_states, mohr_coulomb_material,
+    place_points, saturated, vertical_cut_tri3,
+};
+use a3d_init::mpm::{FosOutcome, FosReport, FosSettings, strength_reduction};
+
+const G: f64 = 9.81;
+
+/// Slope angle and friction angle of the infinite-slope cases.
+const BETA: f64 = 20.0;
+const PHI: f64 = 35.0;
+const THICKNESS: f64 = 1.0;
+
+fn layer(saturated_soil: bool) -> (AnuraModel, Vec<MaterialPoint>, Vec<MpState>, FosSettings) {
+    layer_with_dilatancy(saturated_soil, PHI)
+}
+
+/// A periodic layer 1 m thick (0.25 m long, 2 × 8 cells) at β = 20° on a
+/// fixed base, φ′ = 35°, c′ = 0, with the exact infinite-slope stresses.
+fn layer_with_dilatancy(
+    saturated_soil: bool,
+    dilatancy: f64,
+) -> (AnuraModel, Vec<MaterialPoint>, Vec<MpState>, FosSettings) {
+    // The limit-equilibrium references assume slip on planes parallel to the
+    // surface with τ/σ′n = tan φ′ there: the continuum collapse state of an
+    // associated material (ψ = φ′). With ψ = 0 the continuum fails at
+    // τ/σ′n = sin φ′ instead (Davis 1968), which has its own test.
+    let dry = mohr_coulomb_material(2e4, 0.3, 2650.0, 0.4, PHI, 0.0, dilatancy);
+    let material = if saturated_soil { saturated(dry) } else { dry };
+    let (model, tied) = inclined_layer_tri3(BETA, THICKNESS, 0.25, 2, 8, material);
+    let points = place_points(&model);
+    let surface_y0 = THICKNESS / BETA.to_radians().cos();
+    let states = infinite_slope_states(&model, &points, BETA, surface_y0, 1.0, G, saturated_soil);
+    let settings = FosSettings {
+        tied_nodes: tied,
+        ..FosSettings::default()
+    };
+    (model, points, states, settings)
+}
+
+fn show(report: &FosReport) -> String {
+    let trials: Vec<String> = report
+        .trials
+        .iter()
+        .map(|t| {
+            format!(
+                "F={:.4} {:?} u={:.3e} du3={:?} du4={:?}",
+                t.factor,
+                t.end,
+                t.max_displacement,
+                t.third_quarter_movement,
+                t.last_quarter_movement
+            )
+        })
+        .collect();
+    format!(
+        "F = {:.4} ({:?}, {} trials, W = {:.3} s)\n  {}",
+        report.factor,
+        report.outcome,
+        report.iterations,
+        report.window,
+        trials.join("\n  ")
+    )
+}
+
+/// Reference: dry cohesionless infinite slope, FS = tan φ′ / tan β
+/// (e.g. Duncan, Wright & Brandon 2014, *Soil Strength and Slope Stability*,
+/// §6.2). Within 5 %.
+#[test]
+fn dry_infinite_slope_matches_tan_phi_over_tan_beta() {
+    let (model, points, states, settings) = layer(false);
+    let report = strength_reduction(&model, &points, &states, &settings).unwrap();
+    let reference = PHI.to_radians().tan() / BETA.to_radians().tan();
+    assert_eq!(report.outcome, FosOutcome::Bracketed);
+    assert!(
+        (report.factor / reference - 1.0).abs() < 0.05,
+        "FS = {} vs tan φ′/tan β = {reference}\n{}",
+        report.factor,
+        show(&report)
+    );
+}
+
+/// Reference: the same dry slope of a non-associated material (ψ = 0)
+/// collapses in simple shear at τ/σ′n = sin φ′_F on planes parallel to the
+/// surface (Davis 1968, "Theories of plasticity and the failure of soil
+/// masses"): sin φ′_F = tan β, so FS = tan φ′ / tan(asin(tan β)). Within 5 %.
+#[test]
+fn non_associated_infinite_slope_matches_davis() {
+    let (model, points, states, settings) = layer_with_dilatancy(false, 0.0);
+    let report = strength_reduction(&model, &points, &states, &settings).unwrap();
+    let reference = PHI.to_radians().tan() / BETA.to_radians().tan().asin().tan();
+    assert_eq!(report.outcome, FosOutcome::Bracketed);
+    assert!(
+        (report.factor / reference - 1.0).abs() < 0.05,
+        "FS = {} vs tan φ′/tan(asin(tan β)) = {reference}\n{}",
+        report.factor,
+        show(&report)
+    );
+}
+
+/// Reference: cohesionless infinite slope with seepage parallel to the
+/// surface and the water table at the surface, pore pressure
+/// p = −γw·z·cos²β: FS = (γ′/γsat)·tan φ′ / tan β (Duncan, Wright & Brandon
+/// 2014, §6.2). Within 5 %.
+#[test]
+fn seeping_infinite_slope_matches_buoyant_ratio() {
+    let (model, points, states, settings) = layer(true);
+    let report = strength_reduction(&model, &points, &states, &settings).unwrap();
+    let gamma_sat = model.materials[0].gamma_at_saturation(1.0, G);
+    let gamma_buoyant = gamma_sat - a3d_init::model::gamma_water(G);
+    let reference = gamma_buoyant / gamma_sat * PHI.to_radians().tan() / BETA.to_radians().tan();
+    assert_eq!(report.outcome, FosOutcome::Bracketed);
+    assert!(
+        (report.factor / reference - 1.0).abs() < 0.05,
+        "FS = {} vs (γ′/γsat)·tan φ′/tan β = {reference}\n{}",
+        report.factor,
+        show(&report)
+    );
+}
+
+/// A vertical cut of `height` in a Tresca soil (φ = 0, c, no tension
+/// cut-off), 1.5 H of ground behind it, 1 H in front, a foundation 0.5 H
+/// deep; K0 = 1 so that the level ground carries no deviatoric stress.
+fn cut(
+    height: f64,
+    cohesion: f64,
+    cell: f64,
+) -> (AnuraModel, Vec<MaterialPoint>, Vec<MpState>, f64) {
+    let mut material = mohr_coulomb_material(2e4, 0.3, 2650.0, 0.3, 0.0, cohesion, 0.0);
+    material.tensile_strength = None;
+    let (behind, front) = (1.5 * height, 1.0 * height);
+    let model = vertical_cut_tri3(height, behind, front, 0.5 * height, cell, material);
+    let points = place_points(&model);
+    let states = cut_geostatic_states(&model, &points, height, behind, 1.0, G);
+    (model, points, states, behind)
+}
+
+/// Reference: the critical height of a vertical cut in a purely cohesive soil
+/// (φ = 0, no tension cut-off), Hc = 3.83·c/γ (Taylor 1948, *Fundamentals of
+/// Soil Mechanics*, stability number Ns = 3.83 for a vertical face; the
+/// limit-analysis bounds are 3.64 ≤ γHc/c ≤ 3.83, Pastor et al. 2000). A cut of
+/// height H then has FS = 3.83·c/(γH). Within 10 %.
+#[test]
+fn vertical_cut_matches_critical_height() {
+    let (height, cohesion) = (2.0, 10.0);
+    let (model, points, states, behind) = cut(height, cohesion, 0.2);
+    let report = strength_reduction(&model, &points, &states, &FosSettings::default()).unwrap();
+    let gamma = model.materials[0].gamma_at_saturation(1.0, G);
+    let reference = 3.83 * cohesion / (gamma * height);
+    assert_eq!(report.outcome, FosOutcome::Bracketed);
+    assert!(
+        (report.factor / reference - 1.0).abs() < 0.10,
+        "FS = {} vs 3.83 c/(γH) = {reference}\n{}",
+        report.factor,
+        show(&report)
+    );
+    let mechanism = report.mechanism.as_ref().unwrap();
+    assert!(mechanism.factor > report.factor);
+    // The mechanism is at the face: the MPs in motion lie near the cut.
+    let moving: Vec<&[f64; 3]> = points
+        .iter()
+        .zip(&mechanism.in_motion)
+        .filter(|(_, m)| **m)
+        .map(|(p, _)| &p.position)
+        .collect();
+    assert!(!moving.is_empty());
+    assert!(
+        moving
+            .iter()
+            .all(|p| p[0] > behind - 1.5 * height && p[1] > -0.5 * height),
+        "moving MPs far from the cut"
+    );
+}
+
+/// The same inputs give the same factor, trial by trial, on one and on two
+/// threads (the runner sums in a fixed order). The model has more than two
+/// rayon chunks of MPs, so two threads do split the work.
+#[test]
+fn same_factor_on_one_and_two_threads() {
+    let (model, points, states, _) = cut(2.0, 10.0, 0.25);
+    assert!(points.len() > 2048);
+    let settings = FosSettings {
+        tolerance: 0.05,
+        ..FosSettings::default()
+    };
+    let on = |threads: usize| {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| strength_reduction(&model, &points, &states, &settings).unwrap())
+    };
+    let (one, two) = (on(1), on(2));
+    assert_eq!(one.factor.to_bits(), two.factor.to_bits());
+    assert_eq!(one.trials, two.trials);
+    assert_eq!(one.mechanism, two.mechanism);
+}
+
+/// Materials that are not Mohr–Coulomb keep their strength and are named;
+/// a model without any Mohr–Coulomb material is an error.
+#[test]
+fn elastic_materials_are_left_alone_and_named() {
+    use a3d_init::mpm::FosError;
+    use a3d_init::mpm::testing::{column_tri3, elastic_material, geostatic_states};
+    let model = column_tri3(1.0, 1.0, 2, 2, elastic_material(1e4, 0.3, 2650.0, 0.4));
+    let points = place_points(&model);
+    let states = geostatic_states(&model, &points, G, 0.43, None);
+    let error = strength_reduction(&model, &points, &states, &FosSettings::default());
+    assert_eq!(error.unwrap_err(), FosError::NothingToReduce);
+
+    // The layer of the dry slope on an elastic base element row: the base
+    // material is named, the slope's factor is unchanged in substance.
+    let (mut model, points, states, settings) = layer(false);
+    let mut base = elastic_material(2e4, 0.3, 2650.0, 0.4);
+    base.index = 2;
+    base.name = "base".into();
+    model.materials.push(base);
+    let mut points = points;
+    let lowest = points
+        .iter()
+        .map(|p| p.position[1] + p.position[0] * BETA.to_radians().tan())
+        .fold(f64::INFINITY, f64::min);
+    for p in &mut points {
+        if p.position[1] + p.position[0] * BETA.to_radians().tan() < lowest + 0.05 {
+            p.material = 2;
+        }
+    }
+    let settings = FosSettings {
+        tolerance: 0.05,
+        ..settings
+    };
+    let report = strength_reduction(&model, &points, &states, &settings).unwrap();
+    assert_eq!(report.reduced_materials.len(), 1);
+    assert_eq!(report.unreduced_materials.len(), 1);
+    assert_eq!(report.unreduced_materials[0].name, "base");
+    assert_eq!(report.unreduced_materials[0].model, "linear_elasticity");
+}
+
+/// `a3d-init fos` without inputs is a usage error (exit 2) that says what to
+/// give; `verify --fos` takes the same route.
+#[test]
+fn fos_command_without_inputs_is_a_usage_error() {
+    for args in [vec!["fos"], vec!["verify", "--fos"]] {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_a3d-init"))
+            .args(&args)
+            .output()
+            .unwrap();
+        assert_eq!(o.status.code(), Some(2), "{args:?}");
+        let stderr = String::from_utf8_lossy(&o.stderr);
+        assert!(
+            stderr.contains("give a folder written by `map`"),
+            "{stderr}"
+        );
+    }
+}
