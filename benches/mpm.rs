@@ -8,10 +8,10 @@
 use std::time::Duration;
 
 use a3d_init::model::{AnuraModel, MaterialPoint, MpState};
-use a3d_init::mpm::testing::{
+use a3d_init::mpm::{RunSettings, Simulation};
+use a3d_init::testkit::{
     column_tet, column_tri3, geostatic_states, mohr_coulomb_material, place_points,
 };
-use a3d_init::mpm::{RunSettings, Simulation};
 use criterion::{Criterion, SamplingMode, Throughput, criterion_group, criterion_main};
 
 /// Steps per measured iteration.

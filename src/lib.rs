@@ -25,3 +25,5 @@ pub mod mpm;
 pub mod pipeline;
 pub mod place;
 pub mod state;
+#[cfg(any(test, feature = "testkit"))]
+pub mod testkit;

@@ -14,9 +14,9 @@ use common::{fixture, run as cli};
 
 use a3d_init::formats::gom::GomDocument;
 use a3d_init::model::{AnuraModel, Dimension, MaterialPoint, MpState, gamma_water};
-use a3d_init::mpm::testing::{column_tri3, elastic_material, geostatic_states, zero_states};
 use a3d_init::mpm::{Reason, RunOutput, RunSettings, Verdict, run, verify};
 use a3d_init::place::place_material_points;
+use a3d_init::testkit::{column_tri3, elastic_material, geostatic_states, zero_states};
 
 const G: f64 = 9.81;
 /// Stiff enough that the settling displacements stay far below an element.

@@ -4,11 +4,11 @@
 //! same factor on one and two threads.
 
 use a3d_init::model::{AnuraModel, MaterialPoint, MpState};
-use a3d_init::mpm::testing::{
+use a3d_init::mpm::{FosOutcome, FosReport, FosSettings, strength_reduction};
+use a3d_init::testkit::{
     cut_geostatic_states, inclined_layer_tri3, infinite_slope_states, mohr_coulomb_material,
     place_points, saturated, vertical_cut_tri3,
 };
-use a3d_init::mpm::{FosOutcome, FosReport, FosSettings, strength_reduction};
 
 const G: f64 = 9.81;
 
@@ -207,7 +207,7 @@ fn same_factor_on_one_and_two_threads() {
 #[test]
 fn elastic_materials_are_left_alone_and_named() {
     use a3d_init::mpm::FosError;
-    use a3d_init::mpm::testing::{column_tri3, elastic_material, geostatic_states};
+    use a3d_init::testkit::{column_tri3, elastic_material, geostatic_states};
     let model = column_tri3(1.0, 1.0, 2, 2, elastic_material(1e4, 0.3, 2650.0, 0.4));
     let points = place_points(&model);
     let states = geostatic_states(&model, &points, G, 0.43, None);

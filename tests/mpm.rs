@@ -8,13 +8,13 @@
 //! they are used.
 
 use a3d_init::model::{AnuraModel, MaterialPoint, MpState};
-use a3d_init::mpm::testing::{
-    column_tet, column_tri3, elastic_material, geostatic_states, mohr_coulomb_material,
-    place_points, saturated, zero_states,
-};
 use a3d_init::mpm::{
     Elasticity, MohrCoulomb, MpmError, Reason, ReturnKind, RunSettings, Simulation, SolidModel,
     Verdict, run, verify,
+};
+use a3d_init::testkit::{
+    column_tet, column_tri3, elastic_material, geostatic_states, mohr_coulomb_material,
+    place_points, saturated, zero_states,
 };
 use proptest::prelude::*;
 

@@ -552,7 +552,7 @@ fn capture(simulation: &Simulation, factor: f64) -> Mechanism {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mpm::testing::{elastic_material, mohr_coulomb_material};
+    use crate::testkit::{elastic_material, mohr_coulomb_material};
 
     #[test]
     fn reduction_divides_tan_phi_and_cohesion_and_caps_dilatancy() {

@@ -438,7 +438,7 @@ impl<const D: usize> SpatialHash<D> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mpm::testing::{column_tet, column_tri3, elastic_material};
+    use crate::testkit::{column_tet, column_tri3, elastic_material};
     use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 

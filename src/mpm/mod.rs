@@ -28,8 +28,6 @@ mod principal;
 pub mod run;
 pub mod shape;
 pub mod step;
-#[doc(hidden)]
-pub mod testing;
 
 pub use fos::{FosError, FosOutcome, FosReport, FosSettings, strength_reduction};
 pub use material::{Elasticity, SolidModel};

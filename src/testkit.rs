@@ -1,4 +1,5 @@
-//! Test and benchmark support for the MPM check (hidden from the docs):
+//! Test and benchmark support (feature `testkit`, not part of the default
+//! library API): for the MPM check,
 //! structured column meshes with their [`AnuraModel`], a minimal MP placement
 //! and analytic geostatic states.
 //!
@@ -23,10 +24,9 @@
 //!
 //! Nothing here reads files; it is plain data construction.
 
-use std::collections::HashMap;
-
-use super::shape::{Simplex, tet_old_local_to_global, tri3_local_to_global};
+use crate::model::generate;
 use crate::model::{AnuraModel, Dimension, ElementType, Material, MaterialPoint, Mesh, MpState};
+use crate::mpm::shape::{Simplex, tet_old_local_to_global, tri3_local_to_global};
 
 /// A dry linear elastic material (ρs in kg/m³, E in kPa).
 pub fn elastic_material(young: f64, poisson: f64, density_solid: f64, porosity: f64) -> Material {
@@ -137,7 +137,8 @@ pub fn column_tri3(
 }
 
 /// A 3D `tetrahedral_old` column `width` (x) × `height` (y) × `depth` (z)
-/// with `nx` × `ny` × `nz` cells of 6 tetrahedra each.
+/// with `nx` × `ny` × `nz` cells of 6 Kuhn tetrahedra each
+/// ([`generate::structured_tet_mesh`]); x and z sides on rollers, base fixed.
 pub fn column_tet(
     width: f64,
     height: f64,
@@ -147,93 +148,10 @@ pub fn column_tet(
     nz: usize,
     material: Material,
 ) -> AnuraModel {
-    let node = |i: usize, j: usize, k: usize| (k * (ny + 1) * (nx + 1) + j * (nx + 1) + i) as u32;
-    let mut nodes = Vec::new();
-    for k in 0..=nz {
-        for j in 0..=ny {
-            for i in 0..=nx {
-                nodes.push([
-                    width * i as f64 / nx as f64,
-                    height * j as f64 / ny as f64,
-                    depth * k as f64 / nz as f64,
-                ]);
-            }
-        }
-    }
-    let mut mid: HashMap<(u32, u32), u32> = HashMap::new();
-    let mut connectivity = Vec::new();
-    // The six monotone paths from corner (0,0,0) to (1,1,1) of a cell.
-    let paths = [
-        [0, 1, 2],
-        [0, 2, 1],
-        [1, 0, 2],
-        [1, 2, 0],
-        [2, 0, 1],
-        [2, 1, 0],
-    ];
-    for k in 0..nz {
-        for j in 0..ny {
-            for i in 0..nx {
-                for path in paths {
-                    let mut at = [i, j, k];
-                    let mut corners = [node(i, j, k); 4];
-                    for (step, &axis) in path.iter().enumerate() {
-                        at[axis] += 1;
-                        corners[step + 1] = node(at[0], at[1], at[2]);
-                    }
-                    let p = |n: u32| nodes[n as usize];
-                    let (a, b, c, d) = (p(corners[0]), p(corners[1]), p(corners[2]), p(corners[3]));
-                    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-                    let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-                    let w = [d[0] - a[0], d[1] - a[1], d[2] - a[2]];
-                    let triple = u[0] * (v[1] * w[2] - v[2] * w[1])
-                        - u[1] * (v[0] * w[2] - v[2] * w[0])
-                        + u[2] * (v[0] * w[1] - v[1] * w[0]);
-                    if triple < 0.0 {
-                        corners.swap(2, 3);
-                    }
-                    connectivity.extend_from_slice(&corners);
-                    for (x, y) in [(0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3)] {
-                        let key = (corners[x].min(corners[y]), corners[x].max(corners[y]));
-                        let id = *mid.entry(key).or_insert_with(|| {
-                            let (q, r) = (nodes[key.0 as usize], nodes[key.1 as usize]);
-                            nodes.push([
-                                0.5 * (q[0] + r[0]),
-                                0.5 * (q[1] + r[1]),
-                                0.5 * (q[2] + r[2]),
-                            ]);
-                            (nodes.len() - 1) as u32
-                        });
-                        connectivity.push(id);
-                    }
-                }
-            }
-        }
-    }
-    let fixity = nodes
-        .iter()
-        .map(|p| {
-            let base = p[1] == 0.0;
-            [
-                base || p[0] == 0.0 || p[0] == width,
-                base,
-                base || p[2] == 0.0 || p[2] == depth,
-            ]
-        })
-        .collect();
-    let n_elements = connectivity.len() / 10;
-    finish(
-        Mesh {
-            dimension: Dimension::Cartesian3D,
-            element_type: ElementType::TetOld,
-            nodes,
-            connectivity,
-        },
-        material,
-        fixity,
-        n_elements,
-        4,
-    )
+    let mesh = generate::structured_tet_mesh(width, 0.0, height, depth, nx, ny, nz);
+    let fixity = generate::box_fixities(&mesh);
+    let n_elements = mesh.n_elements();
+    finish(mesh, material, fixity, n_elements, 4)
 }
 
 fn finish(
