@@ -104,7 +104,8 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         force: args.force,
     };
     let mapped = map::compute(&map_args)?;
-    let inputs: Vec<&Path> = vec![&mapped.project.files.gom, &fem_file];
+    let mut inputs = map::project_inputs(&mapped.project.files);
+    inputs.push(&fem_file);
     let out = OutputDir::create(&args.out, args.force, &inputs)?;
     map::write(&mapped, &out)?;
     plot_curve(&out.path("calibration.svg"), &outcome)?;

@@ -6,7 +6,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{Context, bail};
+use anyhow::bail;
 use serde::Serialize;
 
 use super::inspect::{LoadedProject, load_project};
@@ -106,6 +106,23 @@ pub struct MapArgs {
     /// Replace an existing output folder.
     #[arg(long)]
     pub force: bool,
+}
+
+impl FemArgs {
+    /// Every file these options read (`--fem` files and `--fem-mesh`).
+    pub fn input_paths(&self) -> Vec<&Path> {
+        let mut out: Vec<&Path> = self.fem.iter().map(PathBuf::as_path).collect();
+        out.extend(self.fem_mesh.as_deref());
+        out
+    }
+}
+
+/// Every file of an Anura3D project that a run reads (GOM, CPS, OPD).
+pub fn project_inputs(files: &crate::formats::project::ProjectFiles) -> Vec<&Path> {
+    let mut out: Vec<&Path> = vec![&files.gom];
+    out.extend(files.cps.as_deref());
+    out.extend(files.opd.as_deref());
+    out
 }
 
 /// FEM nodes read and joined, with the reports of each file.
@@ -259,7 +276,7 @@ struct InputFile {
 
 fn describe(path: &Path) -> anyhow::Result<InputFile> {
     use sha2::{Digest, Sha256};
-    let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+    let bytes = crate::formats::input::read_bytes(path)?;
     let digest = Sha256::digest(&bytes);
     Ok(InputFile {
         path: path.to_path_buf(),
@@ -1019,11 +1036,8 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| default_out(&mapped.project.files.dir, &mapped.project.files.name));
-    let mut inputs: Vec<&Path> = vec![&mapped.project.files.gom];
-    if let Some(c) = &mapped.project.files.cps {
-        inputs.push(c);
-    }
-    inputs.extend(args.fem.fem.iter().map(PathBuf::as_path));
+    let mut inputs = project_inputs(&mapped.project.files);
+    inputs.extend(args.fem.input_paths());
     let out = OutputDir::create(&target, args.force, &inputs)?;
     let written = write(&mapped, &out)?;
     let target = out.commit()?;

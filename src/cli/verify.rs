@@ -55,6 +55,7 @@ pub struct RunArgs {
 
 struct Loaded {
     model_path: PathBuf,
+    state_path: PathBuf,
     project: super::inspect::LoadedProject,
     points: Vec<MaterialPoint>,
     states: Vec<MpState>,
@@ -102,6 +103,7 @@ fn load(args: &VerifyArgs, default_out: &str) -> anyhow::Result<Loaded> {
     });
     Ok(Loaded {
         model_path,
+        state_path,
         project,
         points,
         states,
@@ -209,7 +211,8 @@ pub fn verify_core(args: &VerifyArgs) -> anyhow::Result<(mpm::RunReport, PathBuf
     let settings = settings(args, l.project.cps.as_ref());
     let report = mpm::verify(&l.project.model, &l.points, &l.states, &settings)
         .map_err(|e| anyhow::anyhow!("{e}"))?;
-    let inputs: Vec<&Path> = vec![&l.model_path];
+    let mut inputs = super::map::project_inputs(&l.project.files);
+    inputs.extend([l.model_path.as_path(), l.state_path.as_path()]);
     let out = OutputDir::create(&l.out, args.force, &inputs)?;
     let json = serde_json::to_string_pretty(&report)?;
     out.write("verify.json", |w| w.write_all(json.as_bytes()))?;
@@ -308,7 +311,8 @@ pub fn run_run(args: RunArgs) -> anyhow::Result<()> {
         .collect();
     let output = mpm::run(&l.project.model, &l.points, &l.states, &settings)
         .map_err(|e| anyhow::anyhow!("{e}"))?;
-    let inputs: Vec<&Path> = vec![&l.model_path];
+    let mut inputs = super::map::project_inputs(&l.project.files);
+    inputs.extend([l.model_path.as_path(), l.state_path.as_path()]);
     let out = OutputDir::create(&l.out, args.verify.force, &inputs)?;
     let json = serde_json::to_string_pretty(&output.report)?;
     out.write("run.json", |w| w.write_all(json.as_bytes()))?;

@@ -9,6 +9,7 @@ pub mod cps;
 pub mod fem_csv;
 pub mod gom;
 pub mod gsz;
+pub mod input;
 pub mod keyword_doc;
 pub mod lex;
 pub mod mapf;
