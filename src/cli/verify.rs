@@ -69,32 +69,7 @@ fn load(args: &VerifyArgs, default_out: &str) -> anyhow::Result<Loaded> {
         _ => bail!("give a folder written by `map`, or --mpm MODEL --state mps.csv"),
     };
     let project = load_project(&model_path)?;
-    let (points, states) = mps_table::read_states(&state_path)?;
-    if points.len() != project.points.len() {
-        bail!(
-            "{}: {} MPs, but the model places {}",
-            state_path.display(),
-            points.len(),
-            project.points.len()
-        );
-    }
-    for (a, b) in points.iter().zip(&project.points) {
-        let d = (0..3)
-            .map(|k| (a.position[k] - b.position[k]).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        if a.id != b.id
-            || a.element != b.element
-            || d > 1e-9 * (1.0 + b.position[0].abs() + b.position[1].abs())
-        {
-            bail!(
-                "{}: MP {} does not match the model's MP {} (element or position differ): the state belongs to another model",
-                state_path.display(),
-                a.id,
-                b.id
-            );
-        }
-    }
+    let (points, states) = mps_table::read_states_for(&state_path, &project.points)?;
     let out = args.out.clone().unwrap_or_else(|| {
         state_path
             .parent()

@@ -13,6 +13,7 @@ pub mod input;
 pub mod keyword_doc;
 pub mod lex;
 pub mod mapf;
+pub mod material_map;
 pub mod mps_table;
 pub mod ply;
 pub mod project;
