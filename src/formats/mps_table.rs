@@ -95,6 +95,23 @@ pub fn read_states_for(
 ) -> Result<(Vec<MaterialPoint>, Vec<crate::model::MpState>), super::error::FormatError> {
     use super::error::ParseError;
     let (points, states, lines) = read_states_with_lines(path)?;
+    if points.len() != expected.len() {
+        let line = lines
+            .get(expected.len())
+            .copied()
+            .unwrap_or_else(|| lines.last().map_or(2, |l| l + 1));
+        return Err(ParseError::at(
+            path,
+            line,
+            1,
+            format!(
+                "{} MPs, but the model places {}",
+                points.len(),
+                expected.len()
+            ),
+        )
+        .into());
+    }
     for (k, (a, b)) in points.iter().zip(expected).enumerate() {
         let d = (0..3)
             .map(|c| (a.position[c] - b.position[c]).powi(2))
@@ -115,23 +132,6 @@ pub fn read_states_for(
             )
             .into());
         }
-    }
-    if points.len() != expected.len() {
-        let line = lines
-            .get(expected.len())
-            .copied()
-            .unwrap_or_else(|| lines.last().map_or(2, |l| l + 1));
-        return Err(ParseError::at(
-            path,
-            line,
-            1,
-            format!(
-                "{} MPs, but the model places {}",
-                points.len(),
-                expected.len()
-            ),
-        )
-        .into());
     }
     Ok((points, states))
 }
