@@ -11,7 +11,7 @@ use serde::Serialize;
 use super::map::{FemArgs, load_fem};
 use super::output::OutputDir;
 use super::plot::{self, Series};
-use crate::calibrate::{AnnealSettings, Calibration, calibrate};
+use crate::calibrate::{AnnealSettings, Calibration, try_calibrate};
 use crate::kernel::loo::{LooObjective, LooStats, Norm};
 use crate::kernel::mapper::{self, MapSettings, NodeCloud, OutsidePolicy};
 use crate::kernel::{Kernel, KernelKind};
@@ -122,7 +122,8 @@ pub fn run_calibration(
         ..AnnealSettings::default()
     };
     let f = |h: f64| objective.evaluate(h, norm_kind);
-    let mut calibration = calibrate(f, lo, hi, &settings);
+    let mut calibration =
+        try_calibrate(f, lo, hi, &settings).map_err(|e| anyhow::anyhow!("calibration: {e}"))?;
     let mut fallback = None;
     if objective.is_constant() {
         let factor = if matches!(kernel, KernelKind::Gaussian { .. }) {
