@@ -28,7 +28,9 @@ pub struct Calibration {
 pub enum CalibrateError {
     #[error("the bracket [{lo}, {hi}] is not a finite, non-empty interval")]
     BadBracket { lo: f64, hi: f64 },
-    #[error("the objective is not finite at h = {h} ({value}): the field values are too large or not numbers")]
+    #[error(
+        "the objective is not finite at h = {h} ({value}): the field values are too large or not numbers"
+    )]
     NonFinite { h: f64, value: f64 },
 }
 

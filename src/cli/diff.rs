@@ -358,8 +358,7 @@ fn diff_files(a: &Path, b: &Path, args: &DiffArgs) -> anyhow::Result<FileDiff> {
         ),
         "mapf" | "table" => diff_tables(a, b, args, &mut out)?,
         _ => {
-            if crate::formats::input::read_bytes(a)? != crate::formats::input::read_bytes(b)?
-            {
+            if crate::formats::input::read_bytes(a)? != crate::formats::input::read_bytes(b)? {
                 out.findings
                     .push("contents differ (compared as bytes)".into());
             }

@@ -60,11 +60,7 @@ pub fn refuse_inputs(target: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
                 .any(|m| identity(&m) == target_id);
         }
         if clash {
-            let what = if target_meta.is_dir() {
-                "holds"
-            } else {
-                "is"
-            };
+            let what = if target_meta.is_dir() { "holds" } else { "is" };
             bail!(
                 "refusing to write {}: it {what} the input {}; choose another output path",
                 target.display(),
@@ -232,8 +228,10 @@ impl OutputDir {
                 Ok(target)
             }
             Err(e) if exchange_unsupported(&e) => replace_by_two_renames(staging, &target),
-            Err(e) => Err(anyhow::Error::new(e)
-                .context(format!("replacing {} with the new output", target.display()))),
+            Err(e) => Err(anyhow::Error::new(e).context(format!(
+                "replacing {} with the new output",
+                target.display()
+            ))),
         }
     }
 }
@@ -265,7 +263,9 @@ fn replace_by_two_renames(staging: tempfile::TempDir, target: &Path) -> anyhow::
     // rename() onto an empty folder replaces it.
     if let Err(e) = std::fs::rename(target, &backup_path) {
         let _ = std::fs::remove_dir(&backup_path);
-        return Err(anyhow::Error::new(e).context(format!("moving the old {} aside", target.display())));
+        return Err(
+            anyhow::Error::new(e).context(format!("moving the old {} aside", target.display()))
+        );
     }
     if let Err(e) = rename_noreplace(staging.path(), target) {
         let _ = std::fs::rename(&backup_path, target);
@@ -295,8 +295,7 @@ fn exchange(_a: &Path, _b: &Path) -> std::io::Result<()> {
 }
 
 fn exchange_unsupported(e: &std::io::Error) -> bool {
-    e.kind() == std::io::ErrorKind::Unsupported
-        || matches!(e.raw_os_error(), Some(22 | 38 | 95)) // EINVAL, ENOSYS, EOPNOTSUPP
+    e.kind() == std::io::ErrorKind::Unsupported || matches!(e.raw_os_error(), Some(22 | 38 | 95)) // EINVAL, ENOSYS, EOPNOTSUPP
 }
 
 /// Renames `from` to `to`, failing if `to` exists (atomically where the
@@ -339,7 +338,10 @@ mod tests {
         out.write("new.txt", |w| w.write_all(b"new")).unwrap();
         out.commit().unwrap();
         assert!(!target.join("old.txt").exists());
-        assert_eq!(std::fs::read_to_string(target.join("new.txt")).unwrap(), "new");
+        assert_eq!(
+            std::fs::read_to_string(target.join("new.txt")).unwrap(),
+            "new"
+        );
         let names: Vec<_> = std::fs::read_dir(tmp.path())
             .unwrap()
             .map(|e| e.unwrap().file_name())
@@ -366,7 +368,9 @@ mod tests {
         let tmp = tempfile::tempdir().unwrap();
         let input = tmp.path().join("in.csv");
         std::fs::write(&input, "x").unwrap();
-        let e = refuse_inputs(tmp.path(), &[&input]).unwrap_err().to_string();
+        let e = refuse_inputs(tmp.path(), &[&input])
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("holds the input"), "{e}");
         let e = refuse_inputs(&input, &[&input]).unwrap_err().to_string();
         assert!(e.contains("is the input"), "{e}");

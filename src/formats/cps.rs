@@ -57,10 +57,7 @@ impl CpsDocument {
                         errors.push(self.doc.error_at(
                             i,
                             offset,
-                            format!(
-                                "{}: `{tok}` is not a finite number",
-                                block.keyword
-                            ),
+                            format!("{}: `{tok}` is not a finite number", block.keyword),
                         ));
                     }
                 }
@@ -228,11 +225,12 @@ fn is_non_finite(tok: &str) -> bool {
     let b = t.as_bytes();
     !b.is_empty()
         && (b[0].is_ascii_digit() || b[0] == b'.')
-        && b
-            .iter()
+        && b.iter()
             .all(|&c| c.is_ascii_digit() || matches!(c, b'.' | b'-' | b'+' | b'e' | b'd'))
         && lex::parse_real(tok).is_none()
-        && t.replace('d', "e").parse::<f64>().is_ok_and(|v| !v.is_finite())
+        && t.replace('d', "e")
+            .parse::<f64>()
+            .is_ok_and(|v| !v.is_finite())
 }
 
 #[cfg(test)]

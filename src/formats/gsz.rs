@@ -10,8 +10,8 @@
 use std::path::Path;
 
 use super::error::FormatError;
-use super::input;
 use super::fem_csv::{self, CsvOptions, FemReadReport, UnitOverride};
+use super::input;
 use super::ply;
 use crate::model::FemNodes;
 
@@ -65,9 +65,8 @@ fn archive(path: &Path) -> Result<Archive, FormatError> {
             ),
         ));
     }
-    let zip = zip::ZipArchive::new(file).map_err(|e| {
-        FormatError::file(path, format!("not a readable .gsz (zip) archive: {e}"))
-    })?;
+    let zip = zip::ZipArchive::new(file)
+        .map_err(|e| FormatError::file(path, format!("not a readable .gsz (zip) archive: {e}")))?;
     Ok(Archive {
         zip,
         entry_limit: input::entry_limit(len),

@@ -165,7 +165,13 @@ mod tests {
         let data = vec![0u8; 1000];
         assert_eq!(read_entry_limited(&data[..], 10, 500).unwrap(), Err(501));
         assert_eq!(read_entry_limited(&data[..], 1000, 500).unwrap(), Err(1000));
-        assert_eq!(read_entry_limited(&data[..], 0, 1000).unwrap().unwrap().len(), 1000);
+        assert_eq!(
+            read_entry_limited(&data[..], 0, 1000)
+                .unwrap()
+                .unwrap()
+                .len(),
+            1000
+        );
     }
 
     #[test]

@@ -198,7 +198,9 @@ mod tests {
         ] {
             assert_eq!(parse_real(text), Some(value), "{text}");
         }
-        for bad in ["", "x", "1.2.3", "1e", "--1", "nan", "inf", "1,0", "1e400", "-1D999"] {
+        for bad in [
+            "", "x", "1.2.3", "1e", "--1", "nan", "inf", "1,0", "1e400", "-1D999",
+        ] {
             assert_eq!(parse_real(bad), None, "{bad}");
         }
     }

@@ -42,10 +42,7 @@ pub fn parse(
         }
         let mut parts = pair.split('=');
         let (Some(r), Some(m), None) = (parts.next(), parts.next(), parts.next()) else {
-            return Err(err(
-                column,
-                format!("`{pair}`: expected region=material"),
-            ));
+            return Err(err(column, format!("`{pair}`: expected region=material")));
         };
         let (r, m) = (r.trim(), m.trim());
         if r.is_empty() || m.is_empty() {

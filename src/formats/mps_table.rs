@@ -136,16 +136,10 @@ pub fn read_states_for(
     Ok((points, states))
 }
 
-type StateRows = (
-    Vec<MaterialPoint>,
-    Vec<crate::model::MpState>,
-    Vec<usize>,
-);
+type StateRows = (Vec<MaterialPoint>, Vec<crate::model::MpState>, Vec<usize>);
 
 /// The rows with the 1-based line of each.
-fn read_states_with_lines(
-    path: &std::path::Path,
-) -> Result<StateRows, super::error::FormatError> {
+fn read_states_with_lines(path: &std::path::Path) -> Result<StateRows, super::error::FormatError> {
     use super::error::ParseError;
     let text = super::keyword_doc::read_text(path)?;
     let mut lines = text.lines().enumerate();
@@ -177,9 +171,8 @@ fn read_states_with_lines(
             .into());
         }
         // 1-based column of field k: the characters of the fields and commas before it.
-        let column = |k: usize| -> usize {
-            f[..k].iter().map(|s| s.chars().count() + 1).sum::<usize>() + 1
-        };
+        let column =
+            |k: usize| -> usize { f[..k].iter().map(|s| s.chars().count() + 1).sum::<usize>() + 1 };
         let num = |k: usize| -> Result<f64, ParseError> {
             f[k].trim()
                 .parse::<f64>()
@@ -190,7 +183,11 @@ fn read_states_with_lines(
                         path,
                         i + 1,
                         column(k),
-                        format!("field {}: expected a finite number, found `{}`", k + 1, f[k]),
+                        format!(
+                            "field {}: expected a finite number, found `{}`",
+                            k + 1,
+                            f[k]
+                        ),
                     )
                 })
         };

@@ -596,14 +596,26 @@ mod tests {
                 p[1] += rng.random_range(-0.05..0.05);
             }
         }
-        let gamma: Vec<f64> = (0..mesh.n_elements()).map(|e| 15.0 + (e % 7) as f64).collect();
+        let gamma: Vec<f64> = (0..mesh.n_elements())
+            .map(|e| 15.0 + (e % 7) as f64)
+            .collect();
         let points: Vec<[f64; 3]> = (0..500)
-            .map(|_| [rng.random_range(0.01..5.99), rng.random_range(0.0..2.5), 0.0])
+            .map(|_| {
+                [
+                    rng.random_range(0.01..5.99),
+                    rng.random_range(0.0..2.5),
+                    0.0,
+                ]
+            })
             .collect();
         let fast = overburden(&mesh, |_| true, &gamma, &points);
         let slow = brute_force(&mesh, &gamma, &points);
         for (k, (a, b)) in fast.iter().zip(&slow).enumerate() {
-            assert!((a - b).abs() < 1e-9 * (1.0 + b.abs()), "{k} {:?}: {a} vs {b}", points[k]);
+            assert!(
+                (a - b).abs() < 1e-9 * (1.0 + b.abs()),
+                "{k} {:?}: {a} vs {b}",
+                points[k]
+            );
         }
     }
 

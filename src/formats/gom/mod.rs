@@ -504,11 +504,8 @@ impl GomDocument {
                 None => self.doc.error_at(i, 0, "expected a material index"),
             })?;
             u32::try_from(value[0]).map_err(|_| {
-                self.doc.error_at(
-                    i,
-                    0,
-                    format!("material index {} is out of range", value[0]),
-                )
+                self.doc
+                    .error_at(i, 0, format!("material index {} is out of range", value[0]))
             })
         })?;
         for (e, (&m, (i, _))) in out.iter().zip(self.rows(b)).enumerate() {
