@@ -5,7 +5,7 @@
 //! 1e308, NaN, …), counts nudged by one, and data after the end marker. A reader
 //! may accept or refuse a case; it may not panic.
 //!
-//! CI runs `A3D_FUZZ_CASES` cases per reader (default 400, about 10 s a minute
+//! CI runs `A3D_FUZZ_CASES` cases per reader (default 400, about 10 s
 //! in the debug test profile on two cores). For a release run raise it, e.g.
 //! `A3D_FUZZ_CASES=20000 A3D_FUZZ_SEED=7 cargo test --release --test fuzz`.
 //! A failing case is written to `target/fuzz-failures/` and its reader, seed and
