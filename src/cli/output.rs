@@ -134,6 +134,24 @@ impl OutputDir {
     /// neither be nor hold any of them, whatever `force` says.
     pub fn create(target: &Path, force: bool, inputs: &[&Path]) -> anyhow::Result<OutputDir> {
         refuse_inputs(target, inputs)?;
+        // `.`, `..`, `/` or a folder holding the working directory: replacing it
+        // would pull the ground from under the run (and the user).
+        if target.file_name().is_none() {
+            bail!(
+                "{}: give the output folder by name, not `.`, `..` or `/`",
+                target.display()
+            );
+        }
+        if let (Ok(t), Ok(cwd)) = (
+            std::fs::canonicalize(target),
+            std::env::current_dir().and_then(std::fs::canonicalize),
+        ) && cwd.starts_with(&t)
+        {
+            bail!(
+                "refusing to write {}: it holds the working directory",
+                target.display()
+            );
+        }
         if let Ok(meta) = std::fs::symlink_metadata(target) {
             if !force {
                 bail!("{} exists; pass --force to replace it", target.display());
