@@ -2,7 +2,8 @@
 //! and MP placement), CPS, MAPF, FEM CSV, PLY, `.gsz` and mps.csv. Each case is
 //! a fixture with one to three structure-aware mutations: truncation, bit flips,
 //! duplicated, deleted, swapped or inserted lines, extreme numbers (0, −1, 2⁶²,
-//! 1e308, NaN, …), counts nudged by one, and data after the end marker. A reader
+//! 10¹⁸, 1e308, NaN, …) anywhere or as the count after a `$$KEYWORD`, numbers
+//! nudged by one (wrong counts), and data after the end marker. A reader
 //! may accept or refuse a case; it may not panic.
 //!
 //! CI runs `A3D_FUZZ_CASES` cases per reader (default 400, about 10 s
@@ -114,7 +115,7 @@ fn mutate(rng: &mut ChaCha8Rng, input: &[u8], end_marker: Option<&str>) -> Vec<u
             b.extend_from_slice(b"0\n");
         }
         let ls = lines(&b);
-        match rng.random_range(0..10) {
+        match rng.random_range(0..11) {
             0 => {
                 let at = rng.random_range(0..b.len());
                 b.truncate(at);
@@ -181,6 +182,24 @@ fn mutate(rng: &mut ChaCha8Rng, input: &[u8], end_marker: Option<&str>) -> Vec<u
                 } else {
                     b.extend_from_slice(b"trailing,data\n");
                 }
+            }
+            9 => {
+                // A count: the first token of a line right after a `$$KEYWORD` line.
+                let after_keyword: Vec<(usize, usize)> = ls
+                    .windows(2)
+                    .filter(|w| b[w[0].0..w[0].1].starts_with(b"$$"))
+                    .map(|w| w[1])
+                    .collect();
+                if after_keyword.is_empty() {
+                    continue;
+                }
+                let (s, e) = after_keyword[rng.random_range(0..after_keyword.len())];
+                let end = b[s..e]
+                    .iter()
+                    .position(|c| matches!(c, b' ' | b'\t' | b',' | b'\r' | b'\n'))
+                    .map_or(e, |k| s + k);
+                let replacement = EXTREMES[rng.random_range(0..EXTREMES.len())];
+                b.splice(s..end, replacement.bytes());
             }
             _ => {
                 // Cut the file at a line boundary (a clean truncation).

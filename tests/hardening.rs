@@ -322,6 +322,7 @@ fn ply_with_header(header_nodes: &str, nodes: usize) -> Vec<u8> {
 #[test]
 fn huge_declared_counts_are_errors_not_panics() {
     use a3d_init::formats::ply;
+    let base = std::fs::read_to_string(fixture("anura3d-mini/TwoMat.GOM")).unwrap();
     let p = Path::new("Mesh.ply");
     for (declared, actual) in [
         ("4611686018427387904", 3),
@@ -339,8 +340,23 @@ fn huge_declared_counts_are_errors_not_panics() {
     std::fs::write(&file, ply_with_header("3", 3)).unwrap();
     let e = ply::read_ply_mesh(&file).unwrap_err().to_string();
     assert!(e.contains("truncated PLY"), "{e}");
+    // A material count of 10^18 (found by hand: a capacity-overflow panic).
+    let dir = tmp.path().join("materials");
+    std::fs::create_dir(&dir).unwrap();
+    let gom = dir.join("TwoMat.GOM");
+    std::fs::write(
+        &gom,
+        base.replacen(
+            "$$NUMBER_OF_MATERIALS\n2\n",
+            "$$NUMBER_OF_MATERIALS\n999999999999999999\n",
+            1,
+        ),
+    )
+    .unwrap();
+    let (code, text) = run(&[&"inspect", &gom]);
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("TwoMat.GOM:"), "{text}");
     // GOM counters of 2^62 or 10^18.
-    let base = std::fs::read_to_string(fixture("anura3d-mini/TwoMat.GOM")).unwrap();
     for counters in [
         "4611686018427387904 6",
         "4 999999999999999999",
