@@ -406,3 +406,166 @@ fn fuzz_gsz() {
     }));
     check(failures);
 }
+
+/// Runs the binary, killed after 30 s: (exit code, stderr + stdout).
+fn run_bin(args: &[&std::ffi::OsStr]) -> (i32, String) {
+    use std::process::{Command, Stdio};
+    use std::time::{Duration, Instant};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_a3d-init"))
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(30) {
+            let _ = child.kill();
+            let _ = child.wait();
+            return (-9, format!("hung: {args:?}"));
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let out = child.wait_with_output().unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stderr),
+            String::from_utf8_lossy(&out.stdout)
+        ),
+    )
+}
+
+/// The whole pipeline through the real binary: `map` on a mutated GOM, CPS or
+/// FEM table of the mini project, then `verify` and `calibrate` on what it wrote.
+/// Each run ends with 0, 1 or 2 and no panic within 30 s, changes no input, and
+/// leaves either a complete output folder or none (and no staging folder).
+/// `A3D_FUZZ_CLI_CASES` cases (default 100).
+#[test]
+fn fuzz_cli_pipeline() {
+    let n = env_u64("A3D_FUZZ_CLI_CASES", 100) as usize;
+    let gom = std::fs::read(fixture("anura3d-mini/TwoMat.GOM")).unwrap();
+    let cps = std::fs::read(fixture("anura3d-mini/TwoMat.CPS_001")).unwrap();
+    let mut fem = String::from("X (m),Y (m),PWP (kPa),Material\n");
+    for j in 0..5 {
+        for i in 0..9 {
+            let (x, y) = (i as f64 * 0.25, j as f64 * 0.25);
+            let region = if x < 1.0 { "clay" } else { "sand" };
+            fem.push_str(&format!("{x},{y},{},{region}\n", 9.81 * (1.0 - y)));
+        }
+    }
+    let fem = fem.into_bytes();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed() ^ hash("cli"));
+    let tmp = tempfile::tempdir().unwrap();
+    let mut failures = Vec::new();
+    for case in 0..n {
+        let dir = tmp.path().join(format!("case-{case}"));
+        let model = dir.join("model");
+        std::fs::create_dir_all(&model).unwrap();
+        let which = rng.random_range(0..3);
+        let files = [
+            (
+                model.join("TwoMat.GOM"),
+                if which == 0 {
+                    mutate(&mut rng, &gom, Some("$$FINISH"))
+                } else {
+                    gom.clone()
+                },
+            ),
+            (
+                model.join("TwoMat.CPS_001"),
+                if which == 1 {
+                    mutate(&mut rng, &cps, Some("$$END"))
+                } else {
+                    cps.clone()
+                },
+            ),
+            (
+                dir.join("fem.csv"),
+                if which == 2 {
+                    mutate(&mut rng, &fem, None)
+                } else {
+                    fem.clone()
+                },
+            ),
+        ];
+        for (path, bytes) in &files {
+            std::fs::write(path, bytes).unwrap();
+        }
+        let out = dir.join("out");
+        let stress = ["auto", "geostatic", "zero"][rng.random_range(0..3)];
+        let (code, text) = run_bin(&[
+            "map".as_ref(),
+            "--fem".as_ref(),
+            files[2].0.as_os_str(),
+            "--mpm".as_ref(),
+            model.as_os_str(),
+            "--out".as_ref(),
+            out.as_os_str(),
+            "--stress".as_ref(),
+            stress.as_ref(),
+        ]);
+        let mut problems = Vec::new();
+        if !matches!(code, 0 | 2) || text.contains("panicked") || text.contains("internal error") {
+            problems.push(format!("map exit {code}: {text}"));
+        }
+        if code == 0 && !out.join("report.json").exists() {
+            problems.push("map succeeded without a complete output".into());
+        }
+        if code != 0 && out.exists() {
+            problems.push("map failed but left an output".into());
+        }
+        if code == 0 {
+            for args in [
+                vec![
+                    "verify".as_ref(),
+                    out.as_os_str(),
+                    "--max-steps".as_ref(),
+                    "100".as_ref(),
+                ],
+                vec![
+                    "calibrate".as_ref(),
+                    "--fem".as_ref(),
+                    files[2].0.as_os_str(),
+                    "--out".as_ref(),
+                    dir.join("cal").as_os_str(),
+                ],
+            ] {
+                let (code, text) = run_bin(&args);
+                if !matches!(code, 0..=2)
+                    || text.contains("panicked")
+                    || text.contains("internal error")
+                {
+                    problems.push(format!("{:?} exit {code}: {text}", args[0]));
+                }
+            }
+        }
+        for (path, bytes) in &files {
+            if std::fs::read(path).unwrap() != *bytes {
+                problems.push(format!("{} changed", path.display()));
+            }
+        }
+        for d in [&dir, &model] {
+            for entry in std::fs::read_dir(d).unwrap() {
+                let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+                if name.starts_with(".a3d-init") {
+                    problems.push(format!("{name} left behind"));
+                }
+            }
+        }
+        if !problems.is_empty() {
+            failures.push(format!(
+                "cli: seed {} case {case} (inputs kept in {}): {}",
+                seed(),
+                dir.display(),
+                problems.join("; ")
+            ));
+        }
+    }
+    if !failures.is_empty() {
+        let _ = tmp.keep();
+    }
+    check(failures);
+}
