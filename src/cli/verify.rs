@@ -272,7 +272,10 @@ pub fn print_report(r: &mpm::RunReport, target: &Path) {
 
 pub fn run_run(args: RunArgs) -> anyhow::Result<()> {
     if !(args.time.is_finite() && args.time > 0.0) {
-        bail!("--time {}: expected a positive number of seconds", args.time);
+        bail!(
+            "--time {}: expected a positive number of seconds",
+            args.time
+        );
     }
     let l = load(&args.verify, "run")?;
     let mut settings = settings(&args.verify, l.project.cps.as_ref());
