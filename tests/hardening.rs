@@ -573,3 +573,20 @@ fn calibrate_on_overflowing_fields_is_an_error_not_a_hang() {
     }
     assert!(!tmp.path().join("c").exists());
 }
+
+/// Found by CLI fuzzing: `$$GRAVITY_ACCELERATION 0` made `verify` panic while
+/// plotting an infinite residual ratio (attempt to add with overflow).
+#[test]
+fn verify_with_zero_gravity_plots_without_panicking() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (gom, fem) = mini_project(tmp.path());
+    let cps = gom.with_extension("CPS_001");
+    let text = std::fs::read_to_string(&cps).unwrap();
+    std::fs::write(&cps, text.replacen("9.81\n", "0\n", 1)).unwrap();
+    let out = tmp.path().join("mapped");
+    let (code, text) = run(&[&"map", &"--fem", &fem, &"--mpm", &gom, &"--out", &out]);
+    assert_eq!(code, 0, "{text}");
+    let (code, text) = run(&[&"verify", &out, &"--max-steps", &"100"]);
+    assert!(matches!(code, 0..=2), "{text}");
+    no_staging_left(&out);
+}
