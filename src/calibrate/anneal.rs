@@ -67,6 +67,10 @@ pub fn anneal(f: impl Fn(f64) -> f64, lo: f64, hi: f64, settings: &AnnealSetting
     let mut width = 0.25 * (hi - lo);
     for _ in 0..settings.iterations {
         width = 0.25 * (hi - lo) * (t / t0).sqrt().max(0.005);
+        if !(width.is_finite() && width >= 0.0) {
+            // A non-finite bracket: no step can be drawn (and random_range would panic).
+            break;
+        }
         let candidate = (x + rng.random_range(-width..=width)).clamp(lo, hi);
         let fc = f(candidate);
         trace.push((candidate, fc));

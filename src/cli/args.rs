@@ -43,6 +43,13 @@ pub struct FemArgs {
 }
 
 impl FemArgs {
+    /// Every file these options read (`--fem` files and `--fem-mesh`).
+    pub fn input_paths(&self) -> Vec<&std::path::Path> {
+        let mut out: Vec<&std::path::Path> = self.fem.iter().map(PathBuf::as_path).collect();
+        out.extend(self.fem_mesh.as_deref());
+        out
+    }
+
     /// The library options these arguments describe.
     pub fn options(&self) -> anyhow::Result<FemOptions> {
         let columns = match &self.columns {
@@ -81,4 +88,12 @@ impl FemArgs {
     pub fn load(&self) -> anyhow::Result<LoadedFem> {
         Ok(crate::pipeline::fem::load(&self.options()?)?)
     }
+}
+
+/// Every file of an Anura3D project that a run reads (GOM, CPS, OPD).
+pub fn project_inputs(files: &crate::formats::project::ProjectFiles) -> Vec<&std::path::Path> {
+    let mut out: Vec<&std::path::Path> = vec![&files.gom];
+    out.extend(files.cps.as_deref());
+    out.extend(files.opd.as_deref());
+    out
 }

@@ -171,7 +171,8 @@ pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let inputs: Vec<&std::path::Path> = args.fem.fem.iter().map(PathBuf::as_path).collect();
+    let mut inputs = args.fem.input_paths();
+    inputs.extend(args.check.as_deref());
     let out = OutputDir::create(&args.out, args.force, &inputs)?;
     plot_curve(&out.path("calibration.svg"), &outcome)?;
     if let Some((_, pairs)) = &check {

@@ -118,7 +118,8 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
             seed: 1,
         }),
     )?;
-    let inputs: Vec<&Path> = vec![&mapped.project.files.gom, &fem_file];
+    let mut inputs = super::args::project_inputs(&mapped.project.files);
+    inputs.push(&fem_file);
     let out = OutputDir::create(&args.out, args.force, &inputs)?;
     map::write(&mapped, &out)?;
     plot_curve(&out.path("calibration.svg"), &outcome)?;

@@ -358,9 +358,7 @@ fn diff_files(a: &Path, b: &Path, args: &DiffArgs) -> anyhow::Result<FileDiff> {
         ),
         "mapf" | "table" => diff_tables(a, b, args, &mut out)?,
         _ => {
-            if std::fs::read(a).with_context(|| a.display().to_string())?
-                != std::fs::read(b).with_context(|| b.display().to_string())?
-            {
+            if crate::formats::input::read_bytes(a)? != crate::formats::input::read_bytes(b)? {
                 out.findings
                     .push("contents differ (compared as bytes)".into());
             }

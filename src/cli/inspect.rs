@@ -142,7 +142,8 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
         warnings: &p.info.warnings,
     };
     if let Some(path) = &args.mps {
-        crate::cli::output::write_new(path, args.force, |w| {
+        let inputs = super::args::project_inputs(&p.files);
+        crate::cli::output::write_new(path, args.force, &inputs, |w| {
             crate::formats::mps_table::write_points(w, &p.points)
         })
         .with_context(|| format!("writing {}", path.display()))?;

@@ -135,11 +135,8 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         .out
         .clone()
         .unwrap_or_else(|| default_out(&mapped.project.files.dir, &mapped.project.files.name));
-    let mut inputs: Vec<&Path> = vec![&mapped.project.files.gom];
-    if let Some(c) = &mapped.project.files.cps {
-        inputs.push(c);
-    }
-    inputs.extend(args.fem.fem.iter().map(PathBuf::as_path));
+    let mut inputs = super::args::project_inputs(&mapped.project.files);
+    inputs.extend(args.fem.input_paths());
     let out = OutputDir::create(&target, args.force, &inputs)?;
     let written = write(&mapped, &out)?;
     let target = out.commit()?;

@@ -31,6 +31,10 @@ fn bounds(series: &[Series<'_>]) -> ((f64, f64), (f64, f64)) {
             return (0.0, 1.0);
         }
         let d = (r.1 - r.0).abs().max(1e-12 * r.0.abs().max(1.0));
+        if !(0.1 * d + r.1.abs().max(r.0.abs())).is_finite() {
+            // Values near the end of the f64 range: no room for padding.
+            return (r.0.max(-1e307), r.1.min(1e307));
+        }
         (r.0 - 0.05 * d, r.1 + 0.05 * d)
     };
     (pad(x), pad(y))
@@ -62,7 +66,7 @@ pub fn line_chart(
                 .map(|s| {
                     s.points
                         .iter()
-                        .filter(|p| p.1 > 0.0)
+                        .filter(|p| p.1 > 0.0 && p.1.is_finite() && p.0.is_finite())
                         .map(|p| (p.0, p.1.log10()))
                         .collect()
                 })
@@ -83,7 +87,7 @@ pub fn line_chart(
                 .configure_mesh()
                 .x_desc(x_label)
                 .y_desc(y_label)
-                .y_labels(((hi - lo) as usize + 1).min(12))
+                .y_labels(((hi - lo) as usize).saturating_add(1).min(12))
                 .y_label_formatter(&|v| format!("1e{:.0}", v))
                 .label_style(("sans-serif", 15))
                 .draw()?;

@@ -109,36 +109,18 @@ fn load_state_table(
     default_out: &str,
 ) -> anyhow::Result<Loaded> {
     let project = LoadedProject::load(model_path)?;
-    let (points, states) = mps_table::read_states(state_path)?;
-    if points.len() != project.points.len() {
-        bail!(
-            "{}: {} MPs, but the model places {}",
-            state_path.display(),
-            points.len(),
-            project.points.len()
-        );
-    }
-    if !pipeline::verify::same_points(&points, &project.points) {
-        let bad = points
-            .iter()
-            .zip(&project.points)
-            .find(|(a, b)| {
-                !pipeline::verify::same_points(std::slice::from_ref(a), std::slice::from_ref(b))
-            })
-            .map_or(0, |(a, _)| a.id);
-        bail!(
-            "{}: MP {bad} does not match the model's MP (element or position differ): the state belongs to another model",
-            state_path.display(),
-        );
-    }
+    let (points, states) = mps_table::read_states_for(state_path, &project.points)?;
     let out = args.out.clone().unwrap_or_else(|| {
         state_path
             .parent()
             .unwrap_or(Path::new("."))
             .join(default_out)
     });
-    let mut inputs = vec![project.files.gom.clone(), state_path.to_path_buf()];
-    inputs.extend(project.files.cps.clone());
+    let mut inputs: Vec<PathBuf> = super::args::project_inputs(&project.files)
+        .into_iter()
+        .map(Path::to_path_buf)
+        .collect();
+    inputs.extend([model_path.to_path_buf(), state_path.to_path_buf()]);
     Ok(Loaded {
         project,
         points,
@@ -502,6 +484,12 @@ pub fn print_report(r: &mpm::RunReport) {
 }
 
 pub fn run_run(args: RunArgs) -> anyhow::Result<()> {
+    if !(args.time.is_finite() && args.time > 0.0) {
+        bail!(
+            "--time {}: expected a positive number of seconds",
+            args.time
+        );
+    }
     let l = load(&args.verify, "run")?;
     let mut settings = settings(&args.verify, l.project.cps.as_ref());
     settings.end_time = Some(args.time);

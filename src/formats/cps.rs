@@ -20,23 +20,103 @@ pub struct CpsDocument {
 
 impl CpsDocument {
     pub fn read(path: &Path) -> Result<CpsDocument, FormatError> {
-        Ok(CpsDocument {
+        CpsDocument {
             doc: KeywordDocument::read(path, "$$END", true)?,
-        })
+        }
+        .validated()
     }
 
     pub fn parse(path: &Path, text: String) -> Result<CpsDocument, FormatError> {
-        Ok(CpsDocument {
+        CpsDocument {
             doc: KeywordDocument::parse(path, text, "$$END", true)?,
-        })
+        }
+        .validated()
     }
 
     /// Reads an OPD file (2025 output selection): the CPS layout without a version header.
     pub fn read_opd(path: &Path) -> Result<CpsDocument, FormatError> {
         let text = super::keyword_doc::read_text(path)?;
-        Ok(CpsDocument {
+        CpsDocument {
             doc: KeywordDocument::parse_with(path, text, "$$END", true, false)?,
-        })
+        }
+        .validated()
+    }
+
+    /// Refuses values Anura3D cannot read as numbers: NaN, infinities and reals
+    /// out of the double range anywhere, and a typed value a3d-init uses
+    /// (gravity, Courant number, local damping) that is not a finite number in
+    /// its range. Every problem is reported, each at its line and column.
+    fn validated(self) -> Result<CpsDocument, FormatError> {
+        let mut errors = Vec::new();
+        for b in 0..self.doc.blocks().len() {
+            let block = &self.doc.blocks()[b];
+            for i in block.data.clone() {
+                let line = self.doc.line(i);
+                for (offset, tok) in lex::tokens(line) {
+                    if is_non_finite(tok) {
+                        errors.push(self.doc.error_at(
+                            i,
+                            offset,
+                            format!("{}: `{tok}` is not a finite number", block.keyword),
+                        ));
+                    }
+                }
+            }
+        }
+        for (keyword, index, lo, hi) in [
+            ("$$GRAVITY_ACCELERATION", 0, 0.0, 1e4),
+            ("$$COURANT_NUMBER", 0, 0.0, 10.0),
+        ] {
+            self.check_range(keyword, index, lo, hi, &mut errors);
+        }
+        if self.get_token("$$HOMOGENEOUS_LOCAL_DAMPING", 0) == Some("1") {
+            self.check_range("$$HOMOGENEOUS_LOCAL_DAMPING", 1, 0.0, 1.0, &mut errors);
+        }
+        match FormatError::from_list(errors) {
+            Some(e) => Err(e),
+            None => Ok(self),
+        }
+    }
+
+    /// Token `index` of `keyword`, when the keyword is present, must be a real in `lo..=hi`.
+    fn check_range(
+        &self,
+        keyword: &str,
+        index: usize,
+        lo: f64,
+        hi: f64,
+        errors: &mut Vec<super::error::ParseError>,
+    ) {
+        let Some(b) = self.doc.find(keyword, true) else {
+            return;
+        };
+        let block = &self.doc.blocks()[b];
+        let found = block
+            .data
+            .clone()
+            .flat_map(|i| lex::tokens(self.doc.line(i)).map(move |(o, t)| (i, o, t)))
+            .nth(index);
+        match found {
+            Some((i, o, tok)) => match lex::parse_real(tok) {
+                Some(v) if (lo..=hi).contains(&v) => {}
+                Some(_) => errors.push(self.doc.error_at(
+                    i,
+                    o,
+                    format!("{keyword}: {tok} is out of range {lo}..={hi}"),
+                )),
+                None if is_non_finite(tok) => {}
+                None => errors.push(self.doc.error_at(
+                    i,
+                    o,
+                    format!("{keyword}: expected a number, found `{tok}`"),
+                )),
+            },
+            None => errors.push(self.doc.error_at(
+                block.line,
+                0,
+                format!("{keyword}: value {} is missing", index + 1),
+            )),
+        }
     }
 
     pub fn document(&self) -> &KeywordDocument {
@@ -135,11 +215,60 @@ impl CpsDocument {
     }
 }
 
+/// A token meant as a number that is not finite: `NaN`, `Inf`, `-Infinity`, or a
+/// real whose exponent overflows (`1e400`, `1D999`).
+fn is_non_finite(tok: &str) -> bool {
+    let t = tok.trim_start_matches(['+', '-']).to_ascii_lowercase();
+    if matches!(t.as_str(), "nan" | "inf" | "infinity") {
+        return true;
+    }
+    let b = t.as_bytes();
+    !b.is_empty()
+        && (b[0].is_ascii_digit() || b[0] == b'.')
+        && b.iter()
+            .all(|&c| c.is_ascii_digit() || matches!(c, b'.' | b'-' | b'+' | b'e' | b'd'))
+        && lex::parse_real(tok).is_none()
+        && t.replace('d', "e")
+            .parse::<f64>()
+            .is_ok_and(|v| !v.is_finite())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     const TEXT: &str = "### Anura3D_2021 ###\n$$k0_procedure\n1\n$$GRAVITY_ACCELERATION\n9.80665\n$$HOMOGENEOUS_LOCAL_DAMPING\n1 0.75\n$$END\n";
+
+    #[test]
+    fn non_finite_values_are_refused_at_their_place() {
+        for (text, expected) in [
+            (
+                "### Anura3D_2021 ###\n$$GRAVITY_ACCELERATION\nNaN\n$$END\n",
+                "a.CPS_001:3:1: $$GRAVITY_ACCELERATION: `NaN` is not a finite number",
+            ),
+            (
+                "### Anura3D_2021 ###\n$$TIME_PER_LOADSTEP\n  1e400\n$$END\n",
+                "a.CPS_001:3:3: $$TIME_PER_LOADSTEP: `1e400` is not a finite number",
+            ),
+            (
+                "### Anura3D_2021 ###\n$$HOMOGENEOUS_LOCAL_DAMPING\n1 -inf\n$$END\n",
+                "a.CPS_001:3:3: $$HOMOGENEOUS_LOCAL_DAMPING: `-inf` is not a finite number",
+            ),
+            (
+                "### Anura3D_2021 ###\n$$GRAVITY_ACCELERATION\n1e308\n$$END\n",
+                "a.CPS_001:3:1: $$GRAVITY_ACCELERATION: 1e308 is out of range",
+            ),
+            (
+                "### Anura3D_2021 ###\n$$GRAVITY_ACCELERATION\nfast\n$$END\n",
+                "a.CPS_001:3:1: $$GRAVITY_ACCELERATION: expected a number, found `fast`",
+            ),
+        ] {
+            let e = CpsDocument::parse(Path::new("a.CPS_001"), text.to_string())
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with(expected), "{e}");
+        }
+    }
 
     #[test]
     fn get_is_case_insensitive_and_set_touches_one_keyword() {

@@ -323,7 +323,7 @@ pub fn read_csv(
     path: &Path,
     options: &CsvOptions,
 ) -> Result<(FemNodes, FemReadReport), FormatError> {
-    let bytes = std::fs::read(path).map_err(|e| FormatError::io(path, e))?;
+    let bytes = super::input::read_bytes(path)?;
     parse_csv(path, &bytes, options)
 }
 

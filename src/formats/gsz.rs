@@ -7,11 +7,11 @@
 //! node k − 1. Values are in the project's base units: metric (m, kPa) or
 //! imperial (ft, psf), read from the XML's `UnitSystem`.
 
-use std::io::Read;
 use std::path::Path;
 
 use super::error::{FormatError, ParseError};
 use super::fem_csv::{self, CsvOptions, FemReadReport, UnitOverride};
+use super::input;
 use super::ply;
 use crate::model::FemNodes;
 
@@ -48,28 +48,53 @@ pub struct GszProject {
     pub analyses: Vec<Analysis>,
 }
 
-fn archive(path: &Path) -> Result<zip::ZipArchive<std::fs::File>, FormatError> {
-    let file = std::fs::File::open(path).map_err(|e| FormatError::io(path, e))?;
-    zip::ZipArchive::new(file)
-        .map_err(|e| FormatError::file(path, format!("not a readable .gsz (zip) archive: {e}")))
+/// An open archive and the most bytes one of its entries may expand to.
+struct Archive {
+    zip: zip::ZipArchive<std::fs::File>,
+    entry_limit: u64,
 }
 
-fn read_entry(
-    zip: &mut zip::ZipArchive<std::fs::File>,
-    path: &Path,
-    name: &str,
-) -> Result<Vec<u8>, FormatError> {
-    let mut entry = zip
+fn archive(path: &Path) -> Result<Archive, FormatError> {
+    let (file, len) = input::open_regular(path)?;
+    if len > input::MAX_INPUT_BYTES {
+        return Err(FormatError::file(
+            path,
+            format!(
+                "{len} bytes, larger than the {}-byte limit on an input file",
+                input::MAX_INPUT_BYTES
+            ),
+        ));
+    }
+    let zip = zip::ZipArchive::new(file)
+        .map_err(|e| FormatError::file(path, format!("not a readable .gsz (zip) archive: {e}")))?;
+    Ok(Archive {
+        zip,
+        entry_limit: input::entry_limit(len),
+    })
+}
+
+/// Reads one entry, refusing one that expands past the archive's entry limit
+/// (zip bombs) whatever size its header declares.
+fn read_entry(archive: &mut Archive, path: &Path, name: &str) -> Result<Vec<u8>, FormatError> {
+    let limit = archive.entry_limit;
+    let entry = archive
+        .zip
         .by_name(name)
         .map_err(|_| FormatError::file(path, format!("the archive has no `{name}`")))?;
-    let mut bytes = Vec::with_capacity(entry.size() as usize);
-    entry.read_to_end(&mut bytes).map_err(|e| {
-        FormatError::file(
+    let declared = entry.size();
+    match input::read_entry_limited(entry, declared, limit) {
+        Ok(Ok(bytes)) => Ok(bytes),
+        Ok(Err(size)) => Err(FormatError::file(
+            path,
+            format!(
+                "`{name}` expands to {size} bytes or more, past the {limit}-byte limit for an entry of this archive (a zip bomb?)"
+            ),
+        )),
+        Err(e) => Err(FormatError::file(
             path,
             format!("`{name}` cannot be read (truncated or corrupt archive?): {e}"),
-        )
-    })?;
-    Ok(bytes)
+        )),
+    }
 }
 
 /// The text of the first `<tag>…</tag>` in `s`.
@@ -93,6 +118,7 @@ fn attribute<'a>(s: &'a str, attr: &str) -> Option<&'a str> {
 pub fn read_project(path: &Path) -> Result<GszProject, FormatError> {
     let mut zip = archive(path)?;
     let names: Vec<String> = zip
+        .zip
         .file_names()
         .map(|n| n.map(|n| n.into_owned()))
         .collect::<Result<_, _>>()

@@ -132,6 +132,22 @@ impl KeywordDocument {
             )
             .into());
         };
+        // Anura3D stops reading at the end marker: anything after it would be
+        // silently ignored, so it is refused (blank lines are fine).
+        let end_line = blocks[terminator].line;
+        if let Some(i) = (end_line + 1..lines.len()).find(|&i| !line_str(i).trim().is_empty()) {
+            return Err(ParseError::at(
+                path,
+                i + 1,
+                1,
+                format!(
+                    "data after `{}` (line {}): Anura3D stops reading at the end marker; remove it or move it above",
+                    blocks[terminator].keyword,
+                    end_line + 1
+                ),
+            )
+            .into());
+        }
         let eol = if text.contains("\r\n") { "\r\n" } else { "\n" };
         Ok(KeywordDocument {
             path: path.to_path_buf(),
@@ -281,18 +297,10 @@ impl KeywordDocument {
     }
 }
 
-/// Reads a text file, naming the file on I/O errors and the place of invalid UTF-8.
+/// Reads a text file, naming the file on I/O errors and the place of invalid
+/// UTF-8; non-regular files and oversized files are refused (see [`super::input`]).
 pub fn read_text(path: &Path) -> Result<String, FormatError> {
-    let bytes = std::fs::read(path).map_err(|e| FormatError::io(path, e))?;
-    String::from_utf8(bytes).map_err(|e| {
-        let valid = e.utf8_error().valid_up_to();
-        let text = String::from_utf8_lossy(&e.as_bytes()[..valid]).into_owned();
-        FormatError::Parse(ParseError::new(
-            path,
-            Position::of_byte(&text, valid),
-            "the file is not valid UTF-8 text (binary file?)",
-        ))
-    })
+    super::input::read_text(path)
 }
 
 /// Splits into lines: (start, end without line ending, end with line ending).
@@ -340,7 +348,7 @@ mod tests {
             "### Anura3D_2021 ###   \n$$A\n1 2 \n$$FINISH\n",
             "### Anura3D_2025 ###\r\n$$A\r\n1\r\n\r\n$$FINISH\r\n",
             "### Anura3D_2023 ###\n$$FINISH",
-            "### Anura3D_2023 ###\n$$A\n$$FINISH\ntrailing junk\n",
+            "### Anura3D_2023 ###\n$$A\n$$FINISH\n\n  \n",
         ] {
             assert_eq!(doc(text).unwrap().to_text(), text);
         }
@@ -362,6 +370,17 @@ mod tests {
         assert_eq!(
             d.to_text(),
             "### Anura3D_2025 ###\r\n$$A \r\n9\r\n$$B\r\n2  \r\n$$FINISH\r\n"
+        );
+    }
+
+    #[test]
+    fn data_after_the_terminator_is_refused_with_its_line() {
+        let e = doc("### Anura3D_2023 ###\n$$A\n$$FINISH\n\ntrailing junk\n")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("t.GOM:5:1: data after `$$FINISH` (line 3)"),
+            "{e}"
         );
     }
 

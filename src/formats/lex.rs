@@ -105,15 +105,17 @@ pub fn parse_real(tok: &str) -> Option<f64> {
         && b.iter().any(u8::is_ascii_digit)
         && let Ok(v) = tok.parse::<f64>()
     {
-        return Some(v);
+        // Out-of-range tokens such as `1e400` parse as infinity: refused.
+        return v.is_finite().then_some(v);
     }
     match fortran_real(tok) {
         Ok(("", text)) => {
-            if text.contains(['d', 'D']) {
-                text.replace(['d', 'D'], "e").parse().ok()
+            let v: f64 = if text.contains(['d', 'D']) {
+                text.replace(['d', 'D'], "e").parse().ok()?
             } else {
-                text.parse().ok()
-            }
+                text.parse().ok()?
+            };
+            v.is_finite().then_some(v)
         }
         _ => None,
     }
@@ -196,7 +198,9 @@ mod tests {
         ] {
             assert_eq!(parse_real(text), Some(value), "{text}");
         }
-        for bad in ["", "x", "1.2.3", "1e", "--1", "nan", "inf", "1,0"] {
+        for bad in [
+            "", "x", "1.2.3", "1e", "--1", "nan", "inf", "1,0", "1e400", "-1D999",
+        ] {
             assert_eq!(parse_real(bad), None, "{bad}");
         }
     }

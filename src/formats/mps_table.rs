@@ -83,6 +83,63 @@ pub fn write_states(
 pub fn read_states(
     path: &std::path::Path,
 ) -> Result<(Vec<MaterialPoint>, Vec<crate::model::MpState>), super::error::FormatError> {
+    read_states_with_lines(path).map(|(p, s, _)| (p, s))
+}
+
+/// Like [`read_states`], and checks the table against the MPs a model places
+/// (`expected`): same count, and row by row the same id, element and position.
+/// A mismatch is an error at the row's line.
+pub fn read_states_for(
+    path: &std::path::Path,
+    expected: &[MaterialPoint],
+) -> Result<(Vec<MaterialPoint>, Vec<crate::model::MpState>), super::error::FormatError> {
+    use super::error::ParseError;
+    let (points, states, lines) = read_states_with_lines(path)?;
+    if points.len() != expected.len() {
+        let line = lines
+            .get(expected.len())
+            .copied()
+            .unwrap_or_else(|| lines.last().map_or(2, |l| l + 1));
+        return Err(ParseError::at(
+            path,
+            line,
+            1,
+            format!(
+                "{} MPs, but the model places {}",
+                points.len(),
+                expected.len()
+            ),
+        )
+        .into());
+    }
+    for (k, (a, b)) in points.iter().zip(expected).enumerate() {
+        let d = (0..3)
+            .map(|c| (a.position[c] - b.position[c]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        if a.id != b.id
+            || a.element != b.element
+            || d > 1e-9 * (1.0 + b.position[0].abs() + b.position[1].abs())
+        {
+            return Err(ParseError::at(
+                path,
+                lines[k],
+                1,
+                format!(
+                    "MP {} does not match the model's MP {} (element or position differ): the state belongs to another model",
+                    a.id, b.id
+                ),
+            )
+            .into());
+        }
+    }
+    Ok((points, states))
+}
+
+type StateRows = (Vec<MaterialPoint>, Vec<crate::model::MpState>, Vec<usize>);
+
+/// The rows with the 1-based line of each.
+fn read_states_with_lines(path: &std::path::Path) -> Result<StateRows, super::error::FormatError> {
     use super::error::ParseError;
     let text = super::keyword_doc::read_text(path)?;
     let mut lines = text.lines().enumerate();
@@ -98,6 +155,7 @@ pub fn read_states(
     }
     let mut points = Vec::new();
     let mut states = Vec::new();
+    let mut line_numbers = Vec::new();
     for (i, line) in lines {
         if line.trim().is_empty() {
             continue;
@@ -107,27 +165,38 @@ pub fn read_states(
             return Err(ParseError::at(
                 path,
                 i + 1,
-                1,
+                line.chars().count() + 1,
                 format!("expected at least 22 fields, found {}", f.len()),
             )
             .into());
         }
+        // 1-based column of field k: the characters of the fields and commas before it.
+        let column =
+            |k: usize| -> usize { f[..k].iter().map(|s| s.chars().count() + 1).sum::<usize>() + 1 };
         let num = |k: usize| -> Result<f64, ParseError> {
-            f[k].trim().parse::<f64>().map_err(|_| {
-                ParseError::at(
-                    path,
-                    i + 1,
-                    1,
-                    format!("field {}: expected a number, found `{}`", k + 1, f[k]),
-                )
-            })
+            f[k].trim()
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| {
+                    ParseError::at(
+                        path,
+                        i + 1,
+                        column(k),
+                        format!(
+                            "field {}: expected a finite number, found `{}`",
+                            k + 1,
+                            f[k]
+                        ),
+                    )
+                })
         };
         let int = |k: usize| -> Result<u32, ParseError> {
             f[k].trim().parse::<u32>().map_err(|_| {
                 ParseError::at(
                     path,
                     i + 1,
-                    1,
+                    column(k),
                     format!("field {}: expected an integer, found `{}`", k + 1, f[k]),
                 )
             })
@@ -145,6 +214,7 @@ pub fn read_states(
             total: [num(9)?, num(10)?, num(11)?, num(12)?, num(13)?, num(14)?],
             saturation: num(21)?,
         });
+        line_numbers.push(i + 1);
     }
-    Ok((points, states))
+    Ok((points, states, line_numbers))
 }

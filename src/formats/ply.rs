@@ -50,9 +50,59 @@ fn read_uint(bytes: &[u8], size: usize) -> u64 {
     v
 }
 
+/// Bytes of one row of `el` without its list items.
+fn min_row_size(el: &Element) -> usize {
+    el.properties
+        .iter()
+        .map(|p| match p.kind {
+            PropKind::Scalar(s) => s,
+            PropKind::List(c, _) => c,
+        })
+        .sum()
+}
+
+/// The offset after the `el.count` rows of `el` starting at `offset`, or `None`
+/// when they do not fit in `bytes`. The declared count is checked against the
+/// bytes left before any loop, so a huge count costs nothing.
+fn skip_element(bytes: &[u8], mut offset: usize, el: &Element) -> Option<usize> {
+    let row = min_row_size(el);
+    if row == 0 {
+        // Rows without properties take no bytes, whatever their count.
+        return Some(offset);
+    }
+    if el.count > bytes.len().saturating_sub(offset) / row {
+        return None;
+    }
+    if el
+        .properties
+        .iter()
+        .all(|p| matches!(p.kind, PropKind::Scalar(_)))
+    {
+        return Some(offset + el.count * row);
+    }
+    for _ in 0..el.count {
+        for p in &el.properties {
+            match p.kind {
+                PropKind::Scalar(s) => offset = offset.checked_add(s)?,
+                PropKind::List(c, t) => {
+                    if offset.checked_add(c)? > bytes.len() {
+                        return None;
+                    }
+                    let n = usize::try_from(read_uint(&bytes[offset..], c)).ok()?;
+                    offset = offset.checked_add(c)?.checked_add(n.checked_mul(t)?)?;
+                }
+            }
+        }
+        if offset > bytes.len() {
+            return None;
+        }
+    }
+    Some(offset)
+}
+
 /// Reads the node coordinates of a GeoStudio PLY mesh.
 pub fn read_ply_nodes(path: &Path) -> Result<Vec<[f64; 3]>, FormatError> {
-    let bytes = std::fs::read(path).map_err(|e| FormatError::io(path, e))?;
+    let bytes = super::input::read_bytes(path)?;
     parse_ply_nodes(path, &bytes)
 }
 
@@ -64,7 +114,7 @@ pub fn parse_ply_nodes(path: &Path, bytes: &[u8]) -> Result<Vec<[f64; 3]>, Forma
 /// Reads nodes and the node lists of the `element` element (converted from
 /// GeoStudio's 1-based ids to 0-based indices).
 pub fn read_ply_mesh(path: &Path) -> Result<PlyMesh, FormatError> {
-    let bytes = std::fs::read(path).map_err(|e| FormatError::io(path, e))?;
+    let bytes = super::input::read_bytes(path)?;
     parse_ply(path, &bytes, true)
 }
 
@@ -202,23 +252,10 @@ fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, 
         .into()
     };
     for el in &elements[..node_index] {
-        for _ in 0..el.count {
-            for p in &el.properties {
-                match p.kind {
-                    PropKind::Scalar(s) => offset += s,
-                    PropKind::List(c, t) => {
-                        if offset + c > bytes.len() {
-                            return Err(truncated(offset, &el.name));
-                        }
-                        let n = read_uint(&bytes[offset..], c) as usize;
-                        offset += c + n * t;
-                    }
-                }
-            }
-        }
+        offset = skip_element(bytes, offset, el).ok_or_else(|| truncated(offset, &el.name))?;
     }
-    let need = node.count * 24;
-    if offset + need > bytes.len() {
+    let need = node.count.saturating_mul(24);
+    if offset.saturating_add(need) > bytes.len() {
         return Err(ParseError::new(
             path,
             Position { line: 0, column: 0, byte: offset },
@@ -257,21 +294,28 @@ fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, 
     let mut cells = Vec::new();
     if with_elements {
         let mut offset = offset + need;
-        if let Some(el) = elements[node_index + 1..]
-            .iter()
-            .find(|e| e.name == "element")
-        {
+        let after = &elements[node_index + 1..];
+        if let Some(k) = after.iter().position(|e| e.name == "element") {
+            for skipped in &after[..k] {
+                offset = skip_element(bytes, offset, skipped)
+                    .ok_or_else(|| truncated(offset, &skipped.name))?;
+            }
+            let el = &after[k];
+            if el.count > bytes.len().saturating_sub(offset) / min_row_size(el).max(1) {
+                return Err(truncated(offset, "element"));
+            }
             for _ in 0..el.count {
                 for p in &el.properties {
                     match p.kind {
-                        PropKind::Scalar(sz) => offset += sz,
+                        PropKind::Scalar(sz) => offset = offset.saturating_add(sz),
                         PropKind::List(c, t) => {
-                            if offset + c > bytes.len() {
+                            if offset.saturating_add(c) > bytes.len() {
                                 return Err(truncated(offset, "element"));
                             }
-                            let n = read_uint(&bytes[offset..], c) as usize;
+                            let n = usize::try_from(read_uint(&bytes[offset..], c))
+                                .unwrap_or(usize::MAX);
                             offset += c;
-                            if offset + n * t > bytes.len() {
+                            if n.saturating_mul(t) > bytes.len() - offset {
                                 return Err(truncated(offset, "element"));
                             }
                             if p.name == "id" {

@@ -36,6 +36,10 @@ pub enum LooError {
     Coincident,
     #[error("node {node} has a non-finite value ({value})")]
     NonFinite { node: usize, value: f64 },
+    #[error("field {field}: values too large for a finite error sum (mean or variance overflows)")]
+    TooLarge { field: usize },
+    #[error("the largest smoothing length {0} is not a positive finite number")]
+    BadRange(f64),
 }
 
 /// Statistics of the leave-one-out predictions at one h.
@@ -87,6 +91,9 @@ impl LooObjective {
                 value: *v,
             });
         }
+        if !(h_max.is_finite() && h_max > 0.0) {
+            return Err(LooError::BadRange(h_max));
+        }
         let first = positions[0];
         if positions.iter().all(|p| p == &first) {
             return Err(LooError::Coincident);
@@ -99,6 +106,9 @@ impl LooObjective {
                 .map(|i| (values[i * n_fields + k] - m).powi(2))
                 .sum::<f64>()
                 / n as f64;
+            if !m.is_finite() || !var.is_finite() {
+                return Err(LooError::TooLarge { field: k + 1 });
+            }
             mean[k] = m;
             if n_fields > 1 && var > 0.0 {
                 scale[k] = var.sqrt();

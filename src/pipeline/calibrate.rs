@@ -4,7 +4,7 @@
 use serde::Serialize;
 
 use super::PipelineError;
-use crate::calibrate::{AnnealSettings, Calibration, calibrate};
+use crate::calibrate::{AnnealSettings, Calibration, try_calibrate};
 use crate::kernel::loo::{LooObjective, LooStats, Norm};
 use crate::kernel::mapper;
 use crate::kernel::{Kernel, KernelKind};
@@ -79,7 +79,8 @@ pub fn calibrate_h(
         ..AnnealSettings::default()
     };
     let f = |h: f64| objective.evaluate(h, norm_kind);
-    let mut calibration = calibrate(f, lo, hi, &settings);
+    let mut calibration = try_calibrate(f, lo, hi, &settings)
+        .map_err(|e| PipelineError::Input(format!("calibration: {e}")))?;
     let mut fallback = None;
     if objective.is_constant() {
         let factor = kernel.spacing_factor();

@@ -462,14 +462,13 @@ pub fn map(project: Project, fem: LoadedFem, config: &MapConfig) -> Result<Mappe
     if stress_source == StressSource::Geostatic {
         let t3 = Instant::now();
         let model = &project.model;
-        let index = geostatic::VerticalIndex::new(&model.mesh, |e| model.element_material[e] > 0);
-        let columns = index.columns(&positions, 4);
-        let sample_pts: Vec<[f64; 3]> = columns.samples.iter().map(|s| s.midpoint).collect();
+        let active = |e: usize| model.element_material[e] > 0;
+        // γ per element, averaged over a few points inside it (pwp mapped there).
+        let (sample_pts, sample_elements) = geostatic::element_samples(&model.mesh, active);
         let sample_groups: Option<Vec<u32>> = node_groups.as_ref().map(|_| {
-            columns
-                .samples
+            sample_elements
                 .iter()
-                .map(|s| model.element_material[s.element as usize])
+                .map(|&e| model.element_material[e as usize])
                 .collect()
         });
         let sample_settings = MapSettings {
@@ -484,28 +483,30 @@ pub fn map(project: Project, fem: LoadedFem, config: &MapConfig) -> Result<Mappe
             &dry_without_nodes,
         )?;
         let k_pwp = column(Quantity::Pwp).unwrap_or(0);
-        let gamma: Vec<f64> = columns
-            .samples
+        let mut gamma_sum = vec![(0.0f64, 0usize); model.mesh.n_elements()];
+        for (s, &e) in sample_elements.iter().enumerate() {
+            let m = model.material_of(e as usize);
+            let p = sampled.values[s * n_fields + k_pwp];
+            let saturation = match m {
+                Some(m) if p > 0.0 && !m.is_unsaturated() => 0.0,
+                other => state::saturation(other, p),
+            };
+            let slot = &mut gamma_sum[e as usize];
+            slot.0 += m.map_or(0.0, |m| m.gamma_at_saturation(saturation, g));
+            slot.1 += 1;
+        }
+        let gamma: Vec<f64> = gamma_sum
             .iter()
-            .enumerate()
-            .map(|(s, sample)| {
-                let m = model.material_of(sample.element as usize);
-                let p = sampled.values[s * n_fields + k_pwp];
-                let saturation = match m {
-                    Some(m) if p > 0.0 && !m.is_unsaturated() => 0.0,
-                    other => state::saturation(other, p),
-                };
-                m.map_or(0.0, |m| m.gamma_at_saturation(saturation, g))
-            })
+            .map(|&(sum, n)| if n > 0 { sum / n as f64 } else { 0.0 })
             .collect();
-        let sigma_v = geostatic::vertical_stress(&columns, &gamma);
+        let sigma_v = geostatic::overburden(&model.mesh, active, &gamma, &positions);
         for (i, p) in points.iter().enumerate() {
             let m = model.materials.get(p.material as usize - 1);
             let k0 = m.and_then(|m| m.k0).unwrap_or(0.5);
             states[i].total =
                 geostatic::geostatic_tensor(sigma_v[i], k0, states[i].pwp, states[i].saturation);
         }
-        notes.push(format!("total stress from the overburden of the GOM materials along the vertical (g = {g} m/s²; γ saturated below the water table, from the retention curve or dry above), σh = K0·σ'v + S·p with each material's K0"));
+        notes.push(format!("total stress from the overburden of the GOM materials along the vertical (g = {g} m/s²; γ per element, averaged over 4–5 points inside it: saturated below the water table, from the retention curve or dry above), σh = K0·σ'v + S·p with each material's K0"));
         timings.push((
             "geostatic stress".to_string(),
             t3.elapsed().as_secs_f64() * 1e3,

@@ -17,40 +17,15 @@ pub(super) fn groups(
     fem: &FemNodes,
     material_map: Option<&str>,
 ) -> Result<(Option<Vec<u32>>, String), PipelineError> {
+    let materials = &project.model.materials;
+    let explicit = match material_map {
+        Some(spec) => crate::formats::material_map::parse(spec, materials, fem.region.as_deref())
+            .map_err(|e| input_err!("--material-map: {e}"))?,
+        None => Vec::new(),
+    };
     let Some(regions) = &fem.region else {
         return Ok((None, "none: the FEM file has no region column, so nodes of every material were used for every MP".into()));
     };
-    let materials = &project.model.materials;
-    let mut explicit: Vec<(String, u32)> = Vec::new();
-    if let Some(spec) = material_map {
-        for pair in spec.split(',').filter(|s| !s.trim().is_empty()) {
-            let (r, m) = pair
-                .split_once('=')
-                .ok_or_else(|| input_err!("--material-map: `{pair}`: expected region=material"))?;
-            let m = m.trim();
-            let index = m
-                .parse::<u32>()
-                .ok()
-                .filter(|&i| i >= 1 && i as usize <= materials.len())
-                .or_else(|| {
-                    materials
-                        .iter()
-                        .find(|x| x.name.eq_ignore_ascii_case(m))
-                        .map(|x| x.index)
-                })
-                .ok_or_else(|| {
-                    input_err!(
-                        "--material-map: no GOM material `{m}` (materials: {})",
-                        materials
-                            .iter()
-                            .map(|x| x.name.as_str())
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    )
-                })?;
-            explicit.push((r.trim().to_string(), index));
-        }
-    }
     let resolve = |region: &str| -> Option<u32> {
         explicit
             .iter()

@@ -18,8 +18,7 @@ pub struct InputFile {
 
 pub(super) fn describe(path: &Path) -> Result<InputFile, PipelineError> {
     use sha2::{Digest, Sha256};
-    let bytes = std::fs::read(path)
-        .map_err(|e| PipelineError::Input(format!("{}: cannot read: {e}", path.display())))?;
+    let bytes = crate::formats::input::read_bytes(path)?;
     let digest = Sha256::digest(&bytes);
     Ok(InputFile {
         path: path.to_path_buf(),

@@ -186,6 +186,7 @@ pub fn judge_folder(project: &Project) -> Result<Judged, PipelineError> {
     });
     let mut inputs = vec![project.files.gom.clone(), mapf_path.clone()];
     inputs.extend(project.files.cps.clone());
+    inputs.extend(project.files.opd.clone());
     if mps_path.is_file() {
         inputs.push(mps_path);
     }

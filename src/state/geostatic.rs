@@ -7,6 +7,18 @@
 //! the top of the active mesh along the vertical; gaps in the mesh carry no
 //! weight. Horizontal total stress: σh = K0·σ'v + S·p with σ'v = σv − S·p, on xx
 //! and zz (and yy in 3D stays vertical); shears are zero.
+//!
+//! [`overburden`] evaluates the column integral with γ constant per element
+//! (the caller averages γ over [`element_samples`]). In 2D it is a sweep from the
+//! top down, O((N + E) log N) time and linear memory for N points and E elements:
+//! an element entirely above the sweep line adds γ·h(x) (its chord length, linear
+//! between its vertices' x) to a Fenwick tree over the points' x; the elements
+//! the sweep line cuts are found in a uniform grid and add their partial chord.
+//! In 3D each point walks its own column (linear memory, time O(N · column)).
+//! A vertical face shared by two elements counts once: the line belongs to the
+//! element on its +x side (half-open rule).
+
+use rayon::prelude::*;
 
 use crate::model::Mesh;
 
@@ -218,6 +230,307 @@ pub fn vertical_stress(columns: &Columns, gamma: &[f64]) -> Vec<f64> {
         .collect()
 }
 
+/// Points where the caller evaluates γ for each active element: the centroid and
+/// the midpoints between the centroid and each corner. Returns the points and the
+/// element of each; average γ over an element's points for [`overburden`].
+pub fn element_samples(mesh: &Mesh, active: impl Fn(usize) -> bool) -> (Vec<[f64; 3]>, Vec<u32>) {
+    let nc = mesh.element_type.n_corners();
+    let mut points = Vec::new();
+    let mut elements = Vec::new();
+    for e in 0..mesh.n_elements() {
+        if !active(e) {
+            continue;
+        }
+        let c = mesh.corner_coords(e);
+        let mut centroid = [0.0; 3];
+        for q in c.iter().take(nc) {
+            for k in 0..3 {
+                centroid[k] += q[k] / nc as f64;
+            }
+        }
+        points.push(centroid);
+        elements.push(e as u32);
+        for q in c.iter().take(nc) {
+            points.push([
+                0.5 * (centroid[0] + q[0]),
+                0.5 * (centroid[1] + q[1]),
+                0.5 * (centroid[2] + q[2]),
+            ]);
+            elements.push(e as u32);
+        }
+    }
+    (points, elements)
+}
+
+/// Total vertical stress (negative, compression) at each point: −∫ γ dy over the
+/// active elements above it, with `gamma[e]` (kN/m³) constant per element.
+pub fn overburden(
+    mesh: &Mesh,
+    active: impl Fn(usize) -> bool + Sync,
+    gamma: &[f64],
+    points: &[[f64; 3]],
+) -> Vec<f64> {
+    if mesh.dimension.n_dim() == 2 {
+        return overburden_2d(mesh, &active, gamma, points);
+    }
+    let index = VerticalIndex::new(mesh, &active);
+    points
+        .par_iter()
+        .map_init(Vec::new, |buf, p| {
+            buf.clear();
+            index.column_above(p, 1, buf);
+            -buf.iter()
+                .map(|s| gamma.get(s.element as usize).copied().unwrap_or(0.0) * s.dy)
+                .sum::<f64>()
+        })
+        .collect()
+}
+
+/// The y-interval of a convex polygon on the vertical line at `x`.
+fn chord(poly: &[[f64; 3]], x: f64) -> Option<(f64, f64)> {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for i in 0..poly.len() {
+        let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+        let (x0, x1) = (a[0].min(b[0]), a[0].max(b[0]));
+        if x < x0 || x > x1 {
+            continue;
+        }
+        if a[0] == b[0] {
+            lo = lo.min(a[1].min(b[1]));
+            hi = hi.max(a[1].max(b[1]));
+        } else {
+            let y = a[1] + (x - a[0]) * (b[1] - a[1]) / (b[0] - a[0]);
+            lo = lo.min(y);
+            hi = hi.max(y);
+        }
+    }
+    (hi > lo).then_some((lo, hi))
+}
+
+/// Range-add, point-query Fenwick tree of linear functions a + b·x.
+struct LinearFenwick {
+    a: Vec<f64>,
+    b: Vec<f64>,
+}
+
+impl LinearFenwick {
+    fn new(n: usize) -> LinearFenwick {
+        LinearFenwick {
+            a: vec![0.0; n + 1],
+            b: vec![0.0; n + 1],
+        }
+    }
+
+    fn add_at(&mut self, i: usize, a: f64, b: f64) {
+        let mut i = i + 1;
+        while i < self.a.len() {
+            self.a[i] += a;
+            self.b[i] += b;
+            i += i & i.wrapping_neg();
+        }
+    }
+
+    /// Adds a + b·x to the positions `lo..hi`.
+    fn range_add(&mut self, lo: usize, hi: usize, a: f64, b: f64) {
+        if lo < hi {
+            self.add_at(lo, a, b);
+            self.add_at(hi, -a, -b);
+        }
+    }
+
+    fn value(&self, i: usize, x: f64) -> f64 {
+        let (mut a, mut b) = (0.0, 0.0);
+        let mut i = i + 1;
+        while i > 0 {
+            a += self.a[i];
+            b += self.b[i];
+            i -= i & i.wrapping_neg();
+        }
+        a + b * x
+    }
+}
+
+struct Element2d {
+    e: usize,
+    poly: Vec<[f64; 3]>,
+    lo: [f64; 2],
+    hi: [f64; 2],
+}
+
+fn overburden_2d(
+    mesh: &Mesh,
+    active: &(impl Fn(usize) -> bool + Sync),
+    gamma: &[f64],
+    points: &[[f64; 3]],
+) -> Vec<f64> {
+    let nc = mesh.element_type.n_corners();
+    let elements: Vec<Element2d> = (0..mesh.n_elements())
+        .filter(|&e| active(e) && gamma.get(e).is_some_and(|g| *g != 0.0))
+        .map(|e| {
+            let poly: Vec<[f64; 3]> = mesh.corner_coords(e)[..nc].to_vec();
+            let mut lo = [f64::INFINITY; 2];
+            let mut hi = [f64::NEG_INFINITY; 2];
+            for q in &poly {
+                for k in 0..2 {
+                    lo[k] = lo[k].min(q[k]);
+                    hi[k] = hi[k].max(q[k]);
+                }
+            }
+            Element2d { e, poly, lo, hi }
+        })
+        .filter(|el| el.hi[0] > el.lo[0] && el.hi[1] > el.lo[1])
+        .collect();
+    let mut xs: Vec<f64> = points.iter().map(|p| p[0]).collect();
+    xs.sort_by(f64::total_cmp);
+    xs.dedup();
+    let slot = |x: f64| xs.partition_point(|&v| v < x);
+    let grid = StraddleGrid::new(&elements);
+    let mut by_top: Vec<usize> = (0..elements.len()).collect();
+    by_top.sort_by(|&i, &j| elements[j].lo[1].total_cmp(&elements[i].lo[1]));
+    let mut order: Vec<usize> = (0..points.len()).collect();
+    order.sort_by(|&i, &j| points[j][1].total_cmp(&points[i][1]));
+    let mut tree = LinearFenwick::new(xs.len());
+    let mut next = 0;
+    let mut out = vec![0.0; points.len()];
+    let mut breaks: Vec<f64> = Vec::with_capacity(8);
+    for &i in &order {
+        let p = points[i];
+        // Every element entirely above the sweep line adds its whole chord.
+        while next < by_top.len() && elements[by_top[next]].lo[1] >= p[1] {
+            let el = &elements[by_top[next]];
+            next += 1;
+            let g = gamma[el.e];
+            breaks.clear();
+            breaks.extend(el.poly.iter().map(|q| q[0]));
+            breaks.sort_by(f64::total_cmp);
+            breaks.dedup();
+            for w in breaks.windows(2) {
+                let (xa, xb) = (w[0], w[1]);
+                // The chord is linear on (xa, xb): two inner values give it.
+                let (t1, t2) = (xa + (xb - xa) / 3.0, xa + 2.0 * (xb - xa) / 3.0);
+                let h1 = chord(&el.poly, t1).map_or(0.0, |(l, h)| h - l);
+                let h2 = chord(&el.poly, t2).map_or(0.0, |(l, h)| h - l);
+                let slope = (h2 - h1) / (t2 - t1);
+                let intercept = h1 - slope * t1;
+                tree.range_add(slot(xa), slot(xb), g * intercept, g * slope);
+            }
+        }
+        let k = slot(p[0]);
+        let mut total = tree.value(k, p[0]);
+        // Elements the sweep line cuts: the part of their chord above the point.
+        for &j in grid.candidates(p[0], p[1]) {
+            let el = &elements[j as usize];
+            if !(el.lo[1] < p[1] && p[1] < el.hi[1] && el.lo[0] <= p[0] && p[0] < el.hi[0]) {
+                continue;
+            }
+            if let Some((lo, hi)) = chord(&el.poly, p[0]) {
+                let dy = hi - lo.max(p[1]);
+                if dy > 0.0 {
+                    total += gamma[el.e] * dy;
+                }
+            }
+        }
+        out[i] = -total;
+    }
+    out
+}
+
+/// Elements binned by bounding box on a uniform grid, for "which elements may
+/// contain this point" queries. The cell grows until the bins hold at most 32
+/// entries per element, so memory stays linear on any mesh.
+struct StraddleGrid {
+    lo: [f64; 2],
+    cell: f64,
+    n: [usize; 2],
+    offsets: Vec<usize>,
+    items: Vec<u32>,
+}
+
+impl StraddleGrid {
+    fn new(elements: &[Element2d]) -> StraddleGrid {
+        let mut lo = [f64::INFINITY; 2];
+        let mut hi = [f64::NEG_INFINITY; 2];
+        let mut size = 0.0;
+        for el in elements {
+            for k in 0..2 {
+                lo[k] = lo[k].min(el.lo[k]);
+                hi[k] = hi[k].max(el.hi[k]);
+            }
+            size += (el.hi[0] - el.lo[0]) + (el.hi[1] - el.lo[1]);
+        }
+        if elements.is_empty() || !(hi[0] - lo[0]).is_finite() || !(hi[1] - lo[1]).is_finite() {
+            return StraddleGrid {
+                lo: [0.0; 2],
+                cell: 1.0,
+                n: [1, 1],
+                offsets: vec![0, 0],
+                items: Vec::new(),
+            };
+        }
+        let span = [(hi[0] - lo[0]).max(1e-300), (hi[1] - lo[1]).max(1e-300)];
+        let mut cell = (size / (2 * elements.len()) as f64).max(span[0].max(span[1]) / 4096.0);
+        let budget = 32 * elements.len() + 1024;
+        loop {
+            let n = [
+                ((span[0] / cell).ceil() as usize).clamp(1, 4096),
+                ((span[1] / cell).ceil() as usize).clamp(1, 4096),
+            ];
+            let range = |el: &Element2d, k: usize| {
+                let a = (((el.lo[k] - lo[k]) / cell).floor().max(0.0) as usize).min(n[k] - 1);
+                let b = (((el.hi[k] - lo[k]) / cell).floor().max(0.0) as usize).min(n[k] - 1);
+                a..=b
+            };
+            let entries: usize = elements
+                .iter()
+                .map(|el| range(el, 0).count() * range(el, 1).count())
+                .sum();
+            if entries > budget && (n[0] > 1 || n[1] > 1) {
+                cell *= 2.0;
+                continue;
+            }
+            let mut counts = vec![0usize; n[0] * n[1] + 1];
+            for el in elements {
+                for j in range(el, 1) {
+                    for i in range(el, 0) {
+                        counts[j * n[0] + i + 1] += 1;
+                    }
+                }
+            }
+            for c in 1..counts.len() {
+                counts[c] += counts[c - 1];
+            }
+            let mut fill = counts.clone();
+            let mut items = vec![0u32; entries];
+            for (k, el) in elements.iter().enumerate() {
+                for j in range(el, 1) {
+                    for i in range(el, 0) {
+                        let c = j * n[0] + i;
+                        items[fill[c]] = k as u32;
+                        fill[c] += 1;
+                    }
+                }
+            }
+            return StraddleGrid {
+                lo,
+                cell,
+                n,
+                offsets: counts,
+                items,
+            };
+        }
+    }
+
+    fn candidates(&self, x: f64, y: f64) -> &[u32] {
+        let i = ((x - self.lo[0]) / self.cell).floor();
+        let j = ((y - self.lo[1]) / self.cell).floor();
+        if !(i >= 0.0 && j >= 0.0) || i as usize >= self.n[0] || j as usize >= self.n[1] {
+            return &[];
+        }
+        let c = j as usize * self.n[0] + i as usize;
+        &self.items[self.offsets[c]..self.offsets[c + 1]]
+    }
+}
+
 /// Total stress tensor from σv, K0, pwp and S: σ'v = σv − S·p, σ'h = K0·σ'v,
 /// σh = σ'h + S·p on xx and zz, σyy = σv, shears zero.
 pub fn geostatic_tensor(sigma_v: f64, k0: f64, pwp: f64, saturation: f64) -> [f64; 6] {
@@ -252,6 +565,57 @@ mod tests {
             index.column_above(&p, 1, &mut out);
             let total: f64 = out.iter().map(|s| s.dy).sum();
             assert!((total - (3.0 - p[1])).abs() < 1e-9, "{p:?}: {total}");
+        }
+    }
+
+    /// The old per-point column walk, as the oracle of [`overburden`].
+    fn brute_force(mesh: &Mesh, gamma: &[f64], points: &[[f64; 3]]) -> Vec<f64> {
+        let index = VerticalIndex::new(mesh, |_| true);
+        points
+            .iter()
+            .map(|p| {
+                let mut out = Vec::new();
+                index.column_above(p, 1, &mut out);
+                -out.iter()
+                    .map(|s| gamma[s.element as usize] * s.dy)
+                    .sum::<f64>()
+            })
+            .collect()
+    }
+
+    #[test]
+    fn sweep_equals_the_column_walk_on_a_distorted_mesh() {
+        use rand::{RngExt, SeedableRng};
+        let mut mesh = generate::structured_tri_mesh(0.0, 0.0, 6.0, 4.0, 12, 8);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for p in &mut mesh.nodes {
+            // A sloping top and jiggled interior nodes, still counter-clockwise.
+            p[1] *= 1.0 - 0.05 * p[0];
+            if p[0] > 0.0 && p[0] < 6.0 && p[1] > 0.0 {
+                p[0] += rng.random_range(-0.1..0.1);
+                p[1] += rng.random_range(-0.05..0.05);
+            }
+        }
+        let gamma: Vec<f64> = (0..mesh.n_elements())
+            .map(|e| 15.0 + (e % 7) as f64)
+            .collect();
+        let points: Vec<[f64; 3]> = (0..500)
+            .map(|_| {
+                [
+                    rng.random_range(0.01..5.99),
+                    rng.random_range(0.0..2.5),
+                    0.0,
+                ]
+            })
+            .collect();
+        let fast = overburden(&mesh, |_| true, &gamma, &points);
+        let slow = brute_force(&mesh, &gamma, &points);
+        for (k, (a, b)) in fast.iter().zip(&slow).enumerate() {
+            assert!(
+                (a - b).abs() < 1e-9 * (1.0 + b.abs()),
+                "{k} {:?}: {a} vs {b}",
+                points[k]
+            );
         }
     }
 

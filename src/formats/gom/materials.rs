@@ -326,7 +326,8 @@ pub fn read_materials(
         )
     })? as usize;
     let mut warnings = Vec::new();
-    let mut materials = Vec::with_capacity(n);
+    // The count is checked against the block's lines, not trusted for allocation.
+    let mut materials = Vec::with_capacity(n.min(end.saturating_sub(start)));
 
     let read_pair = |cur: &mut Cursor<'_>,
                      expected: &str,

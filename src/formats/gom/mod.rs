@@ -111,6 +111,9 @@ impl GomDocument {
         if rows.len() < n {
             return Err(self.short_block(b, n, rows.len(), what));
         }
+        if let Some(e) = self.extra_rows(b, n, what) {
+            return Err(e);
+        }
         let parsed: Result<Vec<T>, ParseError> = rows
             .par_iter()
             .enumerate()
@@ -138,6 +141,22 @@ impl GomDocument {
             self.doc
                 .error_at(last, 0, format!("missing required block {keyword}"))
         })
+    }
+
+    /// A block with more non-blank data lines than its count: an error at the
+    /// first line too many.
+    fn extra_rows(&self, b: usize, n: usize, what: &str) -> Option<ParseError> {
+        let (i, _) = self.rows(b).nth(n)?;
+        let block = &self.doc.blocks()[b];
+        Some(self.doc.error_at(
+            i,
+            0,
+            format!(
+                "{} (line {}) expects {n} {what}, found more: a count and its block disagree",
+                block.keyword,
+                block.line + 1
+            ),
+        ))
     }
 
     /// Where a block's data ran out: the next keyword line (or the end of the file).
@@ -241,6 +260,24 @@ impl GomDocument {
             ),
         })?;
         let (n_elements, n_nodes) = (counts[0] as usize, counts[1] as usize);
+        if n_elements == 0 || n_nodes == 0 {
+            return Err(self
+                .doc
+                .error_at(
+                    cline,
+                    0,
+                    format!(
+                        "{n_elements} elements and {n_nodes} nodes: a model needs at least one of each"
+                    ),
+                )
+                .into());
+        }
+        if n_elements > u32::MAX as usize || n_nodes > u32::MAX as usize {
+            return Err(self
+                .doc
+                .error_at(cline, 0, "more than 2^32 elements or nodes")
+                .into());
+        }
 
         let nodes = self.read_nodes(dimension.n_dim(), n_nodes)?;
         let (connectivity, element_lines) =
@@ -436,6 +473,19 @@ impl GomDocument {
         if seen < count[0] as usize {
             return Err(self.short_block(b, count[0] as usize, seen, "fixity lines"));
         }
+        // The count line comes first, then exactly `count` node lines.
+        if let Some((i, _)) = self.rows(b).nth(1 + seen) {
+            let block = &self.doc.blocks()[b];
+            return Err(self.doc.error_at(
+                i,
+                0,
+                format!(
+                    "{} (line {}) expects {seen} fixity lines, found more: the count and the block disagree",
+                    block.keyword,
+                    block.line + 1
+                ),
+            ));
+        }
         Ok(())
     }
 
@@ -456,7 +506,10 @@ impl GomDocument {
                 ),
                 None => self.doc.error_at(i, 0, "expected a material index"),
             })?;
-            Ok(value[0] as u32)
+            u32::try_from(value[0]).map_err(|_| {
+                self.doc
+                    .error_at(i, 0, format!("material index {} is out of range", value[0]))
+            })
         })?;
         for (e, (&m, (i, _))) in out.iter().zip(self.rows(b)).enumerate() {
             if m as usize > materials.len() {
@@ -493,7 +546,10 @@ impl GomDocument {
                     .doc
                     .error_at(i, line.len(), "expected `nSolid nLiquid`"),
             })?;
-            Ok((values[0] as u32, values[1] as u32))
+            match (u32::try_from(values[0]), u32::try_from(values[1])) {
+                (Ok(s), Ok(l)) => Ok((s, l)),
+                _ => Err(self.doc.error_at(i, 0, "MP count out of range")),
+            }
         })?;
         for (e, (&(solid, _), (i, _))) in out.iter().zip(self.rows(b)).enumerate() {
             if solid != 0 && !element_type.allowed_mp_counts().contains(&solid) {
@@ -533,6 +589,9 @@ impl GomDocument {
         }
         if out.len() < n_elements {
             return Err(self.short_block(b, n_elements, out.len(), what));
+        }
+        if let Some(e) = self.extra_rows(b, n_elements, what) {
+            return Err(e);
         }
         Ok(out)
     }

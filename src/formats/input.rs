@@ -1,0 +1,183 @@
+//! Opening input files safely, for every reader: only regular files are read
+//! (a folder, `/dev/zero`, a FIFO or a socket is refused at once, before any
+//! byte is read, so nothing hangs or fills memory), and no read goes past a size
+//! limit. Readers call [`read_bytes`] or [`read_text`] instead of `std::fs::read`.
+//!
+//! What it leaves to the readers: checking declared counts against the bytes
+//! actually read (each reader knows its own record sizes).
+
+use std::fs::File;
+use std::io::Read;
+use std::path::Path;
+
+use super::error::{FormatError, ParseError, Position};
+
+/// Largest input file read whole (1 GiB). Larger files are refused with a message
+/// rather than read.
+pub const MAX_INPUT_BYTES: u64 = 1 << 30;
+
+/// Largest uncompressed archive entry, whatever the archive's size (1 GiB).
+pub const MAX_ENTRY_BYTES: u64 = 1 << 30;
+
+/// An archive entry may expand to at most this many times the archive's size
+/// (deflate reaches about 1000× only on degenerate data such as zip bombs; real
+/// node tables compress 3–10×) …
+pub const ENTRY_EXPANSION: u64 = 32;
+
+/// … or to this many bytes, whichever is larger (32 MiB).
+pub const ENTRY_FLOOR_BYTES: u64 = 32 << 20;
+
+/// The uncompressed size allowed for one entry of an archive of `archive_bytes`.
+pub fn entry_limit(archive_bytes: u64) -> u64 {
+    archive_bytes
+        .saturating_mul(ENTRY_EXPANSION)
+        .clamp(ENTRY_FLOOR_BYTES, MAX_ENTRY_BYTES)
+}
+
+/// Opens `path` for reading if it is a regular file (symlinks followed) and
+/// returns it with its size. Anything else is refused without blocking: the
+/// type is checked before opening, and the open itself is non-blocking so a file
+/// swapped for a FIFO in between cannot hang the run.
+pub fn open_regular(path: &Path) -> Result<(File, u64), FormatError> {
+    let meta = std::fs::metadata(path).map_err(|e| FormatError::io(path, e))?;
+    check_kind(path, &meta)?;
+    let file = open_nonblocking(path).map_err(|e| FormatError::io(path, e))?;
+    let meta = file.metadata().map_err(|e| FormatError::io(path, e))?;
+    check_kind(path, &meta)?;
+    Ok((file, meta.len()))
+}
+
+fn check_kind(path: &Path, meta: &std::fs::Metadata) -> Result<(), FormatError> {
+    if meta.is_dir() {
+        return Err(FormatError::file(path, "is a folder; expected a file"));
+    }
+    if !meta.is_file() {
+        return Err(FormatError::file(
+            path,
+            "not a regular file (a device, FIFO or socket); give a file",
+        ));
+    }
+    Ok(())
+}
+
+#[cfg(target_os = "linux")]
+fn open_nonblocking(path: &Path) -> std::io::Result<File> {
+    use std::os::unix::fs::OpenOptionsExt;
+    let flags = rustix::fs::OFlags::NONBLOCK.bits();
+    std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(i32::try_from(flags).unwrap_or(0))
+        .open(path)
+}
+
+#[cfg(not(target_os = "linux"))]
+fn open_nonblocking(path: &Path) -> std::io::Result<File> {
+    File::open(path)
+}
+
+/// Reads a whole regular file of at most `limit` bytes.
+pub fn read_bytes_limited(path: &Path, limit: u64) -> Result<Vec<u8>, FormatError> {
+    let (file, len) = open_regular(path)?;
+    if len > limit {
+        return Err(too_large(path, len, limit));
+    }
+    let mut bytes = Vec::with_capacity(usize::try_from(len).unwrap_or(0));
+    // The file may grow while it is read: never read more than the limit.
+    file.take(limit + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|e| FormatError::io(path, e))?;
+    if bytes.len() as u64 > limit {
+        return Err(too_large(path, bytes.len() as u64, limit));
+    }
+    Ok(bytes)
+}
+
+fn too_large(path: &Path, len: u64, limit: u64) -> FormatError {
+    FormatError::file(
+        path,
+        format!("{len} bytes or more, larger than the {limit}-byte limit on an input file"),
+    )
+}
+
+/// Reads a whole regular file (at most [`MAX_INPUT_BYTES`]).
+pub fn read_bytes(path: &Path) -> Result<Vec<u8>, FormatError> {
+    read_bytes_limited(path, MAX_INPUT_BYTES)
+}
+
+/// Reads a regular text file, giving the place of the first invalid UTF-8 byte.
+pub fn read_text(path: &Path) -> Result<String, FormatError> {
+    let bytes = read_bytes(path)?;
+    String::from_utf8(bytes).map_err(|e| {
+        let valid = e.utf8_error().valid_up_to();
+        let text = String::from_utf8_lossy(&e.as_bytes()[..valid]).into_owned();
+        FormatError::Parse(ParseError::new(
+            path,
+            Position::of_byte(&text, valid),
+            "the file is not valid UTF-8 text (binary file?)",
+        ))
+    })
+}
+
+/// Reads one entry of an archive through `reader`, refusing more than `limit`
+/// bytes whatever size the entry declares (`declared` only sizes the buffer).
+pub fn read_entry_limited(
+    mut reader: impl Read,
+    declared: u64,
+    limit: u64,
+) -> std::io::Result<Result<Vec<u8>, u64>> {
+    if declared > limit {
+        return Ok(Err(declared));
+    }
+    let mut bytes = Vec::with_capacity(usize::try_from(declared).unwrap_or(0));
+    (&mut reader).take(limit + 1).read_to_end(&mut bytes)?;
+    if bytes.len() as u64 > limit {
+        return Ok(Err(bytes.len() as u64));
+    }
+    Ok(Ok(bytes))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn folders_and_devices_are_refused_before_reading() {
+        let dir = tempfile::tempdir().unwrap();
+        let e = read_bytes(dir.path()).unwrap_err().to_string();
+        assert!(e.contains("is a folder"), "{e}");
+        if Path::new("/dev/zero").exists() {
+            let e = read_bytes(Path::new("/dev/zero")).unwrap_err().to_string();
+            assert!(e.contains("not a regular file"), "{e}");
+        }
+    }
+
+    #[test]
+    fn a_file_over_the_limit_is_refused() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("big");
+        std::fs::write(&p, vec![b'a'; 100]).unwrap();
+        assert!(read_bytes_limited(&p, 99).is_err());
+        assert_eq!(read_bytes_limited(&p, 100).unwrap().len(), 100);
+    }
+
+    #[test]
+    fn an_entry_longer_than_declared_is_cut_at_the_limit() {
+        let data = vec![0u8; 1000];
+        assert_eq!(read_entry_limited(&data[..], 10, 500).unwrap(), Err(501));
+        assert_eq!(read_entry_limited(&data[..], 1000, 500).unwrap(), Err(1000));
+        assert_eq!(
+            read_entry_limited(&data[..], 0, 1000)
+                .unwrap()
+                .unwrap()
+                .len(),
+            1000
+        );
+    }
+
+    #[test]
+    fn entry_limit_scales_with_the_archive_within_bounds() {
+        assert_eq!(entry_limit(0), ENTRY_FLOOR_BYTES);
+        assert_eq!(entry_limit(10 << 20), 320 << 20);
+        assert_eq!(entry_limit(u64::MAX), MAX_ENTRY_BYTES);
+    }
+}

@@ -1,0 +1,571 @@
+//! Bounded, seeded fuzzing of every reader (#15): GOM (through the typed model
+//! and MP placement), CPS, MAPF, FEM CSV, PLY, `.gsz` and mps.csv. Each case is
+//! a fixture with one to three structure-aware mutations: truncation, bit flips,
+//! duplicated, deleted, swapped or inserted lines, extreme numbers (0, −1, 2⁶²,
+//! 10¹⁸, 1e308, NaN, …) anywhere or as the count after a `$$KEYWORD`, numbers
+//! nudged by one (wrong counts), and data after the end marker. A reader
+//! may accept or refuse a case; it may not panic.
+//!
+//! CI runs `A3D_FUZZ_CASES` cases per reader (default 400, about 10 s
+//! in the debug test profile on two cores). For a release run raise it, e.g.
+//! `A3D_FUZZ_CASES=20000 A3D_FUZZ_SEED=7 cargo test --release --test fuzz`.
+//! A failing case is written to `target/fuzz-failures/` and its reader, seed and
+//! case number are printed; every crash found becomes a named test in
+//! `tests/hardening.rs`.
+
+use std::io::Write;
+use std::panic::{AssertUnwindSafe, catch_unwind};
+use std::path::{Path, PathBuf};
+
+use a3d_init::formats::cps::CpsDocument;
+use a3d_init::formats::fem_csv::{self, CsvOptions};
+use a3d_init::formats::gom::GomDocument;
+use a3d_init::formats::mps_table::{self, MpDiagnostics};
+use a3d_init::formats::{gsz, mapf, ply};
+use a3d_init::model::MpState;
+use rand::{RngExt, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+fn fixture(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures")
+        .join(rel)
+}
+
+fn env_u64(name: &str, default: u64) -> u64 {
+    std::env::var(name)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(default)
+}
+
+fn cases() -> usize {
+    env_u64("A3D_FUZZ_CASES", 400) as usize
+}
+
+fn seed() -> u64 {
+    env_u64("A3D_FUZZ_SEED", 15)
+}
+
+const EXTREMES: [&str; 16] = [
+    "0",
+    "-1",
+    "1",
+    "4611686018427387904",
+    "999999999999999999",
+    "4294967296",
+    "4294967297",
+    "1e308",
+    "-1e308",
+    "1e400",
+    "NaN",
+    "inf",
+    "-0",
+    "1e-320",
+    "2147483648",
+    "",
+];
+
+/// Byte ranges of the numeric tokens of `text`.
+fn numbers(text: &[u8]) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < text.len() {
+        if text[i].is_ascii_digit() {
+            let start = if i > 0 && text[i - 1] == b'-' {
+                i - 1
+            } else {
+                i
+            };
+            while i < text.len()
+                && (text[i].is_ascii_alphanumeric() || matches!(text[i], b'.' | b'+' | b'-'))
+            {
+                i += 1;
+            }
+            out.push((start, i));
+        } else {
+            i += 1;
+        }
+    }
+    out
+}
+
+/// Byte ranges of the lines of `text` (including the line ending).
+fn lines(text: &[u8]) -> Vec<(usize, usize)> {
+    let mut out = Vec::new();
+    let mut start = 0;
+    for (i, &b) in text.iter().enumerate() {
+        if b == b'\n' {
+            out.push((start, i + 1));
+            start = i + 1;
+        }
+    }
+    if start < text.len() {
+        out.push((start, text.len()));
+    }
+    out
+}
+
+/// One to three structure-aware mutations of `input`.
+fn mutate(rng: &mut ChaCha8Rng, input: &[u8], end_marker: Option<&str>) -> Vec<u8> {
+    let mut b = input.to_vec();
+    let n_ops = rng.random_range(1..=3);
+    for _ in 0..n_ops {
+        if b.is_empty() {
+            b.extend_from_slice(b"0\n");
+        }
+        let ls = lines(&b);
+        match rng.random_range(0..11) {
+            0 => {
+                let at = rng.random_range(0..b.len());
+                b.truncate(at);
+            }
+            1 => {
+                let at = rng.random_range(0..b.len());
+                b[at] ^= 1 << rng.random_range(0..8);
+            }
+            2 => {
+                let (s, e) = ls[rng.random_range(0..ls.len())];
+                let line = b[s..e].to_vec();
+                b.splice(e..e, line);
+            }
+            3 => {
+                let (s, e) = ls[rng.random_range(0..ls.len())];
+                b.drain(s..e);
+            }
+            4 | 5 => {
+                let nums = numbers(&b);
+                if nums.is_empty() {
+                    continue;
+                }
+                let (s, e) = nums[rng.random_range(0..nums.len())];
+                let replacement = if rng.random_range(0..2) == 0 {
+                    EXTREMES[rng.random_range(0..EXTREMES.len())].to_string()
+                } else {
+                    // A count or value nudged by one.
+                    let text = String::from_utf8_lossy(&b[s..e]).into_owned();
+                    match text.parse::<i64>() {
+                        Ok(v) => (v + if rng.random_range(0..2) == 0 { 1 } else { -1 }).to_string(),
+                        Err(_) => "0".to_string(),
+                    }
+                };
+                b.splice(s..e, replacement.into_bytes());
+            }
+            6 => {
+                if ls.len() < 2 {
+                    continue;
+                }
+                let i = rng.random_range(0..ls.len() - 1);
+                let (s1, e1) = ls[i];
+                let (s2, e2) = ls[i + 1];
+                let mut swapped = b[s2..e2].to_vec();
+                if !swapped.ends_with(b"\n") {
+                    swapped.push(b'\n');
+                }
+                swapped.extend_from_slice(&b[s1..e1]);
+                b.splice(s1..e2, swapped);
+            }
+            7 => {
+                let (s, _) = ls[rng.random_range(0..ls.len())];
+                let garbage: &[u8] = match rng.random_range(0..5) {
+                    0 => b"$$STARTNODES\n",
+                    1 => b"\x00\xff\xfe garbage\n",
+                    2 => b"1,2,3,4,5,6,7,8,9,10,11,12,13,14,15,16,17,18,19,20,21,22,23,24,25\n",
+                    3 => b"\n\n\n",
+                    _ => b"$$FINISH\n",
+                };
+                b.splice(s..s, garbage.iter().copied());
+            }
+            8 => {
+                if let Some(marker) = end_marker {
+                    b.extend_from_slice(format!("{marker}\nafter the end\n").as_bytes());
+                } else {
+                    b.extend_from_slice(b"trailing,data\n");
+                }
+            }
+            9 => {
+                // A count: the first token of a line right after a `$$KEYWORD` line.
+                let after_keyword: Vec<(usize, usize)> = ls
+                    .windows(2)
+                    .filter(|w| b[w[0].0..w[0].1].starts_with(b"$$"))
+                    .map(|w| w[1])
+                    .collect();
+                if after_keyword.is_empty() {
+                    continue;
+                }
+                let (s, e) = after_keyword[rng.random_range(0..after_keyword.len())];
+                let end = b[s..e]
+                    .iter()
+                    .position(|c| matches!(c, b' ' | b'\t' | b',' | b'\r' | b'\n'))
+                    .map_or(e, |k| s + k);
+                let replacement = EXTREMES[rng.random_range(0..EXTREMES.len())];
+                b.splice(s..end, replacement.bytes());
+            }
+            _ => {
+                // Cut the file at a line boundary (a clean truncation).
+                let (s, _) = ls[rng.random_range(0..ls.len())];
+                b.truncate(s);
+            }
+        }
+    }
+    b
+}
+
+/// Runs `read` on `cases()` mutations of `base`; returns the failures.
+fn fuzz(
+    reader: &str,
+    base: &[u8],
+    end_marker: Option<&str>,
+    read: impl Fn(&Path, &[u8]),
+) -> Vec<String> {
+    let dir = tempfile::tempdir().unwrap();
+    let mut failures = Vec::new();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed() ^ hash(reader));
+    for case in 0..cases() {
+        let bytes = mutate(&mut rng, base, end_marker);
+        let path = dir.path().join(format!("case-{case}"));
+        let outcome = catch_unwind(AssertUnwindSafe(|| read(&path, &bytes)));
+        if outcome.is_err() {
+            let keep = Path::new(env!("CARGO_TARGET_TMPDIR"))
+                .join("..")
+                .join("fuzz-failures");
+            let _ = std::fs::create_dir_all(&keep);
+            let file = keep.join(format!("{reader}-seed{}-case{case}.bin", seed()));
+            let _ = std::fs::write(&file, &bytes);
+            failures.push(format!(
+                "{reader}: seed {} case {case} panicked; input kept in {}",
+                seed(),
+                file.display()
+            ));
+        }
+    }
+    failures
+}
+
+fn hash(s: &str) -> u64 {
+    s.bytes().fold(0xcbf2_9ce4_8422_2325, |h, b| {
+        (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3)
+    })
+}
+
+fn check(failures: Vec<String>) {
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+fn read_gom(path: &Path, bytes: &[u8]) {
+    let Ok(text) = String::from_utf8(bytes.to_vec()) else {
+        return;
+    };
+    if let Ok(doc) = GomDocument::parse(path, text.clone()) {
+        assert_eq!(doc.to_text(), text, "an untouched document round-trips");
+        if let Ok((model, _)) = doc.model() {
+            let _ = a3d_init::place::place_material_points(&model);
+        }
+    }
+}
+
+#[test]
+fn fuzz_gom() {
+    let base = std::fs::read(fixture("anura3d-mini/TwoMat.GOM")).unwrap();
+    check(fuzz("gom", &base, Some("$$FINISH"), read_gom));
+}
+
+#[test]
+fn fuzz_cps() {
+    let base = std::fs::read(fixture("anura3d-mini/TwoMat.CPS_001")).unwrap();
+    check(fuzz("cps", &base, Some("$$END"), |path, bytes| {
+        let Ok(text) = String::from_utf8(bytes.to_vec()) else {
+            return;
+        };
+        if let Ok(cps) = CpsDocument::parse(path, text) {
+            let _ = (cps.gravity(), cps.local_damping(), cps.stage());
+            let _ = cps.computation_method();
+        }
+    }));
+}
+
+/// The placed MPs of the mini model with a made-up state, for the MAPF and
+/// mps.csv bases.
+fn mini_state() -> (Vec<a3d_init::model::MaterialPoint>, Vec<MpState>) {
+    let gom = GomDocument::read(&fixture("anura3d-mini/TwoMat.GOM")).unwrap();
+    let (model, _) = gom.model().unwrap();
+    let points = a3d_init::place::place_material_points(&model).unwrap();
+    let states = points
+        .iter()
+        .map(|p| MpState {
+            pwp: -10.0 * (1.0 - p.position[1]),
+            total: [-5.0, -20.0 * (1.0 - p.position[1]), -5.0, 0.5, 0.0, 0.0],
+            saturation: 1.0,
+        })
+        .collect();
+    (points, states)
+}
+
+#[test]
+fn fuzz_mapf() {
+    let (points, states) = mini_state();
+    let mut base = Vec::new();
+    mapf::write(&mut base, &points, &states, 2, 0.01).unwrap();
+    check(fuzz("mapf", &base, None, |path, bytes| {
+        std::fs::write(path, bytes).unwrap();
+        let _ = mapf::read(path);
+    }));
+}
+
+#[test]
+fn fuzz_mps_csv() {
+    let (points, states) = mini_state();
+    let diagnostics = vec![
+        MpDiagnostics {
+            neighbours: 4,
+            shepard: 1.0,
+            status: "mapped",
+        };
+        points.len()
+    ];
+    let mut base = Vec::new();
+    mps_table::write_states(&mut base, &points, &states, &diagnostics).unwrap();
+    check(fuzz("mps", &base, None, |path, bytes| {
+        std::fs::write(path, bytes).unwrap();
+        let _ = mps_table::read_states(path);
+        let _ = mps_table::read_states_for(path, &points);
+    }));
+}
+
+#[test]
+fn fuzz_fem_csv() {
+    let base = std::fs::read(fixture("geostudio-csv/k0-slope-hydrostatic.csv")).unwrap();
+    check(fuzz("csv", &base, None, |path, bytes| {
+        let _ = fem_csv::parse_csv(path, bytes, &CsvOptions::default());
+    }));
+}
+
+/// Mutations of a binary PLY: its ASCII header as text, or bytes of the body.
+#[test]
+fn fuzz_ply() {
+    let base = std::fs::read(fixture(
+        "geostudio-gsz-internal/rapid-drawdown/1-initial-steady-state_Mesh.ply",
+    ))
+    .unwrap();
+    check(fuzz("ply", &base, None, |path, bytes| {
+        let _ = ply::parse_ply_nodes(path, bytes);
+        std::fs::write(path, bytes).unwrap();
+        let _ = ply::read_ply_mesh(path);
+    }));
+}
+
+/// A small one-analysis archive around the rapid-drawdown node table and mesh.
+fn make_gsz(path: &Path, xml: &[u8], csv: &[u8], mesh: &[u8]) {
+    let file = std::fs::File::create(path).unwrap();
+    let mut zip = zip::ZipWriter::new(file);
+    let options = zip::write::SimpleFileOptions::default();
+    for (name, bytes) in [
+        ("project.xml", xml),
+        ("Steady/001/node.csv", csv),
+        ("Steady/Mesh.ply", mesh),
+    ] {
+        zip.start_file(name, options).unwrap();
+        zip.write_all(bytes).unwrap();
+    }
+    zip.finish().unwrap();
+}
+
+const GSZ_XML: &[u8] = b"<?xml version=\"1.0\"?><GSIData><EngCoords UnitSystem=\"Metric\" /><Analyses Len=\"1\"><Analysis><ID>1</ID><Name>Steady</Name><Kind>SEEP/W</Kind><Method>SteadyState</Method><TimeStep ElapsedTime=\"1\" /></Analysis></Analyses></GSIData>";
+
+#[test]
+fn fuzz_gsz() {
+    let dir = fixture("geostudio-gsz-internal/rapid-drawdown");
+    let csv = std::fs::read(dir.join("1-initial-steady-state_001_node.csv")).unwrap();
+    let mesh = std::fs::read(dir.join("1-initial-steady-state_Mesh.ply")).unwrap();
+    let read = |path: &Path| {
+        let _ = gsz::read_project(path);
+        let _ = gsz::read_step(path, None, &gsz::StepChoice::Last, &CsvOptions::default());
+    };
+    // The unmutated archive reads.
+    let tmp = tempfile::tempdir().unwrap();
+    let good = tmp.path().join("good.gsz");
+    make_gsz(&good, GSZ_XML, &csv, &mesh);
+    gsz::read_step(&good, None, &gsz::StepChoice::Last, &CsvOptions::default()).unwrap();
+    let mut failures = Vec::new();
+    failures.extend(fuzz("gsz-csv", &csv, None, |path, bytes| {
+        make_gsz(path, GSZ_XML, bytes, &mesh);
+        read(path);
+    }));
+    failures.extend(fuzz("gsz-mesh", &mesh, None, |path, bytes| {
+        make_gsz(path, GSZ_XML, &csv, bytes);
+        read(path);
+    }));
+    failures.extend(fuzz("gsz-xml", GSZ_XML, None, |path, bytes| {
+        make_gsz(path, bytes, &csv, &mesh);
+        read(path);
+    }));
+    let archive = std::fs::read(&good).unwrap();
+    failures.extend(fuzz("gsz-bytes", &archive, None, |path, bytes| {
+        std::fs::write(path, bytes).unwrap();
+        read(path);
+    }));
+    check(failures);
+}
+
+/// Runs the binary, killed after 30 s: (exit code, stderr + stdout).
+fn run_bin(args: &[&std::ffi::OsStr]) -> (i32, String) {
+    use std::process::{Command, Stdio};
+    use std::time::{Duration, Instant};
+    let mut child = Command::new(env!("CARGO_BIN_EXE_a3d-init"))
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > Duration::from_secs(30) {
+            let _ = child.kill();
+            let _ = child.wait();
+            return (-9, format!("hung: {args:?}"));
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let out = child.wait_with_output().unwrap();
+    (
+        out.status.code().unwrap_or(-1),
+        format!(
+            "{}{}",
+            String::from_utf8_lossy(&out.stderr),
+            String::from_utf8_lossy(&out.stdout)
+        ),
+    )
+}
+
+/// The whole pipeline through the real binary: `map` on a mutated GOM, CPS or
+/// FEM table of the mini project, then `verify` and `calibrate` on what it wrote.
+/// Each run ends with 0, 1 or 2 and no panic within 30 s, changes no input, and
+/// leaves either a complete output folder or none (and no staging folder).
+/// `A3D_FUZZ_CLI_CASES` cases (default 100).
+#[test]
+fn fuzz_cli_pipeline() {
+    let n = env_u64("A3D_FUZZ_CLI_CASES", 100) as usize;
+    let gom = std::fs::read(fixture("anura3d-mini/TwoMat.GOM")).unwrap();
+    let cps = std::fs::read(fixture("anura3d-mini/TwoMat.CPS_001")).unwrap();
+    let mut fem = String::from("X (m),Y (m),PWP (kPa),Material\n");
+    for j in 0..5 {
+        for i in 0..9 {
+            let (x, y) = (i as f64 * 0.25, j as f64 * 0.25);
+            let region = if x < 1.0 { "clay" } else { "sand" };
+            fem.push_str(&format!("{x},{y},{},{region}\n", 9.81 * (1.0 - y)));
+        }
+    }
+    let fem = fem.into_bytes();
+    let mut rng = ChaCha8Rng::seed_from_u64(seed() ^ hash("cli"));
+    let tmp = tempfile::tempdir().unwrap();
+    let mut failures = Vec::new();
+    for case in 0..n {
+        let dir = tmp.path().join(format!("case-{case}"));
+        let model = dir.join("model");
+        std::fs::create_dir_all(&model).unwrap();
+        let which = rng.random_range(0..3);
+        let files = [
+            (
+                model.join("TwoMat.GOM"),
+                if which == 0 {
+                    mutate(&mut rng, &gom, Some("$$FINISH"))
+                } else {
+                    gom.clone()
+                },
+            ),
+            (
+                model.join("TwoMat.CPS_001"),
+                if which == 1 {
+                    mutate(&mut rng, &cps, Some("$$END"))
+                } else {
+                    cps.clone()
+                },
+            ),
+            (
+                dir.join("fem.csv"),
+                if which == 2 {
+                    mutate(&mut rng, &fem, None)
+                } else {
+                    fem.clone()
+                },
+            ),
+        ];
+        for (path, bytes) in &files {
+            std::fs::write(path, bytes).unwrap();
+        }
+        let out = dir.join("out");
+        let stress = ["auto", "geostatic", "zero"][rng.random_range(0..3)];
+        let (code, text) = run_bin(&[
+            "map".as_ref(),
+            "--fem".as_ref(),
+            files[2].0.as_os_str(),
+            "--mpm".as_ref(),
+            model.as_os_str(),
+            "--out".as_ref(),
+            out.as_os_str(),
+            "--stress".as_ref(),
+            stress.as_ref(),
+        ]);
+        let mut problems = Vec::new();
+        if !matches!(code, 0 | 2) || text.contains("panicked") || text.contains("internal error") {
+            problems.push(format!("map exit {code}: {text}"));
+        }
+        if code == 0 && !out.join("report.json").exists() {
+            problems.push("map succeeded without a complete output".into());
+        }
+        if code != 0 && out.exists() {
+            problems.push("map failed but left an output".into());
+        }
+        if code == 0 {
+            for args in [
+                vec![
+                    "verify".as_ref(),
+                    out.as_os_str(),
+                    "--max-steps".as_ref(),
+                    "100".as_ref(),
+                ],
+                vec![
+                    "calibrate".as_ref(),
+                    "--fem".as_ref(),
+                    files[2].0.as_os_str(),
+                    "--out".as_ref(),
+                    dir.join("cal").as_os_str(),
+                ],
+            ] {
+                let (code, text) = run_bin(&args);
+                if !matches!(code, 0..=2)
+                    || text.contains("panicked")
+                    || text.contains("internal error")
+                {
+                    problems.push(format!("{:?} exit {code}: {text}", args[0]));
+                }
+            }
+        }
+        for (path, bytes) in &files {
+            if std::fs::read(path).unwrap() != *bytes {
+                problems.push(format!("{} changed", path.display()));
+            }
+        }
+        for d in [&dir, &model] {
+            for entry in std::fs::read_dir(d).unwrap() {
+                let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+                if name.starts_with(".a3d-init") {
+                    problems.push(format!("{name} left behind"));
+                }
+            }
+        }
+        if !problems.is_empty() {
+            failures.push(format!(
+                "cli: seed {} case {case} (inputs kept in {}): {}",
+                seed(),
+                dir.display(),
+                problems.join("; ")
+            ));
+        }
+    }
+    if !failures.is_empty() {
+        let _ = tmp.keep();
+    }
+    check(failures);
+}

@@ -1,0 +1,592 @@
+//! Issue #15, one test per class, through the real binary: an output never
+//! deletes or overwrites an input; `--force` replaces a folder whole; failed
+//! runs leave nothing behind; non-regular files, oversized counts, zip bombs,
+//! inconsistent counts, data after the end marker, non-finite values and garbage
+//! options end as exit 2 with a positioned message, never a panic or a hang.
+//! Every run is killed after 30 s, so a hang fails instead of blocking CI.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+fn fixture(rel: &str) -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures")
+        .join(rel)
+}
+
+/// Runs the binary with a 30 s limit: (exit code, stderr + stdout).
+fn run(args: &[&dyn AsRef<std::ffi::OsStr>]) -> (i32, String) {
+    let mut child = Command::new(env!("CARGO_BIN_EXE_a3d-init"))
+        .args(args.iter().map(|a| a.as_ref()))
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    loop {
+        if child.try_wait().unwrap().is_some() {
+            break;
+        }
+        if start.elapsed() > Duration::from_secs(30) {
+            let _ = child.kill();
+            let _ = child.wait();
+            panic!(
+                "a3d-init {:?} hung (killed after 30 s)",
+                args.iter()
+                    .map(|a| a.as_ref().to_owned())
+                    .collect::<Vec<_>>()
+            );
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let out = child.wait_with_output().unwrap();
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stderr),
+        String::from_utf8_lossy(&out.stdout)
+    );
+    assert!(!text.contains("panicked"), "{text}");
+    assert!(!text.contains("internal error"), "{text}");
+    (out.status.code().unwrap_or(-1), text)
+}
+
+/// The mini two-material model with a FEM table that has a region column, in
+/// `dir/model/` and `dir/fem/`.
+fn mini_project(dir: &Path) -> (PathBuf, PathBuf) {
+    let model = dir.join("model");
+    let fem = dir.join("fem");
+    std::fs::create_dir_all(&model).unwrap();
+    std::fs::create_dir_all(&fem).unwrap();
+    for f in ["TwoMat.GOM", "TwoMat.CPS_001"] {
+        std::fs::copy(fixture("anura3d-mini").join(f), model.join(f)).unwrap();
+    }
+    let mut csv = String::from("X (m),Y (m),PWP (kPa),Material\n");
+    for j in 0..5 {
+        for i in 0..9 {
+            let (x, y) = (i as f64 * 0.25, j as f64 * 0.25);
+            let region = if x < 1.0 { "clay" } else { "sand" };
+            csv.push_str(&format!("{x},{y},{},{region}\n", 9.81 * (1.0 - y)));
+        }
+    }
+    std::fs::write(fem.join("fem.csv"), csv).unwrap();
+    (model.join("TwoMat.GOM"), fem.join("fem.csv"))
+}
+
+/// Every file under `dir` with its bytes.
+fn snapshot(dir: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d).unwrap() {
+            let p = entry.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push((p.clone(), std::fs::read(&p).unwrap_or_default()));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+fn no_staging_left(dir: &Path) {
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+        assert!(
+            !name.starts_with(".a3d-init"),
+            "{name} left in {}",
+            dir.display()
+        );
+    }
+}
+
+#[test]
+fn force_never_deletes_or_overwrites_an_input() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (gom, fem) = mini_project(tmp.path());
+    let cps = gom.with_extension("CPS_001");
+    let fem_dir = fem.parent().unwrap().to_path_buf();
+    let model_dir = gom.parent().unwrap().to_path_buf();
+    let before = snapshot(tmp.path());
+    // map --out = the folder of the FEM table, of the model, or the model file itself.
+    for out in [&fem_dir, &model_dir, &gom, &tmp.path().to_path_buf()] {
+        let (code, text) = run(&[
+            &"map", &"--fem", &fem, &"--mpm", &gom, &"--out", out, &"--force",
+        ]);
+        assert_eq!(code, 2, "{text}");
+        assert!(text.contains("refusing to write"), "{text}");
+        assert!(
+            text.contains(&out.display().to_string()),
+            "names the output: {text}"
+        );
+    }
+    // A symlink to the FEM folder is the FEM folder.
+    let link = tmp.path().join("link");
+    std::os::unix::fs::symlink(&fem_dir, &link).unwrap();
+    let (code, text) = run(&[
+        &"map", &"--fem", &fem, &"--mpm", &gom, &"--out", &link, &"--force",
+    ]);
+    assert_eq!(code, 2, "{text}");
+    std::fs::remove_file(&link).unwrap();
+    // inspect --mps = the GOM, the CPS, or a hard link to the GOM.
+    let hard = tmp.path().join("hard.GOM");
+    std::fs::hard_link(&gom, &hard).unwrap();
+    for target in [&gom, &cps, &hard] {
+        let (code, text) = run(&[&"inspect", &model_dir, &"--mps", target, &"--force"]);
+        assert_eq!(code, 2, "{text}");
+        assert!(text.contains("is the input"), "{text}");
+    }
+    std::fs::remove_file(&hard).unwrap();
+    // calibrate --out = the folder of the --check table.
+    let check_dir = tmp.path().join("check");
+    std::fs::create_dir(&check_dir).unwrap();
+    let check = check_dir.join("check.csv");
+    std::fs::copy(&fem, &check).unwrap();
+    let (code, text) = run(&[
+        &"calibrate",
+        &"--fem",
+        &fem,
+        &"--check",
+        &check,
+        &"--out",
+        &check_dir,
+        &"--force",
+    ]);
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("check.csv"), "{text}");
+    std::fs::remove_dir_all(&check_dir).unwrap();
+    assert_eq!(snapshot(tmp.path()), before, "no input changed");
+    no_staging_left(tmp.path());
+}
+
+#[test]
+fn verify_out_may_not_hold_the_state_and_fem_mesh_is_an_input() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (gom, fem) = mini_project(tmp.path());
+    let mapped = tmp.path().join("mapped");
+    let (code, text) = run(&[&"map", &"--fem", &fem, &"--mpm", &gom, &"--out", &mapped]);
+    assert_eq!(code, 0, "{text}");
+    let state_dir = tmp.path().join("state");
+    std::fs::create_dir(&state_dir).unwrap();
+    let state = state_dir.join("mps.csv");
+    std::fs::copy(mapped.join("mps.csv"), &state).unwrap();
+    let before = std::fs::read(&state).unwrap();
+    let (code, text) = run(&[
+        &"verify",
+        &"--mpm",
+        &gom,
+        &"--state",
+        &state,
+        &"--out",
+        &state_dir,
+        &"--force",
+        &"--max-steps",
+        &"10",
+    ]);
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("holds the input"), "{text}");
+    assert_eq!(std::fs::read(&state).unwrap(), before);
+    // --fem-mesh: the folder of Mesh.ply is an input folder too.
+    let rd = fixture("geostudio-gsz-internal/rapid-drawdown");
+    let mesh_dir = tmp.path().join("mesh");
+    std::fs::create_dir(&mesh_dir).unwrap();
+    let mesh = mesh_dir.join("Mesh.ply");
+    std::fs::copy(rd.join("1-initial-steady-state_Mesh.ply"), &mesh).unwrap();
+    let node = rd.join("1-initial-steady-state_001_node.csv");
+    let (code, text) = run(&[
+        &"calibrate",
+        &"--fem",
+        &node,
+        &"--fem-mesh",
+        &mesh,
+        &"--out",
+        &mesh_dir,
+        &"--force",
+    ]);
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("Mesh.ply"), "{text}");
+    assert!(mesh.exists());
+}
+
+#[test]
+fn force_replaces_an_output_folder_whole_and_leaves_no_staging() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (gom, fem) = mini_project(tmp.path());
+    let out = tmp.path().join("out");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("stale.txt"), "old run").unwrap();
+    let (code, text) = run(&[
+        &"map", &"--fem", &fem, &"--mpm", &gom, &"--out", &out, &"--force",
+    ]);
+    assert_eq!(code, 0, "{text}");
+    assert!(
+        !out.join("stale.txt").exists(),
+        "the old folder is gone whole"
+    );
+    assert!(out.join("report.json").exists());
+    no_staging_left(tmp.path());
+    // A failed run (bad --material-map) leaves the old output and nothing else.
+    let (code, text) = run(&[
+        &"map",
+        &"--fem",
+        &fem,
+        &"--mpm",
+        &gom,
+        &"--out",
+        &out,
+        &"--force",
+        &"--material-map",
+        &"clay=9",
+    ]);
+    assert_eq!(code, 2, "{text}");
+    assert!(out.join("report.json").exists());
+    no_staging_left(tmp.path());
+    // A failed verify (a state that is not a number) leaves no staging folder.
+    let mut state = std::fs::read_to_string(out.join("mps.csv")).unwrap();
+    state = state.replacen(",1,", ",x,", 1);
+    let bad = tmp.path().join("bad.csv");
+    std::fs::write(&bad, state).unwrap();
+    let (code, _) = run(&[
+        &"verify",
+        &"--mpm",
+        &gom,
+        &"--state",
+        &bad,
+        &"--out",
+        &tmp.path().join("v"),
+    ]);
+    assert_eq!(code, 2);
+    no_staging_left(tmp.path());
+}
+
+#[test]
+fn non_regular_files_are_refused_at_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (gom, fem) = mini_project(tmp.path());
+    let fifo = tmp.path().join("fifo.csv");
+    let status = Command::new("mkfifo").arg(&fifo).status();
+    let mut specials: Vec<PathBuf> = vec![PathBuf::from("/dev/zero"), tmp.path().to_path_buf()];
+    if status.is_ok_and(|s| s.success()) {
+        specials.push(fifo.clone());
+    }
+    for special in &specials {
+        let (code, text) = run(&[
+            &"map",
+            &"--fem",
+            special,
+            &"--mpm",
+            &gom,
+            &"--out",
+            &tmp.path().join("o"),
+        ]);
+        assert_eq!(code, 2, "{}: {text}", special.display());
+        let (code, text) = run(&[
+            &"calibrate",
+            &"--fem",
+            &fem,
+            &"--fem-mesh",
+            special,
+            &"--out",
+            &tmp.path().join("o"),
+        ]);
+        assert_eq!(code, 2, "{}: {text}", special.display());
+        let (code, text) = run(&[&"inspect", &"--fem", special]);
+        assert_eq!(code, 2, "{}: {text}", special.display());
+        if !special.is_dir() {
+            let (code, text) = run(&[&"diff", special, special]);
+            assert_eq!(code, 2, "{}: {text}", special.display());
+        }
+    }
+    let (code, text) = run(&[&"inspect", &"/dev/zero"]);
+    assert_eq!(code, 2, "{text}");
+}
+
+fn ply_with_header(header_nodes: &str, nodes: usize) -> Vec<u8> {
+    let mut b = format!(
+        "ply\nformat binary_little_endian 1.0\nelement version 1\nproperty ushort major\nproperty ushort minor\nelement node {header_nodes}\nproperty double x\nproperty double y\nproperty double z\nelement element 4611686018427387904\nproperty list uchar int id\nend_header\n"
+    )
+    .into_bytes();
+    b.extend_from_slice(&[1, 0, 0, 0]);
+    for k in 0..nodes {
+        for v in [k as f64, 0.0, 0.0] {
+            b.extend_from_slice(&v.to_le_bytes());
+        }
+    }
+    b
+}
+
+#[test]
+fn huge_declared_counts_are_errors_not_panics() {
+    use a3d_init::formats::ply;
+    let base = std::fs::read_to_string(fixture("anura3d-mini/TwoMat.GOM")).unwrap();
+    let p = Path::new("Mesh.ply");
+    for (declared, actual) in [
+        ("4611686018427387904", 3),
+        ("18446744073709551615", 3),
+        ("4", 3),
+    ] {
+        let e = ply::parse_ply_nodes(p, &ply_with_header(declared, actual))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("PLY"), "{declared}: {e}");
+    }
+    // Huge element counts after the nodes: refused before any loop.
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("Mesh.ply");
+    std::fs::write(&file, ply_with_header("3", 3)).unwrap();
+    let e = ply::read_ply_mesh(&file).unwrap_err().to_string();
+    assert!(e.contains("truncated PLY"), "{e}");
+    // A material count of 10^18 (found by hand: a capacity-overflow panic).
+    let dir = tmp.path().join("materials");
+    std::fs::create_dir(&dir).unwrap();
+    let gom = dir.join("TwoMat.GOM");
+    std::fs::write(
+        &gom,
+        base.replacen(
+            "$$NUMBER_OF_MATERIALS\n2\n",
+            "$$NUMBER_OF_MATERIALS\n999999999999999999\n",
+            1,
+        ),
+    )
+    .unwrap();
+    let (code, text) = run(&[&"inspect", &gom]);
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("TwoMat.GOM:"), "{text}");
+    // GOM counters of 2^62 or 10^18.
+    for counters in [
+        "4611686018427387904 6",
+        "4 999999999999999999",
+        "999999999999999999 999999999999999999",
+    ] {
+        let dir = tmp.path().join(counters.replace(' ', "_"));
+        std::fs::create_dir(&dir).unwrap();
+        let gom = dir.join("TwoMat.GOM");
+        std::fs::write(&gom, base.replacen("4 6\n", &format!("{counters}\n"), 1)).unwrap();
+        let (code, text) = run(&[&"inspect", &gom]);
+        assert_eq!(code, 2, "{text}");
+        assert!(text.contains("TwoMat.GOM:"), "{text}");
+    }
+}
+
+#[test]
+fn a_zip_bomb_entry_is_refused_before_it_fills_memory() {
+    let tmp = tempfile::tempdir().unwrap();
+    let gsz = tmp.path().join("bomb.gsz");
+    let file = std::fs::File::create(&gsz).unwrap();
+    let mut zip = zip::ZipWriter::new(file);
+    let options = zip::write::SimpleFileOptions::default();
+    zip.start_file("project.xml", options).unwrap();
+    zip.write_all(b"<GSIData><Analyses><Analysis><Name>A</Name></Analysis></Analyses></GSIData>")
+        .unwrap();
+    zip.start_file("A/001/node.csv", options).unwrap();
+    let zeros = vec![b'0'; 1 << 20];
+    for _ in 0..40 {
+        zip.write_all(&zeros).unwrap();
+    }
+    zip.start_file("A/Mesh.ply", options).unwrap();
+    zip.write_all(b"ply\n").unwrap();
+    zip.finish().unwrap();
+    assert!(std::fs::metadata(&gsz).unwrap().len() < 1 << 20);
+    let (code, text) = run(&[&"inspect", &"--fem", &gsz]);
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains("zip bomb"), "{text}");
+}
+
+#[test]
+fn inconsistent_counts_trailing_data_and_non_finite_values_are_positioned() {
+    let tmp = tempfile::tempdir().unwrap();
+    let gom = std::fs::read_to_string(fixture("anura3d-mini/TwoMat.GOM")).unwrap();
+    let cps = std::fs::read_to_string(fixture("anura3d-mini/TwoMat.CPS_001")).unwrap();
+    let cases = [
+        (
+            "one_element_less",
+            gom.replacen("4 6\n", "3 6\n", 1),
+            cps.clone(),
+            "TwoMat.GOM:21:1: $$STARTELEMCON (line 17) expects 3",
+        ),
+        (
+            "one_element_more",
+            gom.replacen("4 6\n", "5 6\n", 1),
+            cps.clone(),
+            "TwoMat.GOM:22:1: $$STARTELEMCON (line 17) expects 5",
+        ),
+        (
+            "one_node_more_line",
+            gom.replacen("2.0 1.0\n", "2.0 1.0\n3.0 1.0\n", 1),
+            cps.clone(),
+            "TwoMat.GOM:17:1: $$STARTNODES (line 10) expects 6",
+        ),
+        (
+            "zero_counts",
+            gom.replacen("4 6\n", "0 0\n", 1),
+            cps.clone(),
+            "TwoMat.GOM:9:1: 0 elements and 0 nodes",
+        ),
+        (
+            "negative_count",
+            gom.replacen("4 6\n", "-4 6\n", 1),
+            cps.clone(),
+            "TwoMat.GOM:9:1: expected a count",
+        ),
+        (
+            "fixity_count",
+            gom.replacen(
+                "$$START_FIXITY_LINE_SOLID\n5\n",
+                "$$START_FIXITY_LINE_SOLID\n4\n",
+                1,
+            ),
+            cps.clone(),
+            "TwoMat.GOM:28:1: $$START_FIXITY_LINE_SOLID (line 22) expects 4 fixity lines, found more",
+        ),
+        (
+            "after_finish",
+            format!("{gom}stray line\n"),
+            cps.clone(),
+            "TwoMat.GOM:91:1: data after `$$FINISH`",
+        ),
+        (
+            "overflowing_coordinate",
+            gom.replacen("2.0 1.0\n", "1e400 1.0\n", 1),
+            cps.clone(),
+            "TwoMat.GOM:16:1: expected a coordinate, found `1e400`",
+        ),
+        (
+            "cps_nan",
+            gom.clone(),
+            cps.replacen("9.81\n", "NaN\n", 1),
+            "TwoMat.CPS_001:9:1: $$GRAVITY_ACCELERATION: `NaN` is not a finite number",
+        ),
+        (
+            "cps_inf_damping",
+            gom.clone(),
+            cps.replacen("1 0.75\n", "1 -Infinity\n", 1),
+            "TwoMat.CPS_001:21:3:",
+        ),
+        (
+            "cps_after_end",
+            gom.clone(),
+            format!("{cps}junk\n"),
+            "TwoMat.CPS_001:34:1: data after `$$END`",
+        ),
+    ];
+    for (name, g, c, expected) in cases {
+        let dir = tmp.path().join(name);
+        std::fs::create_dir(&dir).unwrap();
+        std::fs::write(dir.join("TwoMat.GOM"), g).unwrap();
+        std::fs::write(dir.join("TwoMat.CPS_001"), c).unwrap();
+        let (code, text) = run(&[&"inspect", &dir]);
+        assert_eq!(code, 2, "{name}: {text}");
+        assert!(
+            text.contains(expected),
+            "{name}: expected `{expected}` in {text}"
+        );
+    }
+}
+
+#[test]
+fn garbage_material_map_and_bad_states_are_exit_2() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (gom, fem) = mini_project(tmp.path());
+    for (spec, expected) in [
+        ("snad=1", "no region `snad`"),
+        ("clay=1,clay=2", "mapped twice"),
+        ("=1", "both sides"),
+        ("clay", "expected region=material"),
+        (",", "no region=material pair"),
+        ("clay=\u{1}", "no GOM material"),
+    ] {
+        let (code, text) = run(&[
+            &"map",
+            &"--fem",
+            &fem,
+            &"--mpm",
+            &gom,
+            &"--out",
+            &tmp.path().join("o"),
+            &"--material-map",
+            &spec,
+        ]);
+        assert_eq!(code, 2, "{spec}: {text}");
+        assert!(text.contains(expected), "{spec}: {text}");
+    }
+    let out = tmp.path().join("mapped");
+    let (code, text) = run(&[&"map", &"--fem", &fem, &"--mpm", &gom, &"--out", &out]);
+    assert_eq!(code, 0, "{text}");
+    let good = std::fs::read_to_string(out.join("mps.csv")).unwrap();
+    let mut lines: Vec<String> = good.lines().map(String::from).collect();
+    let mut fields: Vec<String> = lines[2].split(',').map(String::from).collect();
+    fields[8] = "NaN".into();
+    lines[2] = fields.join(",");
+    let column = fields[..8]
+        .iter()
+        .map(|f| f.chars().count() + 1)
+        .sum::<usize>()
+        + 1;
+    let bad = tmp.path().join("bad.csv");
+    std::fs::write(&bad, lines.join("\n")).unwrap();
+    let (code, text) = run(&[
+        &"verify",
+        &"--mpm",
+        &gom,
+        &"--state",
+        &bad,
+        &"--out",
+        &tmp.path().join("v"),
+    ]);
+    assert_eq!(code, 2, "{text}");
+    assert!(
+        text.contains(&format!(
+            "bad.csv:3:{column}: field 9: expected a finite number, found `NaN`"
+        )),
+        "{text}"
+    );
+}
+
+#[test]
+fn calibrate_on_overflowing_fields_is_an_error_not_a_hang() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut csv = String::from("X (m),Y (m),PWP (kPa)\n");
+    for j in 0..15 {
+        for i in 0..15 {
+            let v = if (i + j) % 3 == 0 { 1e308 } else { -1e308 };
+            csv.push_str(&format!("{},{},{v}\n", i as f64 * 0.5, j as f64 * 0.5));
+        }
+    }
+    let fem = tmp.path().join("huge.csv");
+    std::fs::write(&fem, csv).unwrap();
+    for norm in ["l1", "l2", "relative"] {
+        let (code, text) = run(&[
+            &"calibrate",
+            &"--fem",
+            &fem,
+            &"--norm",
+            &norm,
+            &"--out",
+            &tmp.path().join("c"),
+        ]);
+        assert_eq!(code, 2, "{norm}: {text}");
+        assert!(text.contains("calibration:"), "{text}");
+    }
+    assert!(!tmp.path().join("c").exists());
+}
+
+/// Found by CLI fuzzing: `$$GRAVITY_ACCELERATION 0` made `verify` panic while
+/// plotting an infinite residual ratio (attempt to add with overflow).
+#[test]
+fn verify_with_zero_gravity_plots_without_panicking() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (gom, fem) = mini_project(tmp.path());
+    let cps = gom.with_extension("CPS_001");
+    let text = std::fs::read_to_string(&cps).unwrap();
+    std::fs::write(&cps, text.replacen("9.81\n", "0\n", 1)).unwrap();
+    let out = tmp.path().join("mapped");
+    let (code, text) = run(&[&"map", &"--fem", &fem, &"--mpm", &gom, &"--out", &out]);
+    assert_eq!(code, 0, "{text}");
+    let (code, text) = run(&[&"verify", &out, &"--max-steps", &"100"]);
+    assert!(matches!(code, 0..=2), "{text}");
+    no_staging_left(&out);
+}
