@@ -97,21 +97,69 @@ fn read_entry(archive: &mut Archive, path: &Path, name: &str) -> Result<Vec<u8>,
     }
 }
 
-/// The text of the first `<tag>…</tag>` in `s`.
-fn tag<'a>(s: &'a str, name: &str) -> Option<&'a str> {
-    let open = format!("<{name}>");
-    let close = format!("</{name}>");
-    let a = s.find(&open)? + open.len();
-    let b = a + s[a..].find(&close)?;
-    Some(s[a..b].trim())
+/// What the project XML says about one analysis.
+struct XmlAnalysis {
+    name: String,
+    kind: String,
+    method: String,
+    /// `ElapsedTime` of its `<TimeStep>`s, in order.
+    times: Vec<f64>,
 }
 
-/// The value of attribute `attr` in the first element `<elem …>` of `s`.
-fn attribute<'a>(s: &'a str, attr: &str) -> Option<&'a str> {
-    let key = format!("{attr}=\"");
-    let a = s.find(&key)? + key.len();
-    let b = a + s[a..].find('"')?;
-    Some(&s[a..b])
+/// Parses the project XML (roxmltree): the unit system and every
+/// `<Analyses>/<Analysis>`. A malformed XML is an error at its line and column,
+/// named `<archive>/<entry>`.
+fn parse_project_xml(
+    path: &Path,
+    xml_name: &str,
+    xml: &str,
+) -> Result<(String, Vec<XmlAnalysis>), FormatError> {
+    let doc = roxmltree::Document::parse(xml).map_err(|e| {
+        let pos = e.pos();
+        ParseError::at(
+            &path.join(xml_name),
+            pos.row as usize,
+            pos.col as usize,
+            format!("the project XML is malformed: {e}"),
+        )
+    })?;
+    let unit_system = doc
+        .descendants()
+        .find_map(|n| n.attribute("UnitSystem"))
+        .unwrap_or("Metric")
+        .to_string();
+    let analyses = doc
+        .descendants()
+        .find(|n| n.has_tag_name("Analyses"))
+        .map(|list| {
+            list.children()
+                .filter(|c| c.has_tag_name("Analysis"))
+                .map(|a| {
+                    // A direct child first; GeoStudio writes Name, Kind and Method there.
+                    let text = |tag: &str| {
+                        a.children()
+                            .find(|c| c.has_tag_name(tag))
+                            .or_else(|| a.descendants().find(|c| c.has_tag_name(tag)))
+                            .and_then(|c| c.text())
+                            .unwrap_or("")
+                            .trim()
+                            .to_string()
+                    };
+                    XmlAnalysis {
+                        name: text("Name"),
+                        kind: text("Kind"),
+                        method: text("Method"),
+                        times: a
+                            .descendants()
+                            .filter(|n| n.has_tag_name("TimeStep"))
+                            .filter_map(|n| n.attribute("ElapsedTime")?.trim().parse().ok())
+                            .collect(),
+                    }
+                })
+                .collect()
+        })
+        .unwrap_or_default();
+    Ok((unit_system, analyses))
 }
 
 /// Reads the project's table of contents.
@@ -130,14 +178,10 @@ pub fn read_project(path: &Path) -> Result<GszProject, FormatError> {
         .ok_or_else(|| FormatError::file(path, "no project XML at the top of the archive"))?;
     let xml_bytes = read_entry(&mut zip, path, &xml_name)?;
     let xml = String::from_utf8_lossy(&xml_bytes).into_owned();
-    let unit_system = attribute(&xml, "UnitSystem")
-        .unwrap_or("Metric")
-        .to_string();
-    let analyses_xml = xml.find("<Analyses").map_or("", |i| &xml[i..]);
+    let (unit_system, xml_analyses) = parse_project_xml(path, &xml_name, &xml)?;
     let mut analyses = Vec::new();
-    for (k, block) in analyses_xml.split("<Analysis>").skip(1).enumerate() {
-        let block = block.split("</Analysis>").next().unwrap_or("");
-        let name = tag(block, "Name").unwrap_or("").to_string();
+    for (k, block) in xml_analyses.into_iter().enumerate() {
+        let name = block.name;
         let folder = name.replace('/', "&3");
         let mut steps: Vec<SavedStep> = names
             .iter()
@@ -155,11 +199,7 @@ pub fn read_project(path: &Path) -> Result<GszProject, FormatError> {
             .collect();
         steps.sort_by_key(|s| s.number);
         // Times: time.csv (Step → Time) when present, else the XML's time steps.
-        let xml_times: Vec<f64> = block
-            .split("<TimeStep ")
-            .skip(1)
-            .filter_map(|t| attribute(t, "ElapsedTime").and_then(|v| v.parse().ok()))
-            .collect();
+        let xml_times = block.times;
         let csv_times: Vec<(u32, f64)> =
             match read_entry(&mut zip, path, &format!("{folder}/time.csv")) {
                 Ok(bytes) => String::from_utf8_lossy(&bytes)
@@ -191,8 +231,8 @@ pub fn read_project(path: &Path) -> Result<GszProject, FormatError> {
         analyses.push(Analysis {
             index: k + 1,
             name,
-            kind: tag(block, "Kind").unwrap_or("").to_string(),
-            method: tag(block, "Method").unwrap_or("").to_string(),
+            kind: block.kind,
+            method: block.method,
             has_mesh: names.iter().any(|n| *n == format!("{folder}/Mesh.ply")),
             folder,
             steps,
@@ -496,4 +536,33 @@ pub fn join_mesh(
             mesh.len()
         )
     }))
+}
+
+#[cfg(test)]
+mod xml_tests {
+    use super::*;
+
+    #[test]
+    fn project_xml_is_read_by_element_not_by_text() {
+        let xml = "<?xml version=\"1.0\"?><GSIData><EngCoords UnitSystem=\"Imperial\"/>\
+            <Analyses><Analysis><Name>Seep &amp; drawdown</Name><Kind>SEEP/W</Kind>\
+            <Method>Transient</Method><TimeSteps><TimeStep ElapsedTime=\"60\"/>\
+            <TimeStep ElapsedTime=\"120\"/></TimeSteps></Analysis></Analyses></GSIData>";
+        let (units, analyses) = parse_project_xml(Path::new("p.gsz"), "p.xml", xml).unwrap();
+        assert_eq!(units, "Imperial");
+        assert_eq!(analyses.len(), 1);
+        assert_eq!(analyses[0].name, "Seep & drawdown");
+        assert_eq!(analyses[0].method, "Transient");
+        assert_eq!(analyses[0].times, vec![60.0, 120.0]);
+    }
+
+    #[test]
+    fn malformed_project_xml_is_an_error_at_its_place() {
+        let xml = "<GSIData>\n<Analyses><Analysis></Analyses>\n</GSIData>";
+        let err = parse_project_xml(Path::new("p.gsz"), "p.xml", xml)
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(err.starts_with("p.gsz/p.xml:2:"), "{err}");
+    }
 }
