@@ -76,9 +76,9 @@ impl Gaussian {
     pub fn truncated_mass(&self, dim: usize) -> f64 {
         let c = self.cutoff;
         match dim {
-            1 => erfc(c),
+            1 => libm::erfc(c),
             2 => (-c * c).exp(),
-            _ => erfc(c) + 2.0 * c * (-c * c).exp() / PI.sqrt(),
+            _ => libm::erfc(c) + 2.0 * c * (-c * c).exp() / PI.sqrt(),
         }
     }
 }
@@ -206,21 +206,4 @@ impl Kernel for KernelKind {
             KernelKind::Wendland { dim1 } => WendlandC2 { dim1 }.alpha(dim, h),
         }
     }
-}
-
-/// Complementary error function (W. J. Cody's rational Chebyshev approximation
-/// as given in Numerical Recipes' `erfcc`, |relative error| < 1.2e-7).
-pub fn erfc(x: f64) -> f64 {
-    let z = x.abs();
-    let t = 1.0 / (1.0 + 0.5 * z);
-    let poly = -z * z - 1.26551223
-        + t * (1.00002368
-            + t * (0.37409196
-                + t * (0.09678418
-                    + t * (-0.18628806
-                        + t * (0.27886807
-                            + t * (-1.13520398
-                                + t * (1.48851587 + t * (-0.82215223 + t * 0.17087277))))))));
-    let r = t * poly.exp();
-    if x >= 0.0 { r } else { 2.0 - r }
 }
