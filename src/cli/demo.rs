@@ -102,6 +102,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         material_map: None,
         out: Some(args.out.clone()),
         force: args.force,
+        fem_vtu: false,
     };
     let mapped = map::compute(&map_args)?;
     let inputs: Vec<&Path> = vec![&mapped.project.files.gom, &fem_file];

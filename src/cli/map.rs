@@ -106,7 +106,14 @@ pub struct MapArgs {
     /// Replace an existing output folder.
     #[arg(long)]
     pub force: bool,
+    /// Also write `fem.vtu` (the FEM nodes) when the FEM has more than 200 000 nodes;
+    /// smaller FEMs always get one.
+    #[arg(long)]
+    pub fem_vtu: bool,
 }
+
+/// FEMs up to this many nodes get a `fem.vtu` without `--fem-vtu`.
+pub const FEM_VTU_AUTO_MAX: usize = 200_000;
 
 /// FEM nodes read and joined, with the reports of each file.
 pub struct LoadedFem {
@@ -886,6 +893,11 @@ fn gom_name(project: &LoadedProject) -> String {
 
 /// Writes the ready-to-run project and the diagnostics into `out`.
 pub fn write(mapped: &Mapped, out: &OutputDir) -> anyhow::Result<Vec<String>> {
+    write_with(mapped, out, false)
+}
+
+/// [`write`], with `fem.vtu` forced on (`--fem-vtu`) or left to the FEM's size.
+pub fn write_with(mapped: &Mapped, out: &OutputDir, fem_vtu: bool) -> anyhow::Result<Vec<String>> {
     let project = &mapped.project;
     let name = &project.files.name;
     let dim = project.model.mesh.dimension.n_dim();
@@ -986,21 +998,23 @@ pub fn write(mapped: &Mapped, out: &OutputDir) -> anyhow::Result<Vec<String>> {
     });
     out.write("mps.vtu", |w| vtu::write_points(w, &positions, &arrays))?;
     written.push("mps.vtu".into());
-    let fem_arrays: Vec<vtu::PointArray> = mapped
-        .fem
-        .nodes
-        .fields
-        .iter()
-        .map(|(q, v)| vtu::PointArray {
-            name: q.name(),
-            components: 1,
-            values: v.clone(),
-        })
-        .collect();
-    out.write("fem.vtu", |w| {
-        vtu::write_points(w, &mapped.fem.nodes.positions, &fem_arrays)
-    })?;
-    written.push("fem.vtu".into());
+    if fem_vtu || mapped.fem.nodes.len() <= FEM_VTU_AUTO_MAX {
+        let fem_arrays: Vec<vtu::PointArray> = mapped
+            .fem
+            .nodes
+            .fields
+            .iter()
+            .map(|(q, v)| vtu::PointArray {
+                name: q.name(),
+                components: 1,
+                values: v.clone(),
+            })
+            .collect();
+        out.write("fem.vtu", |w| {
+            vtu::write_points(w, &mapped.fem.nodes.positions, &fem_arrays)
+        })?;
+        written.push("fem.vtu".into());
+    }
     let json = serde_json::to_string_pretty(&mapped.report)?;
     out.write("report.json", |w| w.write_all(json.as_bytes()))?;
     written.push("report.json".into());
@@ -1025,7 +1039,7 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
     }
     inputs.extend(args.fem.fem.iter().map(PathBuf::as_path));
     let out = OutputDir::create(&target, args.force, &inputs)?;
-    let written = write(&mapped, &out)?;
+    let written = write_with(&mapped, &out, args.fem_vtu)?;
     let target = out.commit()?;
     let r = &mapped.report;
     eprintln!(
