@@ -34,9 +34,18 @@ pub struct BenchArgs {
     /// Elements of the generated GOM (`gom`).
     #[arg(long, default_value_t = 1_000_000)]
     pub elements: usize,
+    /// Neighbour search for `map`: the cell grid (default) or the k-d tree reference.
+    #[arg(long, value_enum, default_value_t = SearchArg::Grid)]
+    pub search: SearchArg,
     /// Repetitions; the best is reported.
     #[arg(long, default_value_t = 3)]
     pub repeat: usize,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum SearchArg {
+    Grid,
+    Kdtree,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -101,14 +110,19 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             let mut mean_neighbours = 0.0;
             for _ in 0..args.repeat.max(1) {
                 let t = Instant::now();
-                let r = mapper::map_points(&cloud, &points, None, &settings)
+                let search = match args.search {
+                    SearchArg::Grid => mapper::Search::Grid,
+                    SearchArg::Kdtree => mapper::Search::KdTree,
+                };
+                let r = mapper::map_points_with(&cloud, &points, None, &settings, search, true)
                     .map_err(|e| anyhow::anyhow!("{e}"))?;
                 best = best.min(t.elapsed().as_secs_f64());
                 mean_neighbours =
                     r.n_neighbours.iter().map(|&n| n as f64).sum::<f64>() / points.len() as f64;
             }
             println!(
-                "map {dim}D: {} nodes → {} points, cubic, h = {h:.5}, {mean_neighbours:.1} neighbours/query, {threads} thread(s): {:.3} s (tree build included) = {:.3e} queries/s ({:.3e} per thread)",
+                "map {dim}D ({:?}): {} nodes → {} points, cubic, h = {h:.5}, {mean_neighbours:.1} neighbours/query, {threads} thread(s): {:.3} s (index build included) = {:.3e} queries/s ({:.3e} per thread)",
+                args.search,
                 args.nodes,
                 args.points,
                 best,

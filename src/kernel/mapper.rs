@@ -9,6 +9,7 @@
 
 use rayon::prelude::*;
 
+use super::grid::{self, Candidates, Cell, Grid};
 use super::neighbours::NeighbourIndex;
 use super::{Kernel, KernelKind};
 
@@ -92,19 +93,67 @@ pub enum MapError {
 /// Values and per-point (neighbours, Shepard ratio, status) of one chunk.
 type ChunkResult = (Vec<f64>, Vec<(u32, f64, PointStatus)>);
 
+/// How the mapper finds the nodes inside the kernel support.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub enum Search {
+    /// Uniform cell grid, queries processed cell by cell (the default).
+    Grid,
+    /// The kiddo k-d tree, one query at a time (the reference).
+    KdTree,
+}
+
+/// One group's nodes and their neighbour search.
 struct Indexed {
     group: u32,
     members: Vec<u32>,
-    index: NeighbourIndex,
+    /// Member positions (local index → position).
+    positions: Vec<[f64; 3]>,
+    /// Built by [`Search::KdTree`], or on demand for nearest-node fallbacks.
+    tree: std::sync::OnceLock<NeighbourIndex>,
+    grid: Option<Grid>,
+    /// The node values in the grid's order (n_fields per node), so that the
+    /// rows of a cell's candidates are gathered with them.
+    grid_values: Vec<f64>,
 }
 
-fn build_indices(nodes: &NodeCloud<'_>) -> Vec<Indexed> {
+impl Indexed {
+    fn tree(&self, dim: usize) -> &NeighbourIndex {
+        self.tree
+            .get_or_init(|| NeighbourIndex::new(&self.positions, dim))
+    }
+}
+
+fn build_indices(nodes: &NodeCloud<'_>, search: Search, radius: f64) -> Vec<Indexed> {
+    let make = |group: u32, members: Vec<u32>| {
+        let positions: Vec<[f64; 3]> = members
+            .iter()
+            .map(|&i| nodes.positions[i as usize])
+            .collect();
+        let grid = (search == Search::Grid).then(|| Grid::new(&positions, nodes.dim, radius));
+        let nf = nodes.n_fields;
+        let grid_values = grid.as_ref().map_or_else(Vec::new, |g| {
+            let mut v = Vec::with_capacity(g.order().len() * nf);
+            for &local in g.order() {
+                let node = members[local as usize] as usize;
+                v.extend_from_slice(&nodes.values[node * nf..(node + 1) * nf]);
+            }
+            v
+        });
+        let ix = Indexed {
+            group,
+            members,
+            grid,
+            grid_values,
+            positions,
+            tree: std::sync::OnceLock::new(),
+        };
+        if search == Search::KdTree {
+            ix.tree(nodes.dim);
+        }
+        ix
+    };
     match nodes.group {
-        None => vec![Indexed {
-            group: u32::MAX,
-            members: (0..nodes.positions.len() as u32).collect(),
-            index: NeighbourIndex::new(nodes.positions, nodes.dim),
-        }],
+        None => vec![make(u32::MAX, (0..nodes.positions.len() as u32).collect())],
         Some(groups) => {
             let mut ids: Vec<u32> = groups.to_vec();
             ids.sort_unstable();
@@ -114,46 +163,38 @@ fn build_indices(nodes: &NodeCloud<'_>) -> Vec<Indexed> {
                     let members: Vec<u32> = (0..groups.len() as u32)
                         .filter(|&i| groups[i as usize] == g)
                         .collect();
-                    let pts: Vec<[f64; 3]> = members
-                        .iter()
-                        .map(|&i| nodes.positions[i as usize])
-                        .collect();
-                    Indexed {
-                        group: g,
-                        members,
-                        index: NeighbourIndex::new(&pts, nodes.dim),
-                    }
+                    make(g, members)
                 })
                 .collect()
         }
     }
 }
 
-/// Maps one point into `out` (n_fields values); returns (neighbours, ratio, status).
-fn map_one(
+/// Maps one point into `out` (n_fields values) from its neighbours `found`
+/// (sorted by distance, then node index; `row` gives a neighbour's values);
+/// returns (neighbours, ratio, status).
+fn map_one<'r>(
     nodes: &NodeCloud<'_>,
     idx: &Indexed,
     settings: &MapSettings,
     p: [f64; 3],
-    scratch: &mut Vec<(u32, f64)>,
+    found: &[(u32, f64)],
+    row: impl Fn(u32) -> &'r [f64],
     out: &mut [f64],
 ) -> (u32, f64, PointStatus) {
-    let support = settings.kernel.support() * settings.h;
-    idx.index.within(p, support, scratch);
     let alpha = settings.kernel.alpha(nodes.dim, settings.h);
     out.iter_mut().for_each(|v| *v = 0.0);
     let mut sum_w = 0.0;
     let mut count = 0;
-    for &(local, d) in scratch.iter() {
+    let nf = nodes.n_fields;
+    for &(local, d) in found {
         let w = settings.kernel.shape(d / settings.h);
         if w <= 0.0 {
             continue;
         }
         count += 1;
         sum_w += w;
-        let node = idx.members[local as usize] as usize;
-        let row = &nodes.values[node * nodes.n_fields..(node + 1) * nodes.n_fields];
-        for (o, v) in out.iter_mut().zip(row) {
+        for (o, v) in out.iter_mut().zip(row(local)) {
             *o += w * v;
         }
     }
@@ -163,12 +204,10 @@ fn map_one(
         return (count, ratio, PointStatus::Mapped);
     }
     match settings.outside {
-        OutsidePolicy::Nearest => match idx.index.nearest(p) {
+        OutsidePolicy::Nearest => match idx.tree(nodes.dim).nearest(p) {
             Some((local, _)) => {
                 let node = idx.members[local as usize] as usize;
-                out.copy_from_slice(
-                    &nodes.values[node * nodes.n_fields..(node + 1) * nodes.n_fields],
-                );
+                out.copy_from_slice(&nodes.values[node * nf..(node + 1) * nf]);
                 (count, ratio, PointStatus::Nearest)
             }
             None => {
@@ -188,6 +227,7 @@ fn run(
     points: &[[f64; 3]],
     point_group: Option<&[u32]>,
     settings: &MapSettings,
+    search: Search,
     parallel: bool,
 ) -> Result<MapResult, MapError> {
     if !(settings.h > 0.0 && settings.h.is_finite()) {
@@ -199,7 +239,12 @@ fn run(
         group: None,
         ..*nodes
     };
-    let indices = build_indices(if grouped { nodes } else { &ungrouped_nodes });
+    let support = settings.kernel.support() * settings.h;
+    let indices = build_indices(
+        if grouped { nodes } else { &ungrouped_nodes },
+        search,
+        support,
+    );
     let lookup = |g: u32| -> Result<&Indexed, MapError> {
         if !grouped {
             return Ok(&indices[0]);
@@ -219,27 +264,66 @@ fn run(
     // Queries run in Morton (Z-curve) order of the points for cache locality in
     // the tree; results are scattered back to the input order. The order depends
     // only on the coordinates, so the output is the same for any thread count.
-    let order = morton_order(points, nodes.dim);
+    let group_of = |i: usize| -> u32 {
+        if grouped {
+            point_group.map_or(u32::MAX, |gs| gs[i])
+        } else {
+            u32::MAX
+        }
+    };
+    let order = match search {
+        Search::KdTree => morton_order(points, nodes.dim),
+        Search::Grid => {
+            // Cell by cell in Morton order of the cells, group by group.
+            let mut keyed: Vec<(u32, u64, u32)> = points
+                .par_iter()
+                .enumerate()
+                .map(|(i, p)| {
+                    let g = group_of(i);
+                    let ix = lookup(g).unwrap_or(&indices[0]);
+                    let key = ix
+                        .grid
+                        .as_ref()
+                        .map_or(0, |grid| grid::morton(grid.cell(*p)));
+                    (g, key, i as u32)
+                })
+                .collect();
+            keyed.par_sort_unstable();
+            keyed.into_iter().map(|(_, _, i)| i).collect()
+        }
+    };
     let work = |idx: &[u32]| {
-        let mut scratch = Vec::with_capacity(128);
+        let mut found = Vec::with_capacity(128);
+        let mut candidates = Candidates::default();
+        let mut gathered: Option<(u32, Cell)> = None;
         let mut values = vec![0.0; idx.len() * nf];
         let mut meta = Vec::with_capacity(idx.len());
         for (k, &i) in idx.iter().enumerate() {
             let i = i as usize;
-            let g = if grouped {
-                point_group.map_or(u32::MAX, |gs| gs[i])
-            } else {
-                u32::MAX
-            };
+            let g = group_of(i);
             let ix = lookup(g).unwrap_or(&indices[0]);
-            meta.push(map_one(
-                nodes,
-                ix,
-                settings,
-                points[i],
-                &mut scratch,
-                &mut values[k * nf..(k + 1) * nf],
-            ));
+            let out = &mut values[k * nf..(k + 1) * nf];
+            let m = match &ix.grid {
+                Some(grid) => {
+                    let cell = grid.cell(points[i]);
+                    if gathered != Some((g, cell)) {
+                        grid.gather(cell, &ix.grid_values, nf, &mut candidates);
+                        gathered = Some((g, cell));
+                    }
+                    candidates.within(points[i], support, &mut found);
+                    let c = &candidates;
+                    map_one(nodes, ix, settings, points[i], &found, |k| c.row(k), out)
+                }
+                None => {
+                    ix.tree(nodes.dim).within(points[i], support, &mut found);
+                    let row = |local: u32| {
+                        let node = ix.members[local as usize] as usize;
+                        &nodes.values[node * nf..(node + 1) * nf]
+                    };
+                    map_one(nodes, ix, settings, points[i], &found, row, out)
+                }
+            };
+            meta.push(m);
         }
         (values, meta)
     };
@@ -283,14 +367,15 @@ fn run(
     Ok(result)
 }
 
-/// Maps the node fields onto `points` in parallel (deterministic).
+/// Maps the node fields onto `points` in parallel (deterministic), with the
+/// cell grid.
 pub fn map_points(
     nodes: &NodeCloud<'_>,
     points: &[[f64; 3]],
     point_group: Option<&[u32]>,
     settings: &MapSettings,
 ) -> Result<MapResult, MapError> {
-    run(nodes, points, point_group, settings, true)
+    run(nodes, points, point_group, settings, Search::Grid, true)
 }
 
 /// The serial oracle of [`map_points`].
@@ -300,7 +385,20 @@ pub fn map_points_serial(
     point_group: Option<&[u32]>,
     settings: &MapSettings,
 ) -> Result<MapResult, MapError> {
-    run(nodes, points, point_group, settings, false)
+    run(nodes, points, point_group, settings, Search::Grid, false)
+}
+
+/// [`map_points`] with a chosen neighbour search, in parallel or serially.
+/// Every choice gives bit-identical results.
+pub fn map_points_with(
+    nodes: &NodeCloud<'_>,
+    points: &[[f64; 3]],
+    point_group: Option<&[u32]>,
+    settings: &MapSettings,
+    search: Search,
+    parallel: bool,
+) -> Result<MapResult, MapError> {
+    run(nodes, points, point_group, settings, search, parallel)
 }
 
 /// Median distance from each node to its nearest other node: the reference

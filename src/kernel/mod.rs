@@ -5,6 +5,7 @@
 //! Kernels follow the paper's notation: R = d/h, w(R) = α·shape(R), with α the
 //! normalisation that makes ∫w = 1 over the line, plane or space.
 
+pub mod grid;
 pub mod loo;
 pub mod mapper;
 pub mod neighbours;
