@@ -458,3 +458,38 @@ fn grid_map_equals_kiddo_map_bit_for_bit() {
         }
     }
 }
+
+#[test]
+fn spacings_equal_brute_force_bit_for_bit() {
+    let mut rng = ChaCha8Rng::seed_from_u64(23);
+    for dim in [2usize, 3] {
+        let pts = cloud_with_duplicates(&mut rng, dim, 1500);
+        let brute: Vec<f64> = (0..pts.len())
+            .map(|i| {
+                within_brute_force(&pts, dim, pts[i], 20.0)
+                    .into_iter()
+                    .find(|&(j, _)| j as usize != i)
+                    .map_or(f64::INFINITY, |(_, d)| d)
+            })
+            .collect();
+        let got = mapper::nearest_other_distances(&pts, dim);
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&got), bits(&brute));
+        let mut sorted = brute.clone();
+        sorted.sort_by(f64::total_cmp);
+        assert_eq!(mapper::median_spacing(&pts, dim), sorted[sorted.len() / 2]);
+        assert_eq!(mapper::min_spacing(&pts, dim), 0.0, "duplicates");
+        let distinct = &pts[..1500];
+        let brute_min = (0..distinct.len())
+            .map(|i| {
+                within_brute_force(distinct, dim, distinct[i], 20.0)
+                    .into_iter()
+                    .find(|&(j, _)| j as usize != i)
+                    .map_or(f64::INFINITY, |(_, d)| d)
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert_eq!(mapper::min_spacing(distinct, dim), brute_min);
+    }
+    assert_eq!(mapper::median_spacing(&[[1.0; 3]], 3), 0.0);
+    assert_eq!(mapper::min_spacing(&[[1.0; 3]], 3), 0.0);
+}

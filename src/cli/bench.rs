@@ -37,6 +37,13 @@ pub struct BenchArgs {
     /// Neighbour search for `map`: the cell grid (default) or the k-d tree reference.
     #[arg(long, value_enum, default_value_t = SearchArg::Grid)]
     pub search: SearchArg,
+    /// Folder for the generated case and the output of `e2e` (default: a
+    /// temporary folder, removed afterwards).
+    #[arg(long)]
+    pub dir: Option<std::path::PathBuf>,
+    /// Write `fem.vtu` in `e2e` too.
+    #[arg(long)]
+    pub fem_vtu: bool,
     /// Repetitions; the best is reported.
     #[arg(long, default_value_t = 3)]
     pub repeat: usize,
@@ -56,6 +63,10 @@ pub enum BenchWhat {
     Gom,
     /// Leave-one-out objective at one h and a full calibration (`--nodes`, 2D hydrostatic field).
     Loo,
+    /// The whole `map` on a generated 3D case (`--nodes` random FEM nodes with
+    /// pwp and six stresses in a 100 m cube, a TET mesh with about `--points`
+    /// MPs, h giving `--neighbours` nodes in reach), phase by phase.
+    E2e,
     /// FEM CSV reading throughput (MB/s) on a generated 3D table of `--nodes` rows
     /// (x, y, z, pwp and six stresses, shortest round-trip decimals).
     Csv,
@@ -178,6 +189,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
                 c.h / l
             );
         }
+        BenchWhat::E2e => e2e(&args)?,
         BenchWhat::Csv => {
             let text = generated_fem_csv(args.nodes, 3);
             let mb = text.len() as f64 / 1e6;
@@ -248,4 +260,103 @@ pub fn generated_fem_csv(n: usize, seed: u64) -> String {
         s.push('\n');
     }
     s
+}
+
+/// `bench e2e`: generates the case, runs `map` as the command does, prints the
+/// phases.
+fn e2e(args: &BenchArgs) -> anyhow::Result<()> {
+    use super::map::{self, FemArgs, MapArgs, OutsideArg, SignArg, StressArg};
+    let threads = rayon::current_num_threads();
+    let tmp;
+    let dir = match &args.dir {
+        Some(d) => {
+            std::fs::create_dir_all(d)?;
+            d.clone()
+        }
+        None => {
+            tmp = tempfile::tempdir()?;
+            tmp.path().to_path_buf()
+        }
+    };
+    let t = Instant::now();
+    let gom = dir.join("e2e.GOM");
+    let fem = dir.join("e2e-fem.csv");
+    // Kuhn cubes: 6 TETs each, 4 MPs per TET.
+    let n_side = ((args.points as f64 / 24.0).cbrt().round() as usize).max(1);
+    if !gom.exists() || !fem.exists() {
+        let mesh = generate::structured_tet_mesh(100.0, 0.0, 100.0, 100.0, n_side, n_side, n_side);
+        let spec = MaterialSpec::dry_soil("soil");
+        let text = model_to_text(&generate::single_material_model(mesh, &spec, 4), "2023");
+        std::fs::write(&gom, text)?;
+        std::fs::write(&fem, generated_fem_csv(args.nodes, 3))?;
+    }
+    let generate_s = t.elapsed().as_secs_f64();
+    // Support 2h holding `neighbours` nodes on average in the 100 m cube.
+    let support =
+        (args.neighbours / (args.nodes as f64 * 4.0 / 3.0 * std::f64::consts::PI)).cbrt() * 100.0;
+    let map_args = MapArgs {
+        fem: FemArgs {
+            fem: vec![fem.clone()],
+            columns: None,
+            fem_units: None,
+            fem_sign: SignArg::Geostudio,
+            fem_mesh: None,
+            analysis: None,
+            step: "last".into(),
+        },
+        mpm: gom.clone(),
+        kernel: "cubic".into(),
+        h: Some(format!("{}", support / 2.0)),
+        seed: 1,
+        outside: OutsideArg::Nearest,
+        min_shepard: 0.02,
+        stress: StressArg::Auto,
+        material_map: None,
+        out: Some(dir.join("out")),
+        force: true,
+        fem_vtu: args.fem_vtu,
+    };
+    let t = Instant::now();
+    let mapped = map::compute(&map_args)?;
+    let compute_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let out = super::output::OutputDir::create(&dir.join("out"), true, &[&gom, &fem])?;
+    let written = map::write_with(&mapped, &out, args.fem_vtu)?;
+    let target = out.commit()?;
+    let write_s = t.elapsed().as_secs_f64();
+    let report = serde_json::to_value(&mapped.report)?;
+    let mps = report["material_points"].as_u64().unwrap_or(0);
+    drop(mapped);
+    println!(
+        "e2e: {} FEM nodes → {mps} MPs, h = {:.4} m, {threads} thread(s) (case generated in {generate_s:.2} s, not counted)",
+        args.nodes,
+        support / 2.0
+    );
+    if let Some(phases) = report["timings_ms"].as_array() {
+        for p in phases {
+            println!(
+                "  {:<28} {:>8.3} s",
+                p[0].as_str().unwrap_or("?"),
+                p[1].as_f64().unwrap_or(0.0) / 1e3
+            );
+        }
+    }
+    let mut bytes = 0u64;
+    for name in &written {
+        bytes += std::fs::metadata(target.join(name)).map_or(0, |m| m.len());
+    }
+    println!("  {:<28} {compute_s:>8.3} s", "compute (all of the above)");
+    println!(
+        "  {:<28} {write_s:>8.3} s ({:.0} MB: {})",
+        "write outputs",
+        bytes as f64 / 1e6,
+        written.join(", ")
+    );
+    println!("  {:<28} {:>8.3} s", "total", compute_s + write_s);
+    if let Ok(status) = std::fs::read_to_string("/proc/self/status")
+        && let Some(line) = status.lines().find(|l| l.starts_with("VmHWM"))
+    {
+        println!("  peak RSS {}", line.trim_start_matches("VmHWM:").trim());
+    }
+    Ok(())
 }

@@ -16,7 +16,6 @@ use crate::formats::fem_csv::{self, CsvOptions, FemReadReport, SignConvention};
 use crate::formats::mps_table::{self, MpDiagnostics};
 use crate::formats::{mapf, vtu};
 use crate::kernel::mapper::{self, MapSettings, NodeCloud, OutsidePolicy, PointStatus};
-use crate::kernel::neighbours::NeighbourIndex;
 use crate::kernel::{Kernel, KernelKind};
 use crate::model::{FemNodes, MpState, Quantity, StressComponent};
 use crate::state::{self, geostatic};
@@ -438,20 +437,7 @@ fn map_subset(
 }
 
 fn min_spacing(points: &[[f64; 3]], dim: usize) -> f64 {
-    let index = NeighbourIndex::new(points, dim);
-    let mut scratch = Vec::new();
-    let mut best = f64::INFINITY;
-    let spacing = mapper::median_spacing(points, dim);
-    for (i, p) in points.iter().enumerate() {
-        index.within(*p, spacing.max(1e-12), &mut scratch);
-        for &(j, d) in &scratch {
-            if j as usize != i {
-                best = best.min(d);
-                break;
-            }
-        }
-    }
-    if best.is_finite() { best } else { spacing }
+    mapper::min_spacing(points, dim)
 }
 
 fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {

@@ -177,6 +177,69 @@ impl Grid {
     }
 }
 
+impl Grid {
+    /// For every point of the grid (in the original order): the distance to
+    /// its second-nearest point (its nearest other point; 0 for a duplicate)
+    /// when that lies within the grid's radius, else `None`. In parallel over
+    /// cells, one gathered neighbourhood per cell.
+    pub fn second_nearest_within(&self, radius: f64) -> Vec<Option<f64>> {
+        use rayon::prelude::*;
+        let n_cells = self.start.len() - 1;
+        let r2 = radius * radius;
+        let parts: Vec<Vec<(u32, Option<f64>)>> = (0..n_cells.div_ceil(1024))
+            .into_par_iter()
+            .map(|block| {
+                let mut out = Vec::new();
+                let mut cand = Candidates::default();
+                for c in block * 1024..((block + 1) * 1024).min(n_cells) {
+                    let (a, b) = (self.start[c] as usize, self.start[c + 1] as usize);
+                    if a == b {
+                        continue;
+                    }
+                    let nx = self.dims[0] as usize;
+                    let ny = self.dims[1] as usize;
+                    let cell = [
+                        (c % nx) as i64,
+                        ((c / nx) % ny) as i64,
+                        (c / (nx * ny)) as i64,
+                    ];
+                    self.gather(cell, &[], 0, &mut cand);
+                    for k in a..b {
+                        let q = [self.xs[k], self.ys[k], self.zs[k]];
+                        let (mut first, mut second) = (f64::INFINITY, f64::INFINITY);
+                        let n = cand.xs.len();
+                        for j in 0..n {
+                            let dx = cand.xs[j] - q[0];
+                            let dy = cand.ys[j] - q[1];
+                            let d2 = if self.dim == 3 {
+                                let dz = cand.zs[j] - q[2];
+                                dx * dx + dy * dy + dz * dz
+                            } else {
+                                dx * dx + dy * dy
+                            };
+                            if d2 < first {
+                                second = first;
+                                first = d2;
+                            } else if d2 < second {
+                                second = d2;
+                            }
+                        }
+                        out.push((self.ids[k], (second <= r2).then(|| second.sqrt())));
+                    }
+                }
+                out
+            })
+            .collect();
+        let mut result = vec![None; self.ids.len()];
+        for part in parts {
+            for (i, d) in part {
+                result[i as usize] = d;
+            }
+        }
+        result
+    }
+}
+
 /// The points around one cell, column-wise.
 #[derive(Default)]
 pub struct Candidates {

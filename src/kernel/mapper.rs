@@ -401,41 +401,54 @@ pub fn map_points_with(
     run(nodes, points, point_group, settings, search, parallel)
 }
 
+/// Distance from each point to its nearest other point (0 for a duplicate),
+/// in parallel.
+pub fn nearest_other_distances(positions: &[[f64; 3]], dim: usize) -> Vec<f64> {
+    if positions.len() < 2 {
+        return vec![0.0; positions.len()];
+    }
+    // A grid with about two points per cell answers most points; the k-d tree
+    // the rest (isolated points).
+    let (lo, hi) = bounds(positions);
+    let volume: f64 = (0..dim).map(|k| (hi[k] - lo[k]).max(1e-300)).product();
+    let cell = (2.0 * volume / positions.len() as f64).powf(1.0 / dim as f64);
+    let mut found = if cell.is_finite() && cell > 0.0 {
+        Grid::new(positions, dim, cell).second_nearest_within(cell)
+    } else {
+        vec![None; positions.len()]
+    };
+    if found.iter().any(Option::is_none) {
+        let index = NeighbourIndex::new(positions, dim);
+        found.par_iter_mut().enumerate().for_each(|(i, d)| {
+            if d.is_none() {
+                *d = index.second_nearest_distance(positions[i]);
+            }
+        });
+    }
+    found.into_iter().map(|d| d.unwrap_or(0.0)).collect()
+}
+
 /// Median distance from each node to its nearest other node: the reference
 /// spacing l of the paper (h ≈ l for the cubic kernel on triangle meshes).
 pub fn median_spacing(positions: &[[f64; 3]], dim: usize) -> f64 {
     if positions.len() < 2 {
         return 0.0;
     }
-    let index = NeighbourIndex::new(positions, dim);
-    let mut scratch = Vec::new();
-    let (lo, hi) = bounds(positions);
-    let diag = (0..3)
-        .map(|k| (hi[k] - lo[k]).powi(2))
-        .sum::<f64>()
-        .sqrt()
-        .max(1e-12);
-    let r0 = diag / (positions.len() as f64).powf(1.0 / dim as f64) / 4.0;
-    let mut d: Vec<f64> = positions
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            // Grow the radius until another node appears.
-            let mut r = r0.max(1e-12);
-            loop {
-                index.within(*p, r, &mut scratch);
-                if let Some(&(_, dist)) = scratch.iter().find(|(j, _)| *j as usize != i) {
-                    return dist;
-                }
-                if r > 4.0 * diag {
-                    return diag;
-                }
-                r *= 2.0;
-            }
-        })
-        .collect();
-    d.sort_by(f64::total_cmp);
+    let mut d = nearest_other_distances(positions, dim);
+    d.par_sort_unstable_by(f64::total_cmp);
     d[d.len() / 2]
+}
+
+/// The smallest distance between two points (0 with fewer than two).
+pub fn min_spacing(positions: &[[f64; 3]], dim: usize) -> f64 {
+    nearest_other_distances(positions, dim)
+        .into_iter()
+        .fold(f64::INFINITY, f64::min)
+        .min(if positions.len() < 2 {
+            0.0
+        } else {
+            f64::INFINITY
+        })
 }
 
 fn bounds(positions: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
