@@ -927,77 +927,43 @@ pub fn write_with(mapped: &Mapped, out: &OutputDir, fem_vtu: bool) -> anyhow::Re
         mps_table::write_states(w, &project.points, &mapped.states, &mapped.diagnostics)
     })?;
     written.push("mps.csv".into());
-    let positions: Vec<[f64; 3]> = project.points.iter().map(|p| p.position).collect();
-    let mut arrays = vec![
-        vtu::PointArray {
-            name: "pwp".into(),
-            components: 1,
-            values: mapped.states.iter().map(|s| s.pwp).collect(),
-        },
-        vtu::PointArray {
+    // The VTU arrays are computed while written (no copies of the fields).
+    let (points, states, diags) = (&project.points, &mapped.states, &mapped.diagnostics);
+    let arrays = vec![
+        vtu::ArrayFn::scalar("pwp", |i| states[i].pwp),
+        vtu::ArrayFn {
             name: "total_stress".into(),
             components: 9,
-            values: mapped
-                .states
-                .iter()
-                .flat_map(|s| vtu::tensor9(&s.total))
-                .collect(),
+            fill: Box::new(|i, out: &mut [f64]| {
+                out.copy_from_slice(&vtu::tensor9(&states[i].total))
+            }),
         },
-        vtu::PointArray {
+        vtu::ArrayFn {
             name: "effective_stress".into(),
             components: 9,
-            values: mapped
-                .states
-                .iter()
-                .flat_map(|s| vtu::tensor9(&s.effective()))
-                .collect(),
+            fill: Box::new(|i, out: &mut [f64]| {
+                out.copy_from_slice(&vtu::tensor9(&states[i].effective()))
+            }),
         },
-        vtu::PointArray {
-            name: "saturation".into(),
-            components: 1,
-            values: mapped.states.iter().map(|s| s.saturation).collect(),
-        },
-        vtu::PointArray {
-            name: "material".into(),
-            components: 1,
-            values: project.points.iter().map(|p| p.material as f64).collect(),
-        },
-        vtu::PointArray {
-            name: "volume".into(),
-            components: 1,
-            values: project.points.iter().map(|p| p.volume).collect(),
-        },
+        vtu::ArrayFn::scalar("saturation", |i| states[i].saturation),
+        vtu::ArrayFn::scalar("material", |i| points[i].material as f64),
+        vtu::ArrayFn::scalar("volume", |i| points[i].volume),
+        vtu::ArrayFn::scalar("neighbours", |i| diags[i].neighbours as f64),
+        vtu::ArrayFn::scalar("shepard", |i| diags[i].shepard),
     ];
-    arrays.push(vtu::PointArray {
-        name: "neighbours".into(),
-        components: 1,
-        values: mapped
-            .diagnostics
-            .iter()
-            .map(|d| d.neighbours as f64)
-            .collect(),
-    });
-    arrays.push(vtu::PointArray {
-        name: "shepard".into(),
-        components: 1,
-        values: mapped.diagnostics.iter().map(|d| d.shepard).collect(),
-    });
-    out.write("mps.vtu", |w| vtu::write_points(w, &positions, &arrays))?;
+    out.write("mps.vtu", |w| {
+        vtu::write_points_with(w, points.len(), &|i| points[i].position, &arrays)
+    })?;
     written.push("mps.vtu".into());
     if fem_vtu || mapped.fem.nodes.len() <= FEM_VTU_AUTO_MAX {
-        let fem_arrays: Vec<vtu::PointArray> = mapped
-            .fem
-            .nodes
+        let nodes = &mapped.fem.nodes;
+        let fem_arrays: Vec<vtu::ArrayFn<'_>> = nodes
             .fields
             .iter()
-            .map(|(q, v)| vtu::PointArray {
-                name: q.name(),
-                components: 1,
-                values: v.clone(),
-            })
+            .map(|(q, v)| vtu::ArrayFn::scalar(q.name(), move |i| v[i]))
             .collect();
         out.write("fem.vtu", |w| {
-            vtu::write_points(w, &mapped.fem.nodes.positions, &fem_arrays)
+            vtu::write_points_with(w, nodes.len(), &|i| nodes.positions[i], &fem_arrays)
         })?;
         written.push("fem.vtu".into());
     }

@@ -41,6 +41,25 @@ fn write_block<const N: usize>(
     w.write_all(&buf)
 }
 
+/// A point-data array computed while it is written, so that no copy of the
+/// values is held: `fill(i, out)` writes the `components` values of point `i`.
+pub struct ArrayFn<'a> {
+    pub name: String,
+    pub components: usize,
+    pub fill: Box<dyn Fn(usize, &mut [f64]) + Sync + 'a>,
+}
+
+impl<'a> ArrayFn<'a> {
+    /// A scalar array with value `f(i)` at point `i`.
+    pub fn scalar(name: impl Into<String>, f: impl Fn(usize) -> f64 + Sync + 'a) -> ArrayFn<'a> {
+        ArrayFn {
+            name: name.into(),
+            components: 1,
+            fill: Box::new(move |i, out: &mut [f64]| out[0] = f(i)),
+        }
+    }
+}
+
 /// Writes points with their point-data arrays (binary, appended raw).
 pub fn write_points(
     w: &mut dyn Write,
@@ -61,6 +80,30 @@ pub fn write_points(
             ));
         }
     }
+    let fns: Vec<ArrayFn<'_>> = arrays
+        .iter()
+        .map(|a| {
+            let c = a.components.max(1);
+            ArrayFn {
+                name: a.name.clone(),
+                components: a.components,
+                fill: Box::new(move |i: usize, out: &mut [f64]| {
+                    out.copy_from_slice(&a.values[i * c..(i + 1) * c])
+                }) as Box<dyn Fn(usize, &mut [f64]) + Sync>,
+            }
+        })
+        .collect();
+    write_points_with(w, n, &|i| points[i], &fns)
+}
+
+/// Writes `n` points, given by `point(i)`, with arrays computed while writing
+/// (see [`ArrayFn`]). The bytes equal [`write_points`]' for the same values.
+pub fn write_points_with(
+    w: &mut dyn Write,
+    n: usize,
+    point: &(dyn Fn(usize) -> [f64; 3] + Sync),
+    arrays: &[ArrayFn<'_>],
+) -> std::io::Result<()> {
     // Offsets of each block in the appended section (8-byte header + data).
     let mut offset = 0usize;
     let mut next = |bytes: usize| {
@@ -81,7 +124,7 @@ pub fn write_points(
             "<DataArray type=\"Float64\" Name=\"{}\" NumberOfComponents=\"{}\" format=\"appended\" offset=\"{}\"/>\n",
             xml_escape(&a.name),
             a.components,
-            next(a.values.len() * 8)
+            next(n * a.components.max(1) * 8)
         ));
     }
     head.push_str("</PointData>\n<Points>\n");
@@ -106,9 +149,23 @@ pub fn write_points(
     head.push_str("<AppendedData encoding=\"raw\">\n_");
     w.write_all(head.as_bytes())?;
     for a in arrays {
-        write_block(w, a.values.len(), |i| a.values[i].to_le_bytes())?;
+        let c = a.components.max(1);
+        let mut row = vec![0.0; c];
+        w.write_all(&((n * c * 8) as u64).to_le_bytes())?;
+        let mut buf = Vec::with_capacity(BLOCK + 8 * c);
+        for i in 0..n {
+            (a.fill)(i, &mut row);
+            for v in &row {
+                buf.extend_from_slice(&v.to_le_bytes());
+            }
+            if buf.len() >= BLOCK {
+                w.write_all(&buf)?;
+                buf.clear();
+            }
+        }
+        w.write_all(&buf)?;
     }
-    write_block(w, n * 3, |i| points[i / 3][i % 3].to_le_bytes())?;
+    write_block(w, n * 3, |i| point(i / 3)[i % 3].to_le_bytes())?;
     write_block(w, n, |i| (i as i64).to_le_bytes())?;
     write_block(w, n, |i| (i as i64 + 1).to_le_bytes())?;
     write_block(w, n, |_| [1u8])?;

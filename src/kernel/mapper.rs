@@ -106,8 +106,6 @@ pub enum Search {
 struct Indexed {
     group: u32,
     members: Vec<u32>,
-    /// Member positions (local index → position).
-    positions: Vec<[f64; 3]>,
     /// Built by [`Search::KdTree`], or on demand for nearest-node fallbacks.
     tree: std::sync::OnceLock<NeighbourIndex>,
     grid: Option<Grid>,
@@ -117,9 +115,15 @@ struct Indexed {
 }
 
 impl Indexed {
-    fn tree(&self, dim: usize) -> &NeighbourIndex {
-        self.tree
-            .get_or_init(|| NeighbourIndex::new(&self.positions, dim))
+    fn tree(&self, nodes: &NodeCloud<'_>) -> &NeighbourIndex {
+        self.tree.get_or_init(|| {
+            let positions: Vec<[f64; 3]> = self
+                .members
+                .iter()
+                .map(|&i| nodes.positions[i as usize])
+                .collect();
+            NeighbourIndex::new(&positions, nodes.dim)
+        })
     }
 }
 
@@ -139,16 +143,16 @@ fn build_indices(nodes: &NodeCloud<'_>, search: Search, radius: f64) -> Vec<Inde
             }
             v
         });
+        drop(positions);
         let ix = Indexed {
             group,
             members,
             grid,
             grid_values,
-            positions,
             tree: std::sync::OnceLock::new(),
         };
         if search == Search::KdTree {
-            ix.tree(nodes.dim);
+            ix.tree(nodes);
         }
         ix
     };
@@ -204,7 +208,7 @@ fn map_one<'r>(
         return (count, ratio, PointStatus::Mapped);
     }
     match settings.outside {
-        OutsidePolicy::Nearest => match idx.tree(nodes.dim).nearest(p) {
+        OutsidePolicy::Nearest => match idx.tree(nodes).nearest(p) {
             Some((local, _)) => {
                 let node = idx.members[local as usize] as usize;
                 out.copy_from_slice(&nodes.values[node * nf..(node + 1) * nf]);
@@ -315,7 +319,7 @@ fn run(
                     map_one(nodes, ix, settings, points[i], &found, |k| c.row(k), out)
                 }
                 None => {
-                    ix.tree(nodes.dim).within(points[i], support, &mut found);
+                    ix.tree(nodes).within(points[i], support, &mut found);
                     let row = |local: u32| {
                         let node = ix.members[local as usize] as usize;
                         &nodes.values[node * nf..(node + 1) * nf]
@@ -327,24 +331,28 @@ fn run(
         }
         (values, meta)
     };
-    let parts: Vec<ChunkResult> = if parallel {
-        order.par_chunks(chunk).map(work).collect()
-    } else {
-        order.chunks(chunk).map(work).collect()
-    };
     let mut result = MapResult {
         values: vec![0.0; points.len() * nf],
         n_neighbours: vec![0; points.len()],
         shepard: vec![0.0; points.len()],
         status: vec![PointStatus::Mapped; points.len()],
     };
-    for (c, (values, meta)) in parts.into_iter().enumerate() {
-        for (k, (n, r, st)) in meta.into_iter().enumerate() {
-            let i = order[c * chunk + k] as usize;
-            result.values[i * nf..(i + 1) * nf].copy_from_slice(&values[k * nf..(k + 1) * nf]);
-            result.n_neighbours[i] = n;
-            result.shepard[i] = r;
-            result.status[i] = st;
+    // Batches of chunks bound the memory of results not yet scattered.
+    let batch = chunk * 64;
+    for (b, batch_order) in order.chunks(batch).enumerate() {
+        let parts: Vec<ChunkResult> = if parallel {
+            batch_order.par_chunks(chunk).map(work).collect()
+        } else {
+            batch_order.chunks(chunk).map(work).collect()
+        };
+        for (c, (values, meta)) in parts.into_iter().enumerate() {
+            for (k, (n, r, st)) in meta.into_iter().enumerate() {
+                let i = order[b * batch + c * chunk + k] as usize;
+                result.values[i * nf..(i + 1) * nf].copy_from_slice(&values[k * nf..(k + 1) * nf]);
+                result.n_neighbours[i] = n;
+                result.shepard[i] = r;
+                result.status[i] = st;
+            }
         }
     }
     if settings.outside == OutsidePolicy::Error {
