@@ -46,8 +46,11 @@ fn write_block<const N: usize>(
 pub struct ArrayFn<'a> {
     pub name: String,
     pub components: usize,
-    pub fill: Box<dyn Fn(usize, &mut [f64]) + Sync + 'a>,
+    pub fill: Box<FillFn<'a>>,
 }
+
+/// `fill(i, out)` of an [`ArrayFn`].
+pub type FillFn<'a> = dyn Fn(usize, &mut [f64]) + Sync + 'a;
 
 impl<'a> ArrayFn<'a> {
     /// A scalar array with value `f(i)` at point `i`.
@@ -89,7 +92,7 @@ pub fn write_points(
                 components: a.components,
                 fill: Box::new(move |i: usize, out: &mut [f64]| {
                     out.copy_from_slice(&a.values[i * c..(i + 1) * c])
-                }) as Box<dyn Fn(usize, &mut [f64]) + Sync>,
+                }) as Box<FillFn<'_>>,
             }
         })
         .collect();
