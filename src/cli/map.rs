@@ -265,11 +265,25 @@ struct InputFile {
 
 fn describe(path: &Path) -> anyhow::Result<InputFile> {
     use sha2::{Digest, Sha256};
-    let bytes = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
-    let digest = Sha256::digest(&bytes);
+    use std::io::Read;
+    // Streamed: a large FEM table is not held in memory a second time.
+    let context = || format!("reading {}", path.display());
+    let mut file = std::fs::File::open(path).with_context(context)?;
+    let mut hasher = Sha256::new();
+    let mut buf = vec![0u8; 1 << 20];
+    let mut len = 0u64;
+    loop {
+        let n = file.read(&mut buf).with_context(context)?;
+        if n == 0 {
+            break;
+        }
+        hasher.update(&buf[..n]);
+        len += n as u64;
+    }
+    let digest = hasher.finalize();
     Ok(InputFile {
         path: path.to_path_buf(),
-        bytes: bytes.len() as u64,
+        bytes: len,
         sha256: digest.iter().map(|b| format!("{b:02x}")).collect(),
     })
 }
