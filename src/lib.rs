@@ -21,4 +21,5 @@ pub mod kernel;
 pub mod model;
 pub mod mpm;
 pub mod place;
+pub mod progress;
 pub mod state;

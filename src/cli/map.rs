@@ -994,6 +994,7 @@ pub fn default_out(project_dir: &Path, name: &str) -> PathBuf {
 
 pub fn run(args: MapArgs) -> anyhow::Result<()> {
     let started = Instant::now();
+    let progress = super::progress::show();
     let mapped = compute(&args)?;
     let target = args
         .out
@@ -1007,6 +1008,7 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
     let out = OutputDir::create(&target, args.force, &inputs)?;
     let written = write_with(&mapped, &out, args.fem_vtu)?;
     let target = out.commit()?;
+    drop(progress);
     let r = &mapped.report;
     eprintln!(
         "a3d-init map: {} FEM nodes → {} MPs ({} kernel, h = {:.4} m; {})",

@@ -1048,10 +1048,15 @@ fn parse_csv_chunked(
         first_line.push(line);
         line += n;
     }
+    crate::progress::READ_FEM.start(body.len() as u64);
     let parts: Vec<Rows> = chunks
         .par_iter()
         .zip(first_line.par_iter())
-        .map(|(chunk, &l0)| parse_chunk(&schema, chunk, l0))
+        .map(|(chunk, &l0)| {
+            let rows = parse_chunk(&schema, chunk, l0);
+            crate::progress::READ_FEM.add(chunk.len() as u64);
+            rows
+        })
         .collect();
     let merged = merge_rows(parts, value_cols.len());
     if let Some(e) = FormatError::from_list(merged.errors) {

@@ -49,8 +49,10 @@ where
     // Batches bound the memory held by formatted text.
     let batch = ROWS_PER_CHUNK * 4 * rayon::current_num_threads().max(1);
     let mut start = 0;
+    crate::progress::WRITE_TABLE.start(n as u64);
     while start < n {
         let end = (start + batch).min(n);
+        crate::progress::WRITE_TABLE.add((end - start) as u64);
         let chunks: Vec<(Vec<u8>, Option<std::io::Error>)> = (start..end)
             .into_par_iter()
             .step_by(ROWS_PER_CHUNK)

@@ -339,7 +339,9 @@ fn run(
     };
     // Batches of chunks bound the memory of results not yet scattered.
     let batch = chunk * 64;
+    crate::progress::MAP.start(points.len() as u64);
     for (b, batch_order) in order.chunks(batch).enumerate() {
+        crate::progress::MAP.add(batch_order.len() as u64);
         let parts: Vec<ChunkResult> = if parallel {
             batch_order.par_chunks(chunk).map(work).collect()
         } else {
