@@ -896,7 +896,7 @@ pub fn write(mapped: &Mapped, out: &OutputDir) -> anyhow::Result<Vec<String>> {
     write_with(mapped, out, false)
 }
 
-/// [`write`], with `fem.vtu` forced on (`--fem-vtu`) or left to the FEM's size.
+/// [`write()`], with `fem.vtu` forced on (`--fem-vtu`) or left to the FEM's size.
 pub fn write_with(mapped: &Mapped, out: &OutputDir, fem_vtu: bool) -> anyhow::Result<Vec<String>> {
     let project = &mapped.project;
     let name = &project.files.name;

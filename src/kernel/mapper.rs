@@ -6,6 +6,13 @@
 //! so the output is bit-identical for any thread count ([`map_points_serial`] is
 //! the oracle). Groups keep materials apart: a point only takes nodes of its own
 //! group ("no smoothing across material boundaries").
+//!
+//! Neighbours come from the cell grid ([`Search::Grid`]: queries sorted by
+//! cell in Morton order, candidates and their values gathered once per cell)
+//! or from the kiddo tree ([`Search::KdTree`], the reference); both give the
+//! same sorted lists, so the results are bit-identical. Results are scattered
+//! back batch by batch to bound memory; progress is counted in
+//! `crate::progress::MAP`.
 
 use rayon::prelude::*;
 
