@@ -24,6 +24,7 @@ pub mod model;
 pub mod mpm;
 pub mod pipeline;
 pub mod place;
+pub mod progress;
 pub mod state;
 #[cfg(any(test, feature = "testkit"))]
 pub mod testkit;

@@ -2,7 +2,8 @@
 //! normalisation, partition of unity, constant and linear fields, brute-force
 //! neighbour search, and the serial mapper (bit for bit, any thread count).
 
-use a3d_init::kernel::mapper::{self, MapSettings, NodeCloud, OutsidePolicy, PointStatus};
+use a3d_init::kernel::grid::Grid;
+use a3d_init::kernel::mapper::{self, MapSettings, NodeCloud, OutsidePolicy, PointStatus, Search};
 use a3d_init::kernel::neighbours::{NeighbourIndex, within_brute_force};
 use a3d_init::kernel::{Gaussian, Kernel, KernelKind};
 use proptest::prelude::*;
@@ -345,4 +346,150 @@ fn null_points_follow_the_policy() {
     settings.outside = OutsidePolicy::Skip;
     let r = mapper::map_points(&cloud, &points, None, &settings).unwrap();
     assert!(r.values[1].is_nan() && r.status[2] == PointStatus::Skipped);
+}
+
+/// Random clouds with duplicates and a tight cluster, in 2D and 3D.
+fn cloud_with_duplicates(rng: &mut ChaCha8Rng, dim: usize, n: usize) -> Vec<[f64; 3]> {
+    let mut pts: Vec<[f64; 3]> = (0..n)
+        .map(|_| {
+            [
+                rng.random_range(-5.0..5.0),
+                rng.random_range(-5.0..5.0),
+                if dim == 3 {
+                    rng.random_range(-5.0..5.0)
+                } else {
+                    0.0
+                },
+            ]
+        })
+        .collect();
+    for _ in 0..n / 10 {
+        pts.push([1.0, 1.0, if dim == 3 { 1.0 } else { 0.0 }]);
+    }
+    pts
+}
+
+#[test]
+fn grid_and_kiddo_searches_equal_brute_force_bit_for_bit() {
+    let mut rng = ChaCha8Rng::seed_from_u64(17);
+    for dim in [2usize, 3] {
+        let pts = cloud_with_duplicates(&mut rng, dim, 5000); // radius 30: more than 4096 candidates
+        let index = NeighbourIndex::new(&pts, dim);
+        for radius in [0.0, 0.05, 0.7, 2.5, 30.0] {
+            let grid = Grid::new(&pts, dim, radius);
+            let (mut a, mut b) = (Vec::new(), Vec::new());
+            for _ in 0..300 {
+                let q = [
+                    rng.random_range(-7.0..7.0),
+                    rng.random_range(-7.0..7.0),
+                    if dim == 3 {
+                        rng.random_range(-7.0..7.0)
+                    } else {
+                        0.0
+                    },
+                ];
+                let want = within_brute_force(&pts, dim, q, radius);
+                grid.within(q, radius, &mut a);
+                index.within(q, radius, &mut b);
+                let bits = |v: &[(u32, f64)]| -> Vec<(u32, u64)> {
+                    v.iter().map(|&(i, d)| (i, d.to_bits())).collect()
+                };
+                assert_eq!(bits(&a), bits(&want), "grid, dim {dim} q {q:?} r {radius}");
+                assert_eq!(bits(&b), bits(&want), "kiddo, dim {dim} q {q:?} r {radius}");
+            }
+            let q = [1.0, 1.0, if dim == 3 { 1.0 } else { 0.0 }];
+            grid.within(q, radius, &mut a);
+            assert!(a.len() >= 300, "duplicates at the query point");
+        }
+    }
+}
+
+#[test]
+fn grid_map_equals_kiddo_map_bit_for_bit() {
+    let mut rng = ChaCha8Rng::seed_from_u64(19);
+    for dim in [2usize, 3] {
+        let nodes = cloud_with_duplicates(&mut rng, dim, 6000);
+        // Duplicated nodes would be refused by the reader; the mapper takes them.
+        let values: Vec<f64> = nodes
+            .iter()
+            .flat_map(|p| [p[0].sin() * 100.0 + p[1], p[2] * p[1] * 0.3])
+            .collect();
+        let groups: Vec<u32> = nodes.iter().map(|p| 1 + (p[1] > 0.5) as u32).collect();
+        let cloud = NodeCloud {
+            positions: &nodes,
+            dim,
+            values: &values,
+            n_fields: 2,
+            group: Some(&groups),
+            node_volume: 0.05,
+        };
+        let points = cloud_with_duplicates(&mut rng, dim, 4000);
+        let point_groups: Vec<u32> = points.iter().map(|p| 1 + (p[1] > 0.5) as u32).collect();
+        for kernel in KERNELS {
+            for (h, outside) in [(0.3, OutsidePolicy::Nearest), (0.05, OutsidePolicy::Skip)] {
+                let settings = MapSettings {
+                    kernel,
+                    h,
+                    min_shepard: 0.01,
+                    outside,
+                };
+                for groups in [None, Some(&point_groups[..])] {
+                    let reference = mapper::map_points_with(
+                        &cloud,
+                        &points,
+                        groups,
+                        &settings,
+                        Search::KdTree,
+                        false,
+                    )
+                    .unwrap();
+                    let grid = mapper::map_points(&cloud, &points, groups, &settings).unwrap();
+                    let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                    assert_eq!(
+                        bits(&grid.values),
+                        bits(&reference.values),
+                        "{kernel:?} h {h}"
+                    );
+                    assert_eq!(grid.n_neighbours, reference.n_neighbours);
+                    assert_eq!(bits(&grid.shepard), bits(&reference.shepard));
+                    assert_eq!(grid.status, reference.status);
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn spacings_equal_brute_force_bit_for_bit() {
+    let mut rng = ChaCha8Rng::seed_from_u64(23);
+    for dim in [2usize, 3] {
+        let pts = cloud_with_duplicates(&mut rng, dim, 1500);
+        let brute: Vec<f64> = (0..pts.len())
+            .map(|i| {
+                within_brute_force(&pts, dim, pts[i], 20.0)
+                    .into_iter()
+                    .find(|&(j, _)| j as usize != i)
+                    .map_or(f64::INFINITY, |(_, d)| d)
+            })
+            .collect();
+        let got = mapper::nearest_other_distances(&pts, dim);
+        let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&got), bits(&brute));
+        let mut sorted = brute.clone();
+        sorted.sort_by(f64::total_cmp);
+        assert_eq!(mapper::median_spacing(&pts, dim), sorted[sorted.len() / 2]);
+        assert_eq!(mapper::min_spacing(&pts, dim), 0.0, "duplicates");
+        let distinct = &pts[..1500];
+        let brute_min = (0..distinct.len())
+            .map(|i| {
+                within_brute_force(distinct, dim, distinct[i], 20.0)
+                    .into_iter()
+                    .find(|&(j, _)| j as usize != i)
+                    .map_or(f64::INFINITY, |(_, d)| d)
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert_eq!(mapper::min_spacing(distinct, dim), brute_min);
+    }
+    assert_eq!(mapper::median_spacing(&[[1.0; 3]], 3), 0.0);
+    assert_eq!(mapper::min_spacing(&[[1.0; 3]], 3), 0.0);
 }

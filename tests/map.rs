@@ -527,3 +527,54 @@ fn malformed_ply_files_are_positioned_errors() {
         assert!(err.contains(expected), "{name}: {err}");
     }
 }
+
+/// #17: the binary `mps.vtu` and `fem.vtu` read back to the values of `mps.csv`
+/// and the FEM table, bit for bit; MAPF and mps.csv are the same for 1 and 2 threads.
+#[test]
+fn binary_vtu_agrees_with_the_tables_and_outputs_do_not_depend_on_threads() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (gom, fem) = write_block(tmp.path());
+    let mut outputs = Vec::new();
+    for threads in ["1", "2"] {
+        let out = tmp.path().join(format!("out{threads}"));
+        let output = std::process::Command::new(env!("CARGO_BIN_EXE_a3d-init"))
+            .args(["map", "--fem", fem.to_str().unwrap(), "--mpm"])
+            .arg(&gom)
+            .arg("--out")
+            .arg(&out)
+            .env("RAYON_NUM_THREADS", threads)
+            .output()
+            .unwrap();
+        assert!(
+            output.status.success(),
+            "{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        outputs.push(out);
+    }
+    for name in ["block.MAPF", "mps.csv", "mps.vtu", "fem.vtu"] {
+        let a = std::fs::read(outputs[0].join(name)).unwrap();
+        let b = std::fs::read(outputs[1].join(name)).unwrap();
+        assert!(a == b, "{name} differs between 1 and 2 threads");
+    }
+    let out = &outputs[0];
+    let (points, states) = mps_table::read_states(&out.join("mps.csv")).unwrap();
+    let vtu = a3d_init::formats::vtu::read(&out.join("mps.vtu")).unwrap();
+    assert_eq!(vtu.points.len(), points.len());
+    let array = |name: &str| {
+        &vtu.arrays
+            .iter()
+            .find(|a| a.name == name)
+            .unwrap_or_else(|| panic!("no {name}"))
+            .values
+    };
+    for (i, (p, s)) in points.iter().zip(&states).enumerate() {
+        assert_eq!(vtu.points[i], p.position);
+        assert_eq!(array("pwp")[i], s.pwp);
+        assert_eq!(array("total_stress")[9 * i + 4], s.total[1]);
+        assert_eq!(array("volume")[i], p.volume);
+    }
+    let fem_vtu = a3d_init::formats::vtu::read(&out.join("fem.vtu")).unwrap();
+    assert_eq!(fem_vtu.points.len(), 41 * 21);
+    assert_eq!(fem_vtu.arrays[0].name, "pwp");
+}

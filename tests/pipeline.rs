@@ -30,7 +30,7 @@ fn library_map_writes_the_mapf_of_the_sample_slope() {
     let mapped = map::map(project, fem, &config).unwrap();
     assert_eq!(mapped.states.len(), n_points);
     let tmp = tempfile::tempdir().unwrap();
-    let written = write::write_project(&mapped, tmp.path()).unwrap();
+    let written = write::write_project(&mapped, tmp.path(), false).unwrap();
     assert!(written.contains(&"K0_phreaticSurf_Geom.MAPF".to_string()));
     let table = mapf::read(&tmp.path().join("K0_phreaticSurf_Geom.MAPF")).unwrap();
     assert_eq!(table.rows.len(), n_points);

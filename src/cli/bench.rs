@@ -34,9 +34,25 @@ pub struct BenchArgs {
     /// Elements of the generated GOM (`gom`).
     #[arg(long, default_value_t = 1_000_000)]
     pub elements: usize,
+    /// Neighbour search for `map`: the cell grid (default) or the k-d tree reference.
+    #[arg(long, value_enum, default_value_t = SearchArg::Grid)]
+    pub search: SearchArg,
+    /// Folder for the generated case and the output of `e2e` (default: a
+    /// temporary folder, removed afterwards).
+    #[arg(long)]
+    pub dir: Option<std::path::PathBuf>,
+    /// Write `fem.vtu` in `e2e` too.
+    #[arg(long)]
+    pub fem_vtu: bool,
     /// Repetitions; the best is reported.
     #[arg(long, default_value_t = 3)]
     pub repeat: usize,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum SearchArg {
+    Grid,
+    Kdtree,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -47,6 +63,13 @@ pub enum BenchWhat {
     Gom,
     /// Leave-one-out objective at one h and a full calibration (`--nodes`, 2D hydrostatic field).
     Loo,
+    /// The whole `map` on a generated 3D case (`--nodes` random FEM nodes with
+    /// pwp and six stresses in a 100 m cube, a TET mesh with about `--points`
+    /// MPs, h giving `--neighbours` nodes in reach), phase by phase.
+    E2e,
+    /// FEM CSV reading throughput (MB/s) on a generated 3D table of `--nodes` rows
+    /// (x, y, z, pwp and six stresses, shortest round-trip decimals).
+    Csv,
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
@@ -98,14 +121,19 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             let mut mean_neighbours = 0.0;
             for _ in 0..args.repeat.max(1) {
                 let t = Instant::now();
-                let r = mapper::map_points(&cloud, &points, None, &settings)
+                let search = match args.search {
+                    SearchArg::Grid => mapper::Search::Grid,
+                    SearchArg::Kdtree => mapper::Search::KdTree,
+                };
+                let r = mapper::map_points_with(&cloud, &points, None, &settings, search, true)
                     .map_err(|e| anyhow::anyhow!("{e}"))?;
                 best = best.min(t.elapsed().as_secs_f64());
                 mean_neighbours =
                     r.n_neighbours.iter().map(|&n| n as f64).sum::<f64>() / points.len() as f64;
             }
             println!(
-                "map {dim}D: {} nodes → {} points, cubic, h = {h:.5}, {mean_neighbours:.1} neighbours/query, {threads} thread(s): {:.3} s (tree build included) = {:.3e} queries/s ({:.3e} per thread)",
+                "map {dim}D ({:?}): {} nodes → {} points, cubic, h = {h:.5}, {mean_neighbours:.1} neighbours/query, {threads} thread(s): {:.3} s (index build included) = {:.3e} queries/s ({:.3e} per thread)",
+                args.search,
                 args.nodes,
                 args.points,
                 best,
@@ -161,6 +189,28 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
                 c.h / l
             );
         }
+        BenchWhat::E2e => e2e(&args)?,
+        BenchWhat::Csv => {
+            let text = generated_fem_csv(args.nodes, 3);
+            let mb = text.len() as f64 / 1e6;
+            let options = crate::formats::fem_csv::CsvOptions::default();
+            let mut best = f64::INFINITY;
+            for _ in 0..args.repeat.max(1) {
+                let t = Instant::now();
+                let (nodes, _) = crate::formats::fem_csv::parse_csv(
+                    Path::new("bench.csv"),
+                    text.as_bytes(),
+                    &options,
+                )?;
+                best = best.min(t.elapsed().as_secs_f64());
+                std::hint::black_box(nodes);
+            }
+            println!(
+                "csv: {} rows × 10 columns, {mb:.1} MB, {threads} thread(s): {best:.3} s = {:.0} MB/s",
+                args.nodes,
+                mb / best
+            );
+        }
         BenchWhat::Gom => {
             let nx = ((args.elements as f64 / 2.0).sqrt().round() as usize).max(1);
             let ny = (args.elements / (2 * nx)).max(1);
@@ -183,6 +233,137 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
                 mb / best
             );
         }
+    }
+    Ok(())
+}
+
+/// A GeoStudio-style 3D node table: `n` random nodes in a 100 m cube with a
+/// hydrostatic pwp and random stresses (seeded).
+pub fn generated_fem_csv(n: usize, seed: u64) -> String {
+    use std::fmt::Write as _;
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    let mut s = String::with_capacity(n * 190);
+    s.push_str("X (m),Y (m),Z (m),Pore-Water Pressure (kPa),XTotalStress,YTotalStress,ZTotalStress,XYShearStress,YZShearStress,XZShearStress\n");
+    for _ in 0..n {
+        let x: f64 = rng.random_range(0.0..100.0);
+        let y: f64 = rng.random_range(0.0..100.0);
+        let z: f64 = rng.random_range(0.0..100.0);
+        let _ = write!(s, "{x},{y},{z},{}", 9.81 * (100.0 - y));
+        for k in 0..6 {
+            let v: f64 = if k < 3 {
+                rng.random_range(0.0..1000.0)
+            } else {
+                rng.random_range(-50.0..50.0)
+            };
+            let _ = write!(s, ",{v}");
+        }
+        s.push('\n');
+    }
+    s
+}
+
+/// `bench e2e`: generates the case, runs `map` as the command does, prints the
+/// phases.
+fn e2e(args: &BenchArgs) -> anyhow::Result<()> {
+    use super::args::{FemArgs, SignArg};
+    use super::map::{self, MapArgs};
+    use crate::pipeline::map::{MixedState, Outside, StressSource};
+    let threads = rayon::current_num_threads();
+    let tmp;
+    let dir = match &args.dir {
+        Some(d) => {
+            std::fs::create_dir_all(d)?;
+            d.clone()
+        }
+        None => {
+            tmp = tempfile::tempdir()?;
+            tmp.path().to_path_buf()
+        }
+    };
+    let t = Instant::now();
+    let gom = dir.join("e2e.GOM");
+    let fem = dir.join("e2e-fem.csv");
+    // Kuhn cubes: 6 TETs each, 4 MPs per TET.
+    let n_side = ((args.points as f64 / 24.0).cbrt().round() as usize).max(1);
+    if !gom.exists() || !fem.exists() {
+        let mesh = generate::structured_tet_mesh(100.0, 0.0, 100.0, 100.0, n_side, n_side, n_side);
+        let spec = MaterialSpec::dry_soil("soil");
+        let text = model_to_text(&generate::single_material_model(mesh, &spec, 4), "2023");
+        std::fs::write(&gom, text)?;
+        std::fs::write(&fem, generated_fem_csv(args.nodes, 3))?;
+    }
+    let generate_s = t.elapsed().as_secs_f64();
+    // Support 2h holding `neighbours` nodes on average in the 100 m cube.
+    let support =
+        (args.neighbours / (args.nodes as f64 * 4.0 / 3.0 * std::f64::consts::PI)).cbrt() * 100.0;
+    let map_args = MapArgs {
+        fem: FemArgs {
+            fem: vec![fem.clone()],
+            columns: None,
+            fem_units: None,
+            fem_sign: SignArg::Geostudio,
+            fem_mesh: None,
+            analysis: None,
+            step: "last".into(),
+        },
+        mpm: gom.clone(),
+        kernel: "cubic".into(),
+        h: Some(format!("{}", support / 2.0)),
+        seed: 1,
+        outside: Outside::Nearest,
+        min_shepard: 0.02,
+        stress: StressSource::Auto,
+        material_map: None,
+        mixed_state: MixedState::Mean,
+        out: Some(dir.join("out")),
+        force: true,
+        fem_vtu: args.fem_vtu,
+        generate_cps: true,
+    };
+    let t = Instant::now();
+    let mapped = map::compute(&map_args, None)?;
+    let compute_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let out = super::output::OutputDir::create(&dir.join("out"), true, &[&gom, &fem])?;
+    let written = map::write(&mapped, &out, args.fem_vtu)?;
+    let target = out.commit()?;
+    let write_s = t.elapsed().as_secs_f64();
+    let report = serde_json::to_value(&mapped.report)?;
+    let mps = report["material_points"].as_u64().unwrap_or(0);
+    drop(mapped);
+    println!(
+        "e2e: {} FEM nodes → {mps} MPs, h = {:.4} m, {threads} thread(s) (case generated in {generate_s:.2} s, not counted)",
+        args.nodes,
+        support / 2.0
+    );
+    if let Some(phases) = report["timings_ms"].as_array() {
+        for p in phases {
+            println!(
+                "  {:<28} {:>8.3} s",
+                p[0].as_str().unwrap_or("?"),
+                p[1].as_f64().unwrap_or(0.0) / 1e3
+            );
+        }
+    }
+    let mut bytes = 0u64;
+    for name in &written {
+        bytes += std::fs::metadata(target.join(name)).map_or(0, |m| m.len());
+    }
+    println!(
+        "  {:<28} {compute_s:>8.3} s",
+        "compute (with untimed steps)"
+    );
+    println!(
+        "  {:<28} {write_s:>8.3} s ({:.0} MB: {})",
+        "write outputs",
+        bytes as f64 / 1e6,
+        written.join(", ")
+    );
+    println!("  {:<28} {:>8.3} s", "total", compute_s + write_s);
+    if let Ok(status) = std::fs::read_to_string("/proc/self/status")
+        && let Some(line) = status.lines().find(|l| l.starts_with("VmHWM"))
+    {
+        println!("  peak RSS {}", line.trim_start_matches("VmHWM:").trim());
     }
     Ok(())
 }

@@ -110,6 +110,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         out: Some(args.out.clone()),
         force: args.force,
         generate_cps: false,
+        fem_vtu: false,
     };
     let mapped = map::compute(
         &map_args,
@@ -121,7 +122,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     let mut inputs = super::args::project_inputs(&mapped.project.files);
     inputs.push(&fem_file);
     let out = OutputDir::create(&args.out, args.force, &inputs)?;
-    map::write(&mapped, &out)?;
+    map::write(&mapped, &out, false)?;
     plot_curve(&out.path("calibration.svg"), &outcome)?;
     let pts = &mapped.project.points;
     let field = |f: &dyn Fn(&crate::model::MpState) -> f64| -> Vec<(f64, f64, f64)> {

@@ -51,6 +51,10 @@ pub struct MapArgs {
     /// Replace an existing output folder.
     #[arg(long)]
     pub force: bool,
+    /// Also write `fem.vtu` (the FEM nodes) when the FEM has more than 200 000 nodes;
+    /// smaller FEMs always get one.
+    #[arg(long)]
+    pub fem_vtu: bool,
     /// Without a CPS beside the model, write a complete default CPS for the model's version (#14).
     #[arg(long)]
     pub generate_cps: bool,
@@ -119,8 +123,12 @@ pub fn compute(args: &MapArgs, h: Option<SmoothingLength>) -> anyhow::Result<Map
 }
 
 /// Writes the mapped project into the staging folder of `out`.
-pub fn write(mapped: &Mapped, out: &OutputDir) -> anyhow::Result<Vec<String>> {
-    Ok(pipeline::write::write_project(mapped, &out.path(""))?)
+pub fn write(mapped: &Mapped, out: &OutputDir, fem_vtu: bool) -> anyhow::Result<Vec<String>> {
+    Ok(pipeline::write::write_project(
+        mapped,
+        &out.path(""),
+        fem_vtu,
+    )?)
 }
 
 /// Default output folder: `<project>.a3d-init/` beside the model.
@@ -130,6 +138,7 @@ pub fn default_out(project_dir: &Path, name: &str) -> PathBuf {
 
 pub fn run(args: MapArgs) -> anyhow::Result<()> {
     let started = Instant::now();
+    let progress = super::progress::show();
     let mapped = compute(&args, None)?;
     let target = args
         .out
@@ -138,8 +147,9 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
     let mut inputs = super::args::project_inputs(&mapped.project.files);
     inputs.extend(args.fem.input_paths());
     let out = OutputDir::create(&target, args.force, &inputs)?;
-    let written = write(&mapped, &out)?;
+    let written = write(&mapped, &out, args.fem_vtu)?;
     let target = out.commit()?;
+    drop(progress);
     let r = &mapped.report;
     eprintln!(
         "a3d-init map: {} FEM nodes → {} MPs ({} kernel, h = {:.4} m; {})",

@@ -13,6 +13,7 @@ mod inspect;
 pub mod map;
 pub mod output;
 pub mod plot;
+mod progress;
 mod verify;
 
 use std::process::ExitCode;

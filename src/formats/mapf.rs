@@ -15,7 +15,7 @@ use std::path::Path;
 
 use super::error::{FormatError, ParseError};
 use super::lex;
-use super::mps_table::fmt_f64;
+use super::mps_table::{push_f64, write_rows};
 use crate::model::{MaterialPoint, MpState};
 
 /// Column headers, in the order written.
@@ -49,16 +49,37 @@ pub fn headers(n_dim: usize) -> &'static [&'static str] {
 
 /// The values of one row in header order: positions, pwp and total stresses
 /// (Anura3D signs), with the 3D shear labels swapped to cancel Anura3D's swap.
-fn row(point: &MaterialPoint, state: &MpState, n_dim: usize, smooth: f64) -> Vec<f64> {
+fn row(point: &MaterialPoint, state: &MpState, n_dim: usize, smooth: f64) -> Row {
     let p = point.position;
     let s = state.total;
     if n_dim == 2 {
-        vec![p[0], p[1], state.pwp, s[0], s[1], s[3], smooth]
+        Row::new(&[p[0], p[1], state.pwp, s[0], s[1], s[3], smooth])
     } else {
         // Anura3D: component 5 (yz) ← SigXZ column, component 6 (xz) ← SigYZ column.
-        vec![
+        Row::new(&[
             p[0], p[1], p[2], state.pwp, s[0], s[1], s[2], s[3], s[4], s[5], smooth,
-        ]
+        ])
+    }
+}
+
+/// The values of one row without a heap allocation.
+struct Row {
+    values: [f64; 11],
+    len: usize,
+}
+
+impl Row {
+    fn new(values: &[f64]) -> Row {
+        let mut out = Row {
+            values: [0.0; 11],
+            len: values.len(),
+        };
+        out.values[..values.len()].copy_from_slice(values);
+        out
+    }
+
+    fn as_slice(&self) -> &[f64] {
+        &self.values[..self.len]
     }
 }
 
@@ -72,18 +93,26 @@ pub fn write(
     smoothing_length: f64,
 ) -> std::io::Result<()> {
     writeln!(w, "{}", headers(n_dim).join(" "))?;
-    for (p, s) in points.iter().zip(states) {
+    let n = points.len().min(states.len());
+    write_rows(w, n, |i, out| {
+        let (p, s) = (&points[i], &states[i]);
         let values = row(p, s, n_dim, smoothing_length);
+        let values = values.as_slice();
         if values.iter().any(|v| !v.is_finite()) {
             return Err(std::io::Error::new(
                 std::io::ErrorKind::InvalidData,
                 format!("MP {} has a non-finite value; refusing to write it", p.id),
             ));
         }
-        let line: Vec<String> = values.into_iter().map(fmt_f64).collect();
-        writeln!(w, "{}", line.join(" "))?;
-    }
-    Ok(())
+        for (k, &v) in values.iter().enumerate() {
+            if k > 0 {
+                out.push(b' ');
+            }
+            push_f64(out, v);
+        }
+        out.push(b'\n');
+        Ok(())
+    })
 }
 
 /// A MAPF read back: its headers and rows (as written, labels not un-swapped).
@@ -179,4 +208,60 @@ pub fn read(path: &Path) -> Result<MapfTable, FormatError> {
 /// between any two MPs, i.e. h = min spacing / 5 (so 2h = 0.4 × spacing).
 pub fn exact_point_smoothing_length(min_mp_spacing: f64) -> f64 {
     min_mp_spacing / 5.0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::MpState;
+
+    fn table(points: &[MaterialPoint], states: &[MpState], dim: usize, threads: usize) -> Vec<u8> {
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let mut out = Vec::new();
+        pool.install(|| write(&mut out, points, states, dim, 0.01))
+            .unwrap();
+        out
+    }
+
+    #[test]
+    fn mapf_keeps_full_precision_for_any_thread_count() {
+        let (points, states) = crate::formats::mps_table::tests::sample(20_000, 5);
+        for dim in [2, 3] {
+            let one = table(&points, &states, dim, 1);
+            assert_eq!(one, table(&points, &states, dim, 2));
+            let dir = tempfile::tempdir().unwrap();
+            let path = dir.path().join("t.MAPF");
+            std::fs::write(&path, &one).unwrap();
+            let back = read(&path).unwrap();
+            assert_eq!(back.rows.len(), points.len());
+            for (r, (p, s)) in back.rows.iter().zip(points.iter().zip(&states)) {
+                let expected = row(p, s, dim, 0.01);
+                let bits = |v: &[f64]| v.iter().map(|x| (x + 0.0).to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(r), bits(expected.as_slice()));
+            }
+        }
+    }
+
+    #[test]
+    fn non_finite_value_stops_the_mapf_at_its_row() {
+        let (points, mut states) = crate::formats::mps_table::tests::sample(10_000, 6);
+        states[7_000].pwp = f64::NAN;
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            let mut out = Vec::new();
+            let e = pool
+                .install(|| write(&mut out, &points, &states, 3, 0.01))
+                .unwrap_err();
+            assert!(
+                e.to_string().contains("MP 7001 has a non-finite value"),
+                "{e}"
+            );
+        }
+    }
 }

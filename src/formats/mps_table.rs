@@ -6,6 +6,8 @@
 
 use std::io::Write;
 
+use rayon::prelude::*;
+
 use crate::model::MaterialPoint;
 
 /// Formats a float so that it reads back to the same value (shortest round trip).
@@ -16,24 +18,92 @@ pub fn fmt_f64(v: f64) -> String {
     format!("{v}")
 }
 
+/// Appends the shortest decimal that reads back to `v` (ryu): `0` for ±0, no
+/// trailing `.0`, an exponent where it is shorter (`1e-7`, `1.5e20`).
+pub fn push_f64(out: &mut Vec<u8>, v: f64) {
+    if v == 0.0 {
+        out.push(b'0');
+        return;
+    }
+    let mut buf = ryu::Buffer::new();
+    let s = buf.format(v);
+    out.extend_from_slice(s.strip_suffix(".0").unwrap_or(s).as_bytes());
+}
+
+/// Appends an integer in decimal.
+pub fn push_int(out: &mut Vec<u8>, v: impl itoa::Integer) {
+    out.extend_from_slice(itoa::Buffer::new().format(v).as_bytes());
+}
+
+/// Rows per formatting chunk of [`write_rows`].
+const ROWS_PER_CHUNK: usize = 4096;
+
+/// Writes rows `0..n`, each appended to a buffer by `row`, formatted in
+/// parallel chunks and written in order, so the bytes do not depend on the
+/// thread count. The first row (in order) whose `row` fails stops the writing
+/// with that error, after the rows before it.
+pub fn write_rows<F>(w: &mut dyn Write, n: usize, row: F) -> std::io::Result<()>
+where
+    F: Fn(usize, &mut Vec<u8>) -> std::io::Result<()> + Sync,
+{
+    // Batches bound the memory held by formatted text.
+    let batch = ROWS_PER_CHUNK * 4 * rayon::current_num_threads().max(1);
+    let mut start = 0;
+    crate::progress::WRITE_TABLE.start(n as u64);
+    while start < n {
+        let end = (start + batch).min(n);
+        crate::progress::WRITE_TABLE.add((end - start) as u64);
+        let chunks: Vec<(Vec<u8>, Option<std::io::Error>)> = (start..end)
+            .into_par_iter()
+            .step_by(ROWS_PER_CHUNK)
+            .map(|first| {
+                let last = (first + ROWS_PER_CHUNK).min(end);
+                let mut buf = Vec::with_capacity((last - first) * 160);
+                for i in first..last {
+                    if let Err(e) = row(i, &mut buf) {
+                        return (buf, Some(e));
+                    }
+                }
+                (buf, None)
+            })
+            .collect();
+        for (buf, error) in chunks {
+            w.write_all(&buf)?;
+            if let Some(e) = error {
+                return Err(e);
+            }
+        }
+        start = end;
+    }
+    Ok(())
+}
+
 /// Writes the placement table: one row per MP.
 pub fn write_points(w: &mut dyn Write, points: &[MaterialPoint]) -> std::io::Result<()> {
     writeln!(w, "id,element,material,local,x,y,z,volume")?;
-    for p in points {
-        writeln!(
-            w,
-            "{},{},{},{},{},{},{},{}",
-            p.id,
-            p.element + 1,
-            p.material,
-            p.local,
-            fmt_f64(p.position[0]),
-            fmt_f64(p.position[1]),
-            fmt_f64(p.position[2]),
-            fmt_f64(p.volume)
-        )?;
+    write_rows(w, points.len(), |i, out| {
+        let p = &points[i];
+        push_placement(out, p);
+        out.push(b'\n');
+        Ok(())
+    })
+}
+
+/// `id,element,material,local,x,y,z,volume` of one MP.
+fn push_placement(out: &mut Vec<u8>, p: &MaterialPoint) {
+    push_int(out, p.id);
+    out.push(b',');
+    push_int(out, p.element + 1);
+    out.push(b',');
+    push_int(out, p.material);
+    out.push(b',');
+    push_int(out, p.local);
+    for v in p.position {
+        out.push(b',');
+        push_f64(out, v);
     }
-    Ok(())
+    out.push(b',');
+    push_f64(out, p.volume);
 }
 
 /// Mapping diagnostics of one MP.
@@ -57,26 +127,27 @@ pub fn write_states(
     diagnostics: &[MpDiagnostics],
 ) -> std::io::Result<()> {
     writeln!(w, "{STATE_HEADER}")?;
-    for ((p, s), d) in points.iter().zip(states).zip(diagnostics) {
-        let eff = s.effective();
-        let mut row = vec![
-            p.id.to_string(),
-            (p.element + 1).to_string(),
-            p.material.to_string(),
-            p.local.to_string(),
-        ];
-        row.extend(p.position.iter().map(|v| fmt_f64(*v)));
-        row.push(fmt_f64(p.volume));
-        row.push(fmt_f64(s.pwp));
-        row.extend(s.total.iter().map(|v| fmt_f64(*v)));
-        row.extend(eff.iter().map(|v| fmt_f64(*v)));
-        row.push(fmt_f64(s.saturation));
-        row.push(d.neighbours.to_string());
-        row.push(fmt_f64(d.shepard));
-        row.push(d.status.to_string());
-        writeln!(w, "{}", row.join(","))?;
-    }
-    Ok(())
+    let n = points.len().min(states.len()).min(diagnostics.len());
+    write_rows(w, n, |i, out| {
+        let (p, s, d) = (&points[i], &states[i], &diagnostics[i]);
+        push_placement(out, p);
+        for v in std::iter::once(s.pwp)
+            .chain(s.total)
+            .chain(s.effective())
+            .chain([s.saturation])
+        {
+            out.push(b',');
+            push_f64(out, v);
+        }
+        out.push(b',');
+        push_int(out, d.neighbours);
+        out.push(b',');
+        push_f64(out, d.shepard);
+        out.push(b',');
+        out.extend_from_slice(d.status.as_bytes());
+        out.push(b'\n');
+        Ok(())
+    })
 }
 
 /// Reads a mapped-state table back: (points, states). Positioned errors.
@@ -217,4 +288,115 @@ fn read_states_with_lines(path: &std::path::Path) -> Result<StateRows, super::er
         line_numbers.push(i + 1);
     }
     Ok((points, states, line_numbers))
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use crate::model::MpState;
+    use rand::{RngExt, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// Values across the magnitudes a table meets, and the awkward ones.
+    fn awkward(rng: &mut ChaCha8Rng) -> f64 {
+        match rng.random_range(0..6) {
+            0 => rng.random_range(-1e3..1e3),
+            1 => rng.random_range(-1.0..1.0) * 10f64.powi(rng.random_range(-300..300)),
+            2 => rng.random_range(-1e6..1e6f64).round(),
+            3 => f64::from_bits(rng.random::<u64>() >> 2),
+            4 => -0.0,
+            _ => 0.1 + 0.2,
+        }
+    }
+
+    pub(crate) fn sample(n: usize, seed: u64) -> (Vec<MaterialPoint>, Vec<MpState>) {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut points = Vec::new();
+        let mut states = Vec::new();
+        for i in 0..n {
+            points.push(MaterialPoint {
+                id: i as u32 + 1,
+                element: i as u32 / 4,
+                material: 1 + i as u32 % 3,
+                local: 1 + i as u32 % 4,
+                position: [awkward(&mut rng), awkward(&mut rng), awkward(&mut rng)],
+                volume: rng.random_range(1e-6..1.0),
+            });
+            states.push(MpState {
+                pwp: awkward(&mut rng),
+                total: std::array::from_fn(|_| awkward(&mut rng)),
+                saturation: rng.random_range(0.0..1.0),
+            });
+        }
+        (points, states)
+    }
+
+    #[test]
+    fn push_f64_reads_back_to_the_same_value_as_fmt_f64() {
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..100_000 {
+            let v = awkward(&mut rng);
+            let mut out = Vec::new();
+            push_f64(&mut out, v);
+            let text = std::str::from_utf8(&out).unwrap();
+            let back: f64 = text.parse().unwrap();
+            let old: f64 = fmt_f64(v).parse().unwrap();
+            assert_eq!(back.to_bits(), old.to_bits(), "{v:e}: {text}");
+            assert!(!text.ends_with(".0"), "{text}");
+        }
+        for (v, text) in [
+            (0.0, "0"),
+            (-0.0, "0"),
+            (1.0, "1"),
+            (-2.5, "-2.5"),
+            (1e-7, "1e-7"),
+        ] {
+            let mut out = Vec::new();
+            push_f64(&mut out, v);
+            assert_eq!(out, text.as_bytes());
+        }
+    }
+
+    fn states_table(points: &[MaterialPoint], states: &[MpState], threads: usize) -> Vec<u8> {
+        let diagnostics: Vec<MpDiagnostics> = (0..points.len())
+            .map(|i| MpDiagnostics {
+                neighbours: i as u32 % 70,
+                shepard: 1.0 / (i as f64 + 3.0),
+                status: "mapped",
+            })
+            .collect();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap();
+        let mut out = Vec::new();
+        pool.install(|| write_states(&mut out, points, states, &diagnostics))
+            .unwrap();
+        out
+    }
+
+    #[test]
+    fn state_table_is_the_same_for_any_thread_count_and_reads_back() {
+        let (points, states) = sample(20_000, 4);
+        let one = states_table(&points, &states, 1);
+        assert_eq!(one, states_table(&points, &states, 2));
+        assert_eq!(one, states_table(&points, &states, 3));
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("mps.csv");
+        std::fs::write(&path, &one).unwrap();
+        let (p, s) = read_states(&path).unwrap();
+        assert_eq!(p.len(), points.len());
+        for ((a, b), (sa, sb)) in p.iter().zip(&points).zip(s.iter().zip(&states)) {
+            assert_eq!(
+                (a.id, a.element, a.material, a.local),
+                (b.id, b.element, b.material, b.local)
+            );
+            let bits = |v: &[f64]| v.iter().map(|x| (x + 0.0).to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&a.position), bits(&b.position));
+            assert_eq!(a.volume, b.volume);
+            assert_eq!(bits(&[sa.pwp]), bits(&[sb.pwp]));
+            assert_eq!(bits(&sa.total), bits(&sb.total));
+            assert_eq!(sa.saturation, sb.saturation);
+        }
+    }
 }

@@ -6,9 +6,17 @@
 //! so the output is bit-identical for any thread count ([`map_points_serial`] is
 //! the oracle). Groups keep materials apart: a point only takes nodes of its own
 //! group ("no smoothing across material boundaries").
+//!
+//! Neighbours come from the cell grid ([`Search::Grid`]: queries sorted by
+//! cell in Morton order, candidates and their values gathered once per cell)
+//! or from the kiddo tree ([`Search::KdTree`], the reference); both give the
+//! same sorted lists, so the results are bit-identical. Results are scattered
+//! back batch by batch to bound memory; progress is counted in
+//! `crate::progress::MAP`.
 
 use rayon::prelude::*;
 
+use super::grid::{self, Candidates, Cell, Grid};
 use super::neighbours::NeighbourIndex;
 use super::{Kernel, KernelKind};
 
@@ -92,19 +100,71 @@ pub enum MapError {
 /// Values and per-point (neighbours, Shepard ratio, status) of one chunk.
 type ChunkResult = (Vec<f64>, Vec<(u32, f64, PointStatus)>);
 
+/// How the mapper finds the nodes inside the kernel support.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub enum Search {
+    /// Uniform cell grid, queries processed cell by cell (the default).
+    Grid,
+    /// The kiddo k-d tree, one query at a time (the reference).
+    KdTree,
+}
+
+/// One group's nodes and their neighbour search.
 struct Indexed {
     group: u32,
     members: Vec<u32>,
-    index: NeighbourIndex,
+    /// Built by [`Search::KdTree`], or on demand for nearest-node fallbacks.
+    tree: std::sync::OnceLock<NeighbourIndex>,
+    grid: Option<Grid>,
+    /// The node values in the grid's order (n_fields per node), so that the
+    /// rows of a cell's candidates are gathered with them.
+    grid_values: Vec<f64>,
 }
 
-fn build_indices(nodes: &NodeCloud<'_>) -> Vec<Indexed> {
+impl Indexed {
+    fn tree(&self, nodes: &NodeCloud<'_>) -> &NeighbourIndex {
+        self.tree.get_or_init(|| {
+            let positions: Vec<[f64; 3]> = self
+                .members
+                .iter()
+                .map(|&i| nodes.positions[i as usize])
+                .collect();
+            NeighbourIndex::new(&positions, nodes.dim)
+        })
+    }
+}
+
+fn build_indices(nodes: &NodeCloud<'_>, search: Search, radius: f64) -> Vec<Indexed> {
+    let make = |group: u32, members: Vec<u32>| {
+        let positions: Vec<[f64; 3]> = members
+            .iter()
+            .map(|&i| nodes.positions[i as usize])
+            .collect();
+        let grid = (search == Search::Grid).then(|| Grid::new(&positions, nodes.dim, radius));
+        let nf = nodes.n_fields;
+        let grid_values = grid.as_ref().map_or_else(Vec::new, |g| {
+            let mut v = Vec::with_capacity(g.order().len() * nf);
+            for &local in g.order() {
+                let node = members[local as usize] as usize;
+                v.extend_from_slice(&nodes.values[node * nf..(node + 1) * nf]);
+            }
+            v
+        });
+        drop(positions);
+        let ix = Indexed {
+            group,
+            members,
+            grid,
+            grid_values,
+            tree: std::sync::OnceLock::new(),
+        };
+        if search == Search::KdTree {
+            ix.tree(nodes);
+        }
+        ix
+    };
     match nodes.group {
-        None => vec![Indexed {
-            group: u32::MAX,
-            members: (0..nodes.positions.len() as u32).collect(),
-            index: NeighbourIndex::new(nodes.positions, nodes.dim),
-        }],
+        None => vec![make(u32::MAX, (0..nodes.positions.len() as u32).collect())],
         Some(groups) => {
             let mut ids: Vec<u32> = groups.to_vec();
             ids.sort_unstable();
@@ -114,46 +174,38 @@ fn build_indices(nodes: &NodeCloud<'_>) -> Vec<Indexed> {
                     let members: Vec<u32> = (0..groups.len() as u32)
                         .filter(|&i| groups[i as usize] == g)
                         .collect();
-                    let pts: Vec<[f64; 3]> = members
-                        .iter()
-                        .map(|&i| nodes.positions[i as usize])
-                        .collect();
-                    Indexed {
-                        group: g,
-                        members,
-                        index: NeighbourIndex::new(&pts, nodes.dim),
-                    }
+                    make(g, members)
                 })
                 .collect()
         }
     }
 }
 
-/// Maps one point into `out` (n_fields values); returns (neighbours, ratio, status).
-fn map_one(
+/// Maps one point into `out` (n_fields values) from its neighbours `found`
+/// (sorted by distance, then node index; `row` gives a neighbour's values);
+/// returns (neighbours, ratio, status).
+fn map_one<'r>(
     nodes: &NodeCloud<'_>,
     idx: &Indexed,
     settings: &MapSettings,
     p: [f64; 3],
-    scratch: &mut Vec<(u32, f64)>,
+    found: &[(u32, f64)],
+    row: impl Fn(u32) -> &'r [f64],
     out: &mut [f64],
 ) -> (u32, f64, PointStatus) {
-    let support = settings.kernel.support() * settings.h;
-    idx.index.within(p, support, scratch);
     let alpha = settings.kernel.alpha(nodes.dim, settings.h);
     out.iter_mut().for_each(|v| *v = 0.0);
     let mut sum_w = 0.0;
     let mut count = 0;
-    for &(local, d) in scratch.iter() {
+    let nf = nodes.n_fields;
+    for &(local, d) in found {
         let w = settings.kernel.shape(d / settings.h);
         if w <= 0.0 {
             continue;
         }
         count += 1;
         sum_w += w;
-        let node = idx.members[local as usize] as usize;
-        let row = &nodes.values[node * nodes.n_fields..(node + 1) * nodes.n_fields];
-        for (o, v) in out.iter_mut().zip(row) {
+        for (o, v) in out.iter_mut().zip(row(local)) {
             *o += w * v;
         }
     }
@@ -163,12 +215,10 @@ fn map_one(
         return (count, ratio, PointStatus::Mapped);
     }
     match settings.outside {
-        OutsidePolicy::Nearest => match idx.index.nearest(p) {
+        OutsidePolicy::Nearest => match idx.tree(nodes).nearest(p) {
             Some((local, _)) => {
                 let node = idx.members[local as usize] as usize;
-                out.copy_from_slice(
-                    &nodes.values[node * nodes.n_fields..(node + 1) * nodes.n_fields],
-                );
+                out.copy_from_slice(&nodes.values[node * nf..(node + 1) * nf]);
                 (count, ratio, PointStatus::Nearest)
             }
             None => {
@@ -188,6 +238,7 @@ fn run(
     points: &[[f64; 3]],
     point_group: Option<&[u32]>,
     settings: &MapSettings,
+    search: Search,
     parallel: bool,
 ) -> Result<MapResult, MapError> {
     if !(settings.h > 0.0 && settings.h.is_finite()) {
@@ -199,7 +250,12 @@ fn run(
         group: None,
         ..*nodes
     };
-    let indices = build_indices(if grouped { nodes } else { &ungrouped_nodes });
+    let support = settings.kernel.support() * settings.h;
+    let indices = build_indices(
+        if grouped { nodes } else { &ungrouped_nodes },
+        search,
+        support,
+    );
     let lookup = |g: u32| -> Result<&Indexed, MapError> {
         if !grouped {
             return Ok(&indices[0]);
@@ -219,34 +275,68 @@ fn run(
     // Queries run in Morton (Z-curve) order of the points for cache locality in
     // the tree; results are scattered back to the input order. The order depends
     // only on the coordinates, so the output is the same for any thread count.
-    let order = morton_order(points, nodes.dim);
+    let group_of = |i: usize| -> u32 {
+        if grouped {
+            point_group.map_or(u32::MAX, |gs| gs[i])
+        } else {
+            u32::MAX
+        }
+    };
+    let order = match search {
+        Search::KdTree => morton_order(points, nodes.dim),
+        Search::Grid => {
+            // Cell by cell in Morton order of the cells, group by group.
+            let mut keyed: Vec<(u32, u64, u32)> = points
+                .par_iter()
+                .enumerate()
+                .map(|(i, p)| {
+                    let g = group_of(i);
+                    let ix = lookup(g).unwrap_or(&indices[0]);
+                    let key = ix
+                        .grid
+                        .as_ref()
+                        .map_or(0, |grid| grid::morton(grid.cell(*p)));
+                    (g, key, i as u32)
+                })
+                .collect();
+            keyed.par_sort_unstable();
+            keyed.into_iter().map(|(_, _, i)| i).collect()
+        }
+    };
     let work = |idx: &[u32]| {
-        let mut scratch = Vec::with_capacity(128);
+        let mut found = Vec::with_capacity(128);
+        let mut candidates = Candidates::default();
+        let mut gathered: Option<(u32, Cell)> = None;
         let mut values = vec![0.0; idx.len() * nf];
         let mut meta = Vec::with_capacity(idx.len());
         for (k, &i) in idx.iter().enumerate() {
             let i = i as usize;
-            let g = if grouped {
-                point_group.map_or(u32::MAX, |gs| gs[i])
-            } else {
-                u32::MAX
-            };
+            let g = group_of(i);
             let ix = lookup(g).unwrap_or(&indices[0]);
-            meta.push(map_one(
-                nodes,
-                ix,
-                settings,
-                points[i],
-                &mut scratch,
-                &mut values[k * nf..(k + 1) * nf],
-            ));
+            let out = &mut values[k * nf..(k + 1) * nf];
+            let m = match &ix.grid {
+                Some(grid) => {
+                    let cell = grid.cell(points[i]);
+                    if gathered != Some((g, cell)) {
+                        grid.gather(cell, &ix.grid_values, nf, &mut candidates);
+                        gathered = Some((g, cell));
+                    }
+                    candidates.within(points[i], support, &mut found);
+                    let c = &candidates;
+                    map_one(nodes, ix, settings, points[i], &found, |k| c.row(k), out)
+                }
+                None => {
+                    ix.tree(nodes).within(points[i], support, &mut found);
+                    let row = |local: u32| {
+                        let node = ix.members[local as usize] as usize;
+                        &nodes.values[node * nf..(node + 1) * nf]
+                    };
+                    map_one(nodes, ix, settings, points[i], &found, row, out)
+                }
+            };
+            meta.push(m);
         }
         (values, meta)
-    };
-    let parts: Vec<ChunkResult> = if parallel {
-        order.par_chunks(chunk).map(work).collect()
-    } else {
-        order.chunks(chunk).map(work).collect()
     };
     let mut result = MapResult {
         values: vec![0.0; points.len() * nf],
@@ -254,13 +344,24 @@ fn run(
         shepard: vec![0.0; points.len()],
         status: vec![PointStatus::Mapped; points.len()],
     };
-    for (c, (values, meta)) in parts.into_iter().enumerate() {
-        for (k, (n, r, st)) in meta.into_iter().enumerate() {
-            let i = order[c * chunk + k] as usize;
-            result.values[i * nf..(i + 1) * nf].copy_from_slice(&values[k * nf..(k + 1) * nf]);
-            result.n_neighbours[i] = n;
-            result.shepard[i] = r;
-            result.status[i] = st;
+    // Batches of chunks bound the memory of results not yet scattered.
+    let batch = chunk * 64;
+    crate::progress::MAP.start(points.len() as u64);
+    for (b, batch_order) in order.chunks(batch).enumerate() {
+        crate::progress::MAP.add(batch_order.len() as u64);
+        let parts: Vec<ChunkResult> = if parallel {
+            batch_order.par_chunks(chunk).map(work).collect()
+        } else {
+            batch_order.chunks(chunk).map(work).collect()
+        };
+        for (c, (values, meta)) in parts.into_iter().enumerate() {
+            for (k, (n, r, st)) in meta.into_iter().enumerate() {
+                let i = order[b * batch + c * chunk + k] as usize;
+                result.values[i * nf..(i + 1) * nf].copy_from_slice(&values[k * nf..(k + 1) * nf]);
+                result.n_neighbours[i] = n;
+                result.shepard[i] = r;
+                result.status[i] = st;
+            }
         }
     }
     if settings.outside == OutsidePolicy::Error {
@@ -283,14 +384,15 @@ fn run(
     Ok(result)
 }
 
-/// Maps the node fields onto `points` in parallel (deterministic).
+/// Maps the node fields onto `points` in parallel (deterministic), with the
+/// cell grid.
 pub fn map_points(
     nodes: &NodeCloud<'_>,
     points: &[[f64; 3]],
     point_group: Option<&[u32]>,
     settings: &MapSettings,
 ) -> Result<MapResult, MapError> {
-    run(nodes, points, point_group, settings, true)
+    run(nodes, points, point_group, settings, Search::Grid, true)
 }
 
 /// The serial oracle of [`map_points`].
@@ -300,7 +402,47 @@ pub fn map_points_serial(
     point_group: Option<&[u32]>,
     settings: &MapSettings,
 ) -> Result<MapResult, MapError> {
-    run(nodes, points, point_group, settings, false)
+    run(nodes, points, point_group, settings, Search::Grid, false)
+}
+
+/// [`map_points`] with a chosen neighbour search, in parallel or serially.
+/// Every choice gives bit-identical results.
+pub fn map_points_with(
+    nodes: &NodeCloud<'_>,
+    points: &[[f64; 3]],
+    point_group: Option<&[u32]>,
+    settings: &MapSettings,
+    search: Search,
+    parallel: bool,
+) -> Result<MapResult, MapError> {
+    run(nodes, points, point_group, settings, search, parallel)
+}
+
+/// Distance from each point to its nearest other point (0 for a duplicate),
+/// in parallel.
+pub fn nearest_other_distances(positions: &[[f64; 3]], dim: usize) -> Vec<f64> {
+    if positions.len() < 2 {
+        return vec![0.0; positions.len()];
+    }
+    // A grid with about two points per cell answers most points; the k-d tree
+    // the rest (isolated points).
+    let (lo, hi) = bounds(positions);
+    let volume: f64 = (0..dim).map(|k| (hi[k] - lo[k]).max(1e-300)).product();
+    let cell = (2.0 * volume / positions.len() as f64).powf(1.0 / dim as f64);
+    let mut found = if cell.is_finite() && cell > 0.0 {
+        Grid::new(positions, dim, cell).second_nearest_within(cell)
+    } else {
+        vec![None; positions.len()]
+    };
+    if found.iter().any(Option::is_none) {
+        let index = NeighbourIndex::new(positions, dim);
+        found.par_iter_mut().enumerate().for_each(|(i, d)| {
+            if d.is_none() {
+                *d = index.second_nearest_distance(positions[i]);
+            }
+        });
+    }
+    found.into_iter().map(|d| d.unwrap_or(0.0)).collect()
 }
 
 /// Median distance from each node to its nearest other node: the reference
@@ -309,35 +451,21 @@ pub fn median_spacing(positions: &[[f64; 3]], dim: usize) -> f64 {
     if positions.len() < 2 {
         return 0.0;
     }
-    let index = NeighbourIndex::new(positions, dim);
-    let mut scratch = Vec::new();
-    let (lo, hi) = bounds(positions);
-    let diag = (0..3)
-        .map(|k| (hi[k] - lo[k]).powi(2))
-        .sum::<f64>()
-        .sqrt()
-        .max(1e-12);
-    let r0 = diag / (positions.len() as f64).powf(1.0 / dim as f64) / 4.0;
-    let mut d: Vec<f64> = positions
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            // Grow the radius until another node appears.
-            let mut r = r0.max(1e-12);
-            loop {
-                index.within(*p, r, &mut scratch);
-                if let Some(&(_, dist)) = scratch.iter().find(|(j, _)| *j as usize != i) {
-                    return dist;
-                }
-                if r > 4.0 * diag {
-                    return diag;
-                }
-                r *= 2.0;
-            }
-        })
-        .collect();
-    d.sort_by(f64::total_cmp);
+    let mut d = nearest_other_distances(positions, dim);
+    d.par_sort_unstable_by(f64::total_cmp);
     d[d.len() / 2]
+}
+
+/// The smallest distance between two points (0 with fewer than two).
+pub fn min_spacing(positions: &[[f64; 3]], dim: usize) -> f64 {
+    nearest_other_distances(positions, dim)
+        .into_iter()
+        .fold(f64::INFINITY, f64::min)
+        .min(if positions.len() < 2 {
+            0.0
+        } else {
+            f64::INFINITY
+        })
 }
 
 fn bounds(positions: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {

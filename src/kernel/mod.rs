@@ -1,10 +1,13 @@
-//! Kernel interpolation (the seed paper's Eq. 1–3): weight functions, the kiddo
-//! neighbour search behind one small wrapper, and the Shepard-normalised mapper
-//! that is parallel over query points. Pure computation, no I/O.
+//! Kernel interpolation (the seed paper's Eq. 1–3): weight functions, two
+//! neighbour searches with one contract (the uniform cell grid of `grid.rs`, the
+//! mapper's default, and the kiddo k-d tree of `neighbours.rs`, the reference),
+//! and the Shepard-normalised mapper that is parallel over query points. Pure
+//! computation, no I/O.
 //!
 //! Kernels follow the paper's notation: R = d/h, w(R) = α·shape(R), with α the
 //! normalisation that makes ∫w = 1 over the line, plane or space.
 
+pub mod grid;
 pub mod loo;
 pub mod mapper;
 pub mod neighbours;

@@ -73,6 +73,29 @@ impl NeighbourIndex {
         out.sort_unstable_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
     }
 
+    /// The distance from `q` to its second-nearest point (the nearest *other*
+    /// point when `q` is one of the indexed points; 0 for a duplicate). `None`
+    /// with fewer than two points.
+    pub fn second_nearest_distance(&self, q: [f64; 3]) -> Option<f64> {
+        let two = std::num::NonZeroUsize::new(2)?;
+        let d2 = match &self.tree {
+            Tree::Two(t) => t
+                .query(&[q[0], q[1]])
+                .nearest_n::<SquaredEuclidean<f64>>(two)
+                .execute()
+                .get(1)
+                .map(|r| r.distance),
+            Tree::Three(t) => t
+                .query(&q)
+                .nearest_n::<SquaredEuclidean<f64>>(two)
+                .execute()
+                .get(1)
+                .map(|r| r.distance),
+            Tree::Empty => None,
+        };
+        d2.map(f64::sqrt)
+    }
+
     /// The nearest point to `q`: (index, distance).
     pub fn nearest(&self, q: [f64; 3]) -> Option<(u32, f64)> {
         match &self.tree {

@@ -20,7 +20,6 @@ use crate::formats::fem_csv::SignConvention;
 use crate::formats::mapf;
 use crate::formats::mps_table::MpDiagnostics;
 use crate::kernel::mapper::{self, MapSettings, NodeCloud, OutsidePolicy, PointStatus};
-use crate::kernel::neighbours::NeighbourIndex;
 use crate::kernel::{Kernel, KernelKind};
 use crate::model::{FemNodes, MpState, Quantity, StressComponent};
 use crate::state::{self, geostatic};
@@ -136,23 +135,6 @@ fn map_subset(
         full.status[i] = sub.status[k];
     }
     Ok(full)
-}
-
-fn min_spacing(points: &[[f64; 3]], dim: usize) -> f64 {
-    let index = NeighbourIndex::new(points, dim);
-    let mut scratch = Vec::new();
-    let mut best = f64::INFINITY;
-    let spacing = mapper::median_spacing(points, dim);
-    for (i, p) in points.iter().enumerate() {
-        index.within(*p, spacing.max(1e-12), &mut scratch);
-        for &(j, d) in &scratch {
-            if j as usize != i {
-                best = best.min(d);
-                break;
-            }
-        }
-    }
-    if best.is_finite() { best } else { spacing }
 }
 
 fn range(values: impl Iterator<Item = f64>) -> (f64, f64) {
@@ -586,7 +568,7 @@ pub fn map(project: Project, fem: LoadedFem, config: &MapConfig) -> Result<Mappe
             bad + 1
         ));
     }
-    let min_mp = min_spacing(&positions, dim);
+    let min_mp = mapper::min_spacing(&positions, dim);
     let mapf_h = mapf::exact_point_smoothing_length(min_mp);
 
     let mut inputs = vec![describe(&project.files.gom)?];

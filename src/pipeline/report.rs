@@ -18,11 +18,26 @@ pub struct InputFile {
 
 pub(super) fn describe(path: &Path) -> Result<InputFile, PipelineError> {
     use sha2::{Digest, Sha256};
-    let bytes = crate::formats::input::read_bytes(path)?;
-    let digest = Sha256::digest(&bytes);
+    use std::io::Read;
+    // Streamed: a large FEM table is not held in memory a second time.
+    let (mut file, _) = crate::formats::input::open_regular(path)?;
+    let io =
+        |e: std::io::Error| PipelineError::Input(format!("{}: cannot read: {e}", path.display()));
+    let mut hasher = Sha256::new();
+    let mut buf = vec![0u8; 1 << 20];
+    let mut len = 0u64;
+    loop {
+        let n = file.read(&mut buf).map_err(io)?;
+        if n == 0 {
+            break;
+        }
+        hasher.update(&buf[..n]);
+        len += n as u64;
+    }
+    let digest = hasher.finalize();
     Ok(InputFile {
         path: path.to_path_buf(),
-        bytes: bytes.len() as u64,
+        bytes: len,
         sha256: digest.iter().map(|b| format!("{b:02x}")).collect(),
     })
 }

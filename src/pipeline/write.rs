@@ -40,9 +40,17 @@ impl Folder<'_> {
     }
 }
 
+/// FEMs up to this many nodes get a `fem.vtu` without `--fem-vtu`.
+pub const FEM_VTU_AUTO_MAX: usize = 200_000;
+
 /// Writes the ready-to-run project and the diagnostics into the folder `dir`;
-/// returns the file names written.
-pub fn write_project(mapped: &Mapped, dir: &Path) -> Result<Vec<String>, PipelineError> {
+/// returns the file names written. `fem.vtu` is written when `fem_vtu` or when
+/// the FEM has at most [`FEM_VTU_AUTO_MAX`] nodes.
+pub fn write_project(
+    mapped: &Mapped,
+    dir: &Path,
+    fem_vtu: bool,
+) -> Result<Vec<String>, PipelineError> {
     let out = Folder(dir);
     let project = &mapped.project;
     let name = &project.files.name;
@@ -86,78 +94,46 @@ pub fn write_project(mapped: &Mapped, dir: &Path) -> Result<Vec<String>, Pipelin
         mps_table::write_states(w, &project.points, &mapped.states, &mapped.diagnostics)
     })?;
     written.push("mps.csv".into());
-    let positions: Vec<[f64; 3]> = project.points.iter().map(|p| p.position).collect();
-    let mut arrays = vec![
-        vtu::PointArray {
-            name: "pwp".into(),
-            components: 1,
-            values: mapped.states.iter().map(|s| s.pwp).collect(),
-        },
-        vtu::PointArray {
+    // The VTU arrays are computed while written (no copies of the fields).
+    let (points, states, diags) = (&project.points, &mapped.states, &mapped.diagnostics);
+    let arrays = vec![
+        vtu::ArrayFn::scalar("pwp", |i| states[i].pwp),
+        vtu::ArrayFn {
             name: "total_stress".into(),
             components: 9,
-            values: mapped
-                .states
-                .iter()
-                .flat_map(|s| vtu::tensor9(&s.total))
-                .collect(),
+            fill: Box::new(|i, out: &mut [f64]| {
+                out.copy_from_slice(&vtu::tensor9(&states[i].total))
+            }),
         },
-        vtu::PointArray {
+        vtu::ArrayFn {
             name: "effective_stress".into(),
             components: 9,
-            values: mapped
-                .states
-                .iter()
-                .flat_map(|s| vtu::tensor9(&s.effective()))
-                .collect(),
+            fill: Box::new(|i, out: &mut [f64]| {
+                out.copy_from_slice(&vtu::tensor9(&states[i].effective()))
+            }),
         },
-        vtu::PointArray {
-            name: "saturation".into(),
-            components: 1,
-            values: mapped.states.iter().map(|s| s.saturation).collect(),
-        },
-        vtu::PointArray {
-            name: "material".into(),
-            components: 1,
-            values: project.points.iter().map(|p| p.material as f64).collect(),
-        },
-        vtu::PointArray {
-            name: "volume".into(),
-            components: 1,
-            values: project.points.iter().map(|p| p.volume).collect(),
-        },
+        vtu::ArrayFn::scalar("saturation", |i| states[i].saturation),
+        vtu::ArrayFn::scalar("material", |i| points[i].material as f64),
+        vtu::ArrayFn::scalar("volume", |i| points[i].volume),
+        vtu::ArrayFn::scalar("neighbours", |i| diags[i].neighbours as f64),
+        vtu::ArrayFn::scalar("shepard", |i| diags[i].shepard),
     ];
-    arrays.push(vtu::PointArray {
-        name: "neighbours".into(),
-        components: 1,
-        values: mapped
-            .diagnostics
-            .iter()
-            .map(|d| d.neighbours as f64)
-            .collect(),
-    });
-    arrays.push(vtu::PointArray {
-        name: "shepard".into(),
-        components: 1,
-        values: mapped.diagnostics.iter().map(|d| d.shepard).collect(),
-    });
-    out.write("mps.vtu", |w| vtu::write_points(w, &positions, &arrays))?;
-    written.push("mps.vtu".into());
-    let fem_arrays: Vec<vtu::PointArray> = mapped
-        .fem
-        .nodes
-        .fields
-        .iter()
-        .map(|(q, v)| vtu::PointArray {
-            name: q.name(),
-            components: 1,
-            values: v.clone(),
-        })
-        .collect();
-    out.write("fem.vtu", |w| {
-        vtu::write_points(w, &mapped.fem.nodes.positions, &fem_arrays)
+    out.write("mps.vtu", |w| {
+        vtu::write_points_with(w, points.len(), &|i| points[i].position, &arrays)
     })?;
-    written.push("fem.vtu".into());
+    written.push("mps.vtu".into());
+    if fem_vtu || mapped.fem.nodes.len() <= FEM_VTU_AUTO_MAX {
+        let nodes = &mapped.fem.nodes;
+        let fem_arrays: Vec<vtu::ArrayFn<'_>> = nodes
+            .fields
+            .iter()
+            .map(|(q, v)| vtu::ArrayFn::scalar(q.name(), move |i| v[i]))
+            .collect();
+        out.write("fem.vtu", |w| {
+            vtu::write_points_with(w, nodes.len(), &|i| nodes.positions[i], &fem_arrays)
+        })?;
+        written.push("fem.vtu".into());
+    }
     let json = serde_json::to_string_pretty(&mapped.report)
         .map_err(|e| PipelineError::Input(format!("report.json: {e}")))?;
     out.write("report.json", |w| w.write_all(json.as_bytes()))?;
