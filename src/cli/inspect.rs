@@ -121,7 +121,7 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
     let mesh = &p.model.mesh;
     let summary = Summary {
         files: &p.files,
-        version: p.gom.version(),
+        version: &p.gom_version,
         cps_version: p.cps.as_ref().map(CpsDocument::version),
         dimension: mesh.dimension.gom_name(),
         element_type: mesh.element_type.gom_name(),

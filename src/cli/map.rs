@@ -88,6 +88,7 @@ impl MapArgs {
             stress: self.stress,
             material_map: self.material_map.clone(),
             mixed_state: self.mixed_state,
+            keep_fem_fields: true,
         })
     }
 }
@@ -108,6 +109,7 @@ pub fn compute(args: &MapArgs, h: Option<SmoothingLength>) -> anyhow::Result<Map
     let fem = args.fem.load()?;
     let t_fem = t1.elapsed().as_secs_f64() * 1e3;
     let mut config = args.config(project.n_dim())?;
+    config.keep_fem_fields = args.fem_vtu || fem.nodes.len() <= pipeline::write::FEM_VTU_AUTO_MAX;
     if let Some(h) = h {
         config.h = h;
     }

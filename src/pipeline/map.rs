@@ -86,6 +86,9 @@ pub struct MapConfig {
     pub material_map: Option<String>,
     /// MPM-MIXED models: element means or per-MP values.
     pub mixed_state: MixedState,
+    /// Keep the FEM fields in [`Mapped::fem`] after mapping (for `fem.vtu`);
+    /// without it they are freed once copied for the kernel (memory).
+    pub keep_fem_fields: bool,
 }
 
 impl Default for MapConfig {
@@ -98,6 +101,7 @@ impl Default for MapConfig {
             stress: StressSource::Auto,
             material_map: None,
             mixed_state: MixedState::Mean,
+            keep_fem_fields: true,
         }
     }
 }
@@ -171,7 +175,11 @@ pub struct Mapped {
 
 /// Maps the FEM fields onto the project's MPs (no output written): the state
 /// per MP, the mapping diagnostics and the report.
-pub fn map(project: Project, fem: LoadedFem, config: &MapConfig) -> Result<Mapped, PipelineError> {
+pub fn map(
+    project: Project,
+    mut fem: LoadedFem,
+    config: &MapConfig,
+) -> Result<Mapped, PipelineError> {
     let mut timings = Vec::new();
     let mut warnings: Vec<String> = project.info.warnings.clone();
     for r in &fem.reports {
@@ -294,12 +302,20 @@ pub fn map(project: Project, fem: LoadedFem, config: &MapConfig) -> Result<Mappe
             }
         }
     }
+    let points = &project.points;
+    let positions: Vec<[f64; 3]> = points.iter().map(|p| p.position).collect();
+    // The exact-point MAPF's h needs the MP spacing: measured now, before the
+    // FEM values are copied, so its search index is not held at the peak.
+    let min_mp = mapper::min_spacing(&positions, dim);
     let n_fields = quantities.len();
     let mut values = vec![0.0; fem.nodes.len() * n_fields];
     for (k, q) in quantities.iter().enumerate() {
         for (i, v) in fem.nodes.field(*q).unwrap_or(&[]).iter().enumerate() {
             values[i * n_fields + k] = *v;
         }
+    }
+    if !config.keep_fem_fields {
+        fem.nodes.fields = Vec::new();
     }
     let cloud = NodeCloud {
         positions: &fem.nodes.positions,
@@ -319,8 +335,6 @@ pub fn map(project: Project, fem: LoadedFem, config: &MapConfig) -> Result<Mappe
             Outside::Skip => OutsidePolicy::Skip,
         },
     };
-    let points = &project.points;
-    let positions: Vec<[f64; 3]> = points.iter().map(|p| p.position).collect();
     let point_groups: Option<Vec<u32>> = node_groups
         .as_ref()
         .map(|_| points.iter().map(|p| p.material).collect());
@@ -372,7 +386,7 @@ pub fn map(project: Project, fem: LoadedFem, config: &MapConfig) -> Result<Mappe
         }
     }
     let t2 = Instant::now();
-    let result = map_subset(
+    let mut result = map_subset(
         &cloud,
         &positions,
         point_groups.as_deref(),
@@ -418,6 +432,8 @@ pub fn map(project: Project, fem: LoadedFem, config: &MapConfig) -> Result<Mappe
             saturation: state::saturation(material, pwp),
         });
     }
+    // The mapped rows are in `states` now; the diagnostics keep the rest.
+    result.values = Vec::new();
     if stress_source == StressSource::Fem
         && dim == 2
         && column(Quantity::TotalStress(StressComponent::Zz)).is_none()
@@ -494,6 +510,8 @@ pub fn map(project: Project, fem: LoadedFem, config: &MapConfig) -> Result<Mappe
             t3.elapsed().as_secs_f64() * 1e3,
         ));
     }
+    // The FEM values' row-major copy is no longer needed.
+    drop(values);
     if stress_source == StressSource::Zero {
         warnings.push("--stress zero: all total stresses are 0; the MPs start unstressed".into());
     }
@@ -568,7 +586,6 @@ pub fn map(project: Project, fem: LoadedFem, config: &MapConfig) -> Result<Mappe
             bad + 1
         ));
     }
-    let min_mp = mapper::min_spacing(&positions, dim);
     let mapf_h = mapf::exact_point_smoothing_length(min_mp);
 
     let mut inputs = vec![describe(&project.files.gom)?];

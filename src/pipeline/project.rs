@@ -13,7 +13,9 @@ use crate::model::{AnuraModel, ComputationMethod, MaterialPoint};
 /// A loaded Anura3D project: files, documents, typed model and predicted MPs.
 pub struct Project {
     pub files: ProjectFiles,
-    pub gom: GomDocument,
+    /// The GOM's version header (`2023`, `2025`, …). The document itself is
+    /// not kept: the GOM is copied to the output byte for byte from its file.
+    pub gom_version: String,
     pub cps: Option<CpsDocument>,
     pub model: AnuraModel,
     pub info: GomInfo,
@@ -81,7 +83,7 @@ impl Project {
         })?;
         Ok(Project {
             files,
-            gom,
+            gom_version: gom.version().to_string(),
             cps,
             model,
             info,

@@ -59,7 +59,7 @@ pub fn write_project(
     // File names as Anura3D will look for them; the model's own CPS with two
     // switches changed, or a generated one (--generate-cps); a default OPD for a
     // 2025 CPS without one (#14).
-    let names = project.files.output_names(project.gom.version());
+    let names = project.files.output_names(&project.gom_version);
     out.copy(&project.files.gom, &names.gom)?;
     written.push(names.gom.clone());
     let active = project
@@ -70,7 +70,7 @@ pub fn write_project(
         .count();
     let text = crate::formats::cps_template::ready_to_run_cps(
         project.cps.as_ref(),
-        project.gom.version(),
+        &project.gom_version,
         dim,
         active,
     )?;
