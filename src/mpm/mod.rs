@@ -20,6 +20,7 @@
 //! does no I/O and prints nothing; it knows nothing about file formats or the
 //! mapping kernels.
 
+mod b_matrix;
 pub mod fos;
 pub mod grid;
 pub mod material;
