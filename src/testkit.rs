@@ -31,22 +31,13 @@ use crate::mpm::shape::{Simplex, tet_old_local_to_global, tri3_local_to_global};
 /// A dry linear elastic material (ρs in kg/m³, E in kPa).
 pub fn elastic_material(young: f64, poisson: f64, density_solid: f64, porosity: f64) -> Material {
     Material {
-        index: 1,
-        name: "elastic".into(),
-        material_type: "dry_material".into(),
         model: Some("linear_elasticity".into()),
         porosity: Some(porosity),
         density_solid: Some(density_solid),
-        density_liquid: None,
         k0: Some(poisson / (1.0 - poisson)),
         young_modulus: Some(young),
         poisson_ratio: Some(poisson),
-        friction_angle: None,
-        cohesion: None,
-        dilatancy_angle: None,
-        tensile_strength: None,
-        retention: None,
-        properties: Vec::new(),
+        ..Material::new(1, "elastic", "dry_material")
     }
 }
 

@@ -43,6 +43,19 @@ pub struct FemArgs {
 }
 
 impl FemArgs {
+    /// The defaults for these files (GeoStudio signs, last step, no overrides).
+    pub fn files(paths: Vec<PathBuf>) -> FemArgs {
+        FemArgs {
+            fem: paths,
+            columns: None,
+            fem_units: None,
+            fem_sign: SignArg::Geostudio,
+            fem_mesh: None,
+            analysis: None,
+            step: "last".into(),
+        }
+    }
+
     /// Every file these options read (`--fem` files and `--fem-mesh`).
     pub fn input_paths(&self) -> Vec<&std::path::Path> {
         let mut out: Vec<&std::path::Path> = self.fem.iter().map(PathBuf::as_path).collect();

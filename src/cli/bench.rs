@@ -265,7 +265,7 @@ pub fn generated_fem_csv(n: usize, seed: u64) -> String {
 /// `bench e2e`: generates the case, runs `map` as the command does, prints the
 /// phases.
 fn e2e(args: &BenchArgs) -> anyhow::Result<()> {
-    use super::args::{FemArgs, SignArg};
+    use super::args::FemArgs;
     use super::map::{self, MapArgs};
     use crate::pipeline::map::{MixedState, Outside, StressSource};
     let threads = rayon::current_num_threads();
@@ -297,15 +297,7 @@ fn e2e(args: &BenchArgs) -> anyhow::Result<()> {
     let support =
         (args.neighbours / (args.nodes as f64 * 4.0 / 3.0 * std::f64::consts::PI)).cbrt() * 100.0;
     let map_args = MapArgs {
-        fem: FemArgs {
-            fem: vec![fem.clone()],
-            columns: None,
-            fem_units: None,
-            fem_sign: SignArg::Geostudio,
-            fem_mesh: None,
-            analysis: None,
-            step: "last".into(),
-        },
+        fem: FemArgs::files(vec![fem.clone()]),
         mpm: gom.clone(),
         kernel: "cubic".into(),
         h: Some(format!("{}", support / 2.0)),

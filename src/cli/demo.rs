@@ -9,7 +9,7 @@ use std::time::Instant;
 
 use anyhow::bail;
 
-use super::args::{FemArgs, SignArg};
+use super::args::FemArgs;
 use super::calibrate::plot_curve;
 use super::map::{self, MapArgs};
 use super::output::OutputDir;
@@ -70,15 +70,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     );
 
     // 2. Calibrate h on the FEM pore pressures.
-    let fem_args = FemArgs {
-        fem: vec![fem_file.clone()],
-        columns: None,
-        fem_units: None,
-        fem_sign: SignArg::Geostudio,
-        fem_mesh: None,
-        analysis: None,
-        step: "last".into(),
-    };
+    let fem_args = FemArgs::files(vec![fem_file.clone()]);
     let fem = fem_args.load()?;
     let outcome = calibrate_h(
         &fem.nodes,

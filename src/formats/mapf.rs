@@ -31,19 +31,7 @@ pub fn headers(n_dim: usize) -> &'static [&'static str] {
             "SmoothLength[m]",
         ]
     } else {
-        &[
-            "X[m]",
-            "Y[m]",
-            "Z[m]",
-            "Pwp[kPa]",
-            "SigX[kPa]",
-            "SigY[kPa]",
-            "SigZ[kPa]",
-            "SigXY[kPa]",
-            "SigXZ[kPa]",
-            "SigYZ[kPa]",
-            "SmoothLength[m]",
-        ]
+        &KNOWN[..11]
     }
 }
 
@@ -129,7 +117,8 @@ impl MapfTable {
     }
 }
 
-/// The headers Anura3D recognises (exact, case-sensitive).
+/// The headers Anura3D recognises (exact, case-sensitive); the first eleven are
+/// the 3D columns a3d-init writes, in order.
 const KNOWN: [&str; 13] = [
     "X[m]",
     "Y[m]",

@@ -106,24 +106,7 @@ mod tests {
         ["clay", "sand"]
             .iter()
             .enumerate()
-            .map(|(k, name)| Material {
-                index: k as u32 + 1,
-                name: name.to_string(),
-                material_type: "dry_material".into(),
-                model: None,
-                porosity: None,
-                density_solid: None,
-                density_liquid: None,
-                k0: None,
-                young_modulus: None,
-                poisson_ratio: None,
-                friction_angle: None,
-                cohesion: None,
-                dilatancy_angle: None,
-                tensile_strength: None,
-                retention: None,
-                properties: Vec::new(),
-            })
+            .map(|(k, name)| Material::new(k as u32 + 1, *name, "dry_material"))
             .collect()
     }
 

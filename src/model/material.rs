@@ -83,6 +83,28 @@ pub struct Material {
 }
 
 impl Material {
+    /// A material with only its head (index, name, type) and no properties.
+    pub fn new(index: u32, name: impl Into<String>, material_type: impl Into<String>) -> Material {
+        Material {
+            index,
+            name: name.into(),
+            material_type: material_type.into(),
+            model: None,
+            porosity: None,
+            density_solid: None,
+            density_liquid: None,
+            k0: None,
+            young_modulus: None,
+            poisson_ratio: None,
+            friction_angle: None,
+            cohesion: None,
+            dilatancy_angle: None,
+            tensile_strength: None,
+            retention: None,
+            properties: Vec::new(),
+        }
+    }
+
     /// True for `unsaturated_material_*` types.
     pub fn is_unsaturated(&self) -> bool {
         self.material_type.starts_with("unsaturated_material")

@@ -407,24 +407,7 @@ pub fn read_materials(
                 format!("unknown material type `{material_type}` (known: {KNOWN_TYPES})"),
             ));
         };
-        let mut material = Material {
-            index: position as u32,
-            name,
-            material_type: material_type.clone(),
-            model: None,
-            porosity: None,
-            density_solid: None,
-            density_liquid: None,
-            k0: None,
-            young_modulus: None,
-            poisson_ratio: None,
-            friction_angle: None,
-            cohesion: None,
-            dilatancy_angle: None,
-            tensile_strength: None,
-            retention: None,
-            properties: Vec::new(),
-        };
+        let mut material = Material::new(position as u32, name, material_type.clone());
         let real = |p: &Pair| -> Result<f64, ParseError> {
             let tok = lex::tokens(&p.value).next().map(|(_, t)| t).unwrap_or("");
             lex::parse_real(tok).ok_or_else(|| {
