@@ -16,18 +16,7 @@ use a3d_init::formats::{mapf, mps_table};
 use a3d_init::model::generate::{self, MaterialSpec};
 
 fn saturated_spec() -> MaterialSpec {
-    MaterialSpec {
-        name: "soil".into(),
-        porosity: 0.4,
-        density_solid: 2650.0,
-        density_liquid: Some(1000.0),
-        k0: 0.3 / 0.7,
-        young_modulus: 2e4,
-        poisson_ratio: 0.3,
-        mohr_coulomb: None,
-        retention: None,
-        permeability: 1e-10,
-    }
+    soil_spec(0.3 / 0.7, 2e4, 1e-10)
 }
 
 /// A 4 m × 10 m saturated block (TRI3, 3 MPs per element) with a CPS using
@@ -45,15 +34,8 @@ fn block_project(dir: &Path, method: &str, mps: u32) -> (PathBuf, PathBuf) {
         ),
     )
     .unwrap();
-    let mut csv = String::from("X,Y,PWP\n");
-    for j in 0..=20 {
-        for i in 0..=8 {
-            let (x, y) = (i as f64 * 0.5, j as f64 * 0.5);
-            csv.push_str(&format!("{x},{y},{}\n", 9.81 * (10.0 - y)));
-        }
-    }
     let fem = dir.join("seep.csv");
-    std::fs::write(&fem, csv).unwrap();
+    std::fs::write(&fem, hydrostatic_grid_csv("X,Y,PWP", 8, 20, 9.81, 10.0)).unwrap();
     (project, fem)
 }
 

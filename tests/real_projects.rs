@@ -11,8 +11,7 @@ use common::*;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use a3d_init::formats::gom::write::model_to_text;
-use a3d_init::model::generate::{self, MaterialSpec};
+use a3d_init::model::generate;
 
 fn real(rel: &str) -> PathBuf {
     fixture("real-projects").join(rel)
@@ -26,19 +25,7 @@ fn s(p: &Path) -> &str {
 /// at `origin`, with header `version`.
 fn block_gom(version: &str, origin: (f64, f64)) -> String {
     let mesh = generate::structured_tri_mesh(origin.0, origin.1, 10.0, 5.0, 10, 5);
-    let spec = MaterialSpec {
-        name: "soil".into(),
-        porosity: 0.4,
-        density_solid: 2650.0,
-        density_liquid: Some(1000.0),
-        k0: 0.5,
-        young_modulus: 1e4,
-        poisson_ratio: 0.3,
-        mohr_coulomb: None,
-        retention: None,
-        permeability: 1e-10,
-    };
-    model_to_text(&generate::single_material_model(mesh, &spec, 3), version)
+    gom_text(mesh, &soil_spec(0.5, 1e4, 1e-10), version)
 }
 
 /// (fixture path, version, origin) of every generated GOM.
@@ -91,15 +78,7 @@ fn gid_project_folder_maps_with_its_own_cps() {
         "{stdout}"
     );
     let out = tmp.path().join("out");
-    let (code, _, stderr) = run_split(&[
-        "map",
-        "--mpm",
-        s(&gid),
-        "--fem",
-        s(&real("hydrostatic.csv")),
-        "--out",
-        s(&out),
-    ]);
+    let (code, _, stderr) = run_map_split(&gid, &real("hydrostatic.csv"), &out, &[]);
     assert_eq!(code, 0, "{stderr}");
     assert!(!stderr.contains("defaults are used"), "{stderr}");
     let mut files: Vec<String> = std::fs::read_dir(&out)
@@ -145,15 +124,12 @@ fn gid_project_folder_maps_with_its_own_cps() {
 fn gid_project_folder_2025_uses_staged_names() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("out");
-    let (code, _, stderr) = run_split(&[
-        "map",
-        "--mpm",
-        s(&real("Stage.gid/Stage-2.dat")),
-        "--fem",
-        s(&real("hydrostatic.csv")),
-        "--out",
-        s(&out),
-    ]);
+    let (code, _, stderr) = run_map_split(
+        &real("Stage.gid/Stage-2.dat"),
+        &real("hydrostatic.csv"),
+        &out,
+        &[],
+    );
     assert_eq!(code, 0, "{stderr}");
     for f in [
         "Stage.GOM_stage0",
@@ -185,16 +161,7 @@ fn no_cps_refuses_map_unless_a_cps_is_generated() {
     assert!(stderr.contains("Bare.GOM: no CPS"), "{stderr}");
     assert!(stderr.contains("--generate-cps"), "{stderr}");
     assert!(!out.exists());
-    let (code, _, stderr) = run_split(&[
-        "map",
-        "--mpm",
-        s(&gom),
-        "--fem",
-        s(&fem),
-        "--out",
-        s(&out),
-        "--generate-cps",
-    ]);
+    let (code, _, stderr) = run_map_split(&gom, &fem, &out, &["--generate-cps"]);
     assert_eq!(code, 0, "{stderr}");
     let cps = std::fs::read_to_string(out.join("Bare.CPS_001")).unwrap();
     assert!(cps.starts_with("### Anura3D_2024 ###\n"), "{cps}");
@@ -267,15 +234,7 @@ fn misnamed_project_file_is_reported_and_the_obvious_project_used() {
     assert_eq!(code, 0);
     assert!(stdout.starts_with("project    X\n"), "{stdout}");
     let out = tmp.path().join("out");
-    let (code, _, stderr) = run_split(&[
-        "map",
-        "--mpm",
-        s(&gom),
-        "--fem",
-        s(&real("hydrostatic.csv")),
-        "--out",
-        s(&out),
-    ]);
+    let (code, _, stderr) = run_map_split(&gom, &real("hydrostatic.csv"), &out, &[]);
     assert_eq!(code, 0, "{stderr}");
     assert!(stderr.contains("will look for X.GOM_stage0"), "{stderr}");
     for f in ["X.GOM_stage0", "X.CPS_001", "X.OPD_stage0", "X.MAPF"] {
@@ -330,20 +289,18 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
     assert_eq!(code, 0, "{stderr}");
     let out = tmp.path().join("out");
     let gom = fixture("anura3d-rapid-drawdown/rapid_drawdown.GOM");
-    let (code, _, stderr) = run_split(&[
-        "map",
-        "--mpm",
-        s(&gom),
-        "--fem",
-        s(&node),
-        "--fem-mesh",
-        s(&mesh),
-        "--out",
-        s(&out),
-        "--generate-cps",
-        "--outside",
-        "nearest",
-    ]);
+    let (code, _, stderr) = run_map_split(
+        &gom,
+        &node,
+        &out,
+        &[
+            "--fem-mesh",
+            s(&mesh),
+            "--generate-cps",
+            "--outside",
+            "nearest",
+        ],
+    );
     assert_eq!(code, 0, "{stderr}");
     let report = std::fs::read_to_string(out.join("report.json")).unwrap();
     assert!(report.contains("lists 492 of the 553 mesh nodes"));
@@ -358,18 +315,12 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
     assert_eq!(code, 0, "{stderr}");
     assert!(stdout.contains("492 nodes (2D)"), "{stdout}");
     let out2 = tmp.path().join("out2");
-    let (code, _, stderr) = run_split(&[
-        "map",
-        "--mpm",
-        s(&gom),
-        "--fem",
-        s(&gsz),
-        "--out",
-        s(&out2),
-        "--generate-cps",
-        "--outside",
-        "nearest",
-    ]);
+    let (code, _, stderr) = run_map_split(
+        &gom,
+        &gsz,
+        &out2,
+        &["--generate-cps", "--outside", "nearest"],
+    );
     assert_eq!(code, 0, "{stderr}");
     // Informational notes are not warnings.
     assert!(
@@ -399,16 +350,8 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
         );
         let (code, _, stderr) = run_split(&["inspect", s(&bad)]);
         assert_eq!(code, 2, "{stderr}");
-        let (code, _, stderr) = run_split(&[
-            "map",
-            "--mpm",
-            s(&gom),
-            "--fem",
-            s(&bad),
-            "--out",
-            s(&tmp.path().join("never")),
-            "--generate-cps",
-        ]);
+        let (code, _, stderr) =
+            run_map_split(&gom, &bad, &tmp.path().join("never"), &["--generate-cps"]);
         assert_eq!(code, 2, "{stderr}");
         assert!(stderr.contains("node.csv:12:1: "), "{stderr}");
     }
@@ -421,15 +364,7 @@ fn fem_in_feet_is_named_with_both_extents_and_the_factor() {
     let tmp = tempfile::tempdir().unwrap();
     let gom = real("offset/Site.GOM");
     let fem = real("site-ft.csv");
-    let (code, _, stderr) = run_split(&[
-        "map",
-        "--mpm",
-        s(&gom),
-        "--fem",
-        s(&fem),
-        "--out",
-        s(&tmp.path().join("a")),
-    ]);
+    let (code, _, stderr) = run_map_split(&gom, &fem, &tmp.path().join("a"), &[]);
     assert_eq!(code, 2, "{stderr}");
     for part in [
         "site-ft.csv: the FEM nodes do not reach the model",
@@ -439,17 +374,12 @@ fn fem_in_feet_is_named_with_both_extents_and_the_factor() {
     ] {
         assert!(stderr.contains(part), "{part}: {stderr}");
     }
-    let (code, _, stderr) = run_split(&[
-        "map",
-        "--mpm",
-        s(&gom),
-        "--fem",
-        s(&fem),
-        "--fem-units",
-        "length=ft",
-        "--out",
-        s(&tmp.path().join("b")),
-    ]);
+    let (code, _, stderr) = run_map_split(
+        &gom,
+        &fem,
+        &tmp.path().join("b"),
+        &["--fem-units", "length=ft"],
+    );
     assert_eq!(code, 0, "{stderr}");
     let (code, _, stderr) = run_split(&[
         "calibrate",
@@ -477,15 +407,8 @@ fn fem_covering_part_of_the_model_names_file_and_extents() {
         .collect();
     let fem = tmp.path().join("part.csv");
     std::fs::write(&fem, part).unwrap();
-    let (code, _, stderr) = run_split(&[
-        "map",
-        "--mpm",
-        s(&real("offset/Site.GOM")),
-        "--fem",
-        s(&fem),
-        "--out",
-        s(&tmp.path().join("out")),
-    ]);
+    let (code, _, stderr) =
+        run_map_split(&real("offset/Site.GOM"), &fem, &tmp.path().join("out"), &[]);
     assert_eq!(code, 2, "{stderr}");
     assert!(stderr.contains("part.csv: "), "{stderr}");
     assert!(
@@ -504,17 +427,7 @@ fn fem_covering_part_of_the_model_names_file_and_extents() {
 fn implausible_pore_pressures_are_warned_not_refused() {
     let tmp = tempfile::tempdir().unwrap();
     let gid = real("Block.gid");
-    let map = |fem: &str, out: &str| {
-        run_split(&[
-            "map",
-            "--mpm",
-            s(&gid),
-            "--fem",
-            s(&real(fem)),
-            "--out",
-            s(&tmp.path().join(out)),
-        ])
-    };
+    let map = |fem: &str, out: &str| run_map_split(&gid, &real(fem), &tmp.path().join(out), &[]);
     let (code, _, stderr) = map("hydrostatic.csv", "ok");
     assert_eq!(code, 0, "{stderr}");
     assert!(!stderr.contains("warning"), "{stderr}");

@@ -6,6 +6,10 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use a3d_init::formats::gom::write::model_to_text;
+use a3d_init::model::Mesh;
+use a3d_init::model::generate::{self, MaterialSpec};
+
 /// `fixtures/<rel>` of this repository.
 pub fn fixture(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -32,4 +36,67 @@ pub fn run_split(args: &[&str]) -> (i32, String, String) {
 pub fn run(args: &[&str]) -> (i32, String) {
     let (code, stdout, stderr) = run_split(args);
     (code, stdout + &stderr)
+}
+
+/// `a3d-init map --mpm <mpm> --fem <fem> --out <out> <extra…>`: (exit code,
+/// stdout, stderr).
+pub fn run_map_split(mpm: &Path, fem: &Path, out: &Path, extra: &[&str]) -> (i32, String, String) {
+    let mut args = vec![
+        "map",
+        "--mpm",
+        mpm.to_str().unwrap(),
+        "--fem",
+        fem.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    run_split(&args)
+}
+
+/// [`run_map_split`] with stdout followed by stderr.
+pub fn run_map(mpm: &Path, fem: &Path, out: &Path, extra: &[&str]) -> (i32, String) {
+    let (code, stdout, stderr) = run_map_split(mpm, fem, out, extra);
+    (code, stdout + &stderr)
+}
+
+/// An elastic, saturated soil without Mohr–Coulomb or retention: "soil",
+/// n = 0.4, ρs = 2650, ρw = 1000 kg/m³, ν = 0.3.
+pub fn soil_spec(k0: f64, young_modulus: f64, permeability: f64) -> MaterialSpec {
+    MaterialSpec {
+        name: "soil".into(),
+        porosity: 0.4,
+        density_solid: 2650.0,
+        density_liquid: Some(1000.0),
+        k0,
+        young_modulus,
+        poisson_ratio: 0.3,
+        mohr_coulomb: None,
+        retention: None,
+        permeability,
+    }
+}
+
+/// The GOM text (header `version`) of `mesh` in one material `spec`, 3 MPs per
+/// element.
+pub fn gom_text(mesh: Mesh, spec: &MaterialSpec, version: &str) -> String {
+    model_to_text(&generate::single_material_model(mesh, spec, 3), version)
+}
+
+/// Writes [`gom_text`] (header 2023) to `path`.
+pub fn write_gom(path: &Path, mesh: Mesh, spec: &MaterialSpec) {
+    std::fs::write(path, gom_text(mesh, spec, "2023")).unwrap();
+}
+
+/// A FEM CSV (`header`, then x, y, pwp) of hydrostatic pwp `gamma_w·(top − y)`
+/// at the nodes of a 0.5 m grid, `nx + 1` by `ny + 1` from the origin.
+pub fn hydrostatic_grid_csv(header: &str, nx: usize, ny: usize, gamma_w: f64, top: f64) -> String {
+    let mut csv = format!("{header}\n");
+    for j in 0..=ny {
+        for i in 0..=nx {
+            let (x, y) = (i as f64 * 0.5, j as f64 * 0.5);
+            csv.push_str(&format!("{x},{y},{}\n", gamma_w * (top - y)));
+        }
+    }
+    csv
 }
