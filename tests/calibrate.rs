@@ -2,10 +2,13 @@
 //! determinism for a seed, the leave-one-out objective against its O(n²) oracle,
 //! the no-neighbour penalty, and bad inputs.
 
+mod common;
+use common::random::*;
+
 use a3d_init::calibrate::{AnnealSettings, calibrate};
 use a3d_init::kernel::KernelKind;
 use a3d_init::kernel::loo::{LooError, LooObjective, Norm, loo_brute_force};
-use rand::{RngExt, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 #[test]
@@ -60,22 +63,10 @@ fn annealer_finds_known_minima() {
 #[test]
 fn same_seed_same_result_any_thread_count() {
     let mut rng = ChaCha8Rng::seed_from_u64(5);
-    let pos: Vec<[f64; 3]> = (0..2000)
-        .map(|_| {
-            [
-                rng.random_range(0.0..50.0),
-                rng.random_range(0.0..50.0),
-                0.0,
-            ]
-        })
-        .collect();
+    let pos = random_points(&mut rng, 2, 2000, 0.0..50.0);
     let values: Vec<f64> = pos.iter().map(|p| 9.81 * (50.0 - p[1])).collect();
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        in_pool(threads, || {
             let obj = LooObjective::new(&pos, 2, &values, 1, KernelKind::Cubic, 6.0).unwrap();
             calibrate(
                 |h| obj.evaluate(h, Norm::L1),
@@ -97,15 +88,7 @@ fn same_seed_same_result_any_thread_count() {
 #[test]
 fn loo_with_reused_lists_equals_brute_force() {
     let mut rng = ChaCha8Rng::seed_from_u64(3);
-    let pos: Vec<[f64; 3]> = (0..400)
-        .map(|_| {
-            [
-                rng.random_range(0.0..20.0),
-                rng.random_range(0.0..20.0),
-                0.0,
-            ]
-        })
-        .collect();
+    let pos = random_points(&mut rng, 2, 400, 0.0..20.0);
     let values: Vec<f64> = pos
         .iter()
         .map(|p| (p[0] * 0.3).sin() * 10.0 + p[1])

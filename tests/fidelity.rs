@@ -40,17 +40,7 @@ fn block_project(dir: &Path, method: &str, mps: u32) -> (PathBuf, PathBuf) {
 }
 
 fn map(project: &Path, fem: &Path, out: &Path, extra: &[&str]) -> String {
-    let mut args = vec![
-        "map",
-        "--fem",
-        fem.to_str().unwrap(),
-        "--mpm",
-        project.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    args.extend_from_slice(extra);
-    let (code, text) = run(&args);
+    let (code, text) = run_map(project, fem, out, extra);
     assert_eq!(code, 0, "{text}");
     text
 }

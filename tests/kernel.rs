@@ -2,6 +2,9 @@
 //! normalisation, partition of unity, constant and linear fields, brute-force
 //! neighbour search, and the serial mapper (bit for bit, any thread count).
 
+mod common;
+use common::random::*;
+
 use a3d_init::kernel::grid::Grid;
 use a3d_init::kernel::mapper::{self, MapSettings, NodeCloud, OutsidePolicy, PointStatus, Search};
 use a3d_init::kernel::neighbours::{NeighbourIndex, within_brute_force};
@@ -85,10 +88,10 @@ proptest! {
     #[test]
     fn normalised_weights_sum_to_one_and_constants_are_exact(seed in 0u64..10_000, k in 0usize..3, c in -500.0f64..500.0) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let nodes: Vec<[f64; 3]> = (0..200).map(|_| [rng.random_range(0.0..10.0), rng.random_range(0.0..10.0), 0.0]).collect();
+        let nodes = random_points(&mut rng, 2, 200, 0.0..10.0);
         let values = vec![c; nodes.len()];
         let cloud = NodeCloud { positions: &nodes, dim: 2, values: &values, n_fields: 1, group: None, node_volume: 0.5 };
-        let points: Vec<[f64; 3]> = (0..50).map(|_| [rng.random_range(1.0..9.0), rng.random_range(1.0..9.0), 0.0]).collect();
+        let points = random_points(&mut rng, 2, 50, 1.0..9.0);
         let settings = MapSettings { kernel: KERNELS[k], h: 1.2, min_shepard: 0.0, outside: OutsidePolicy::Skip };
         let r = mapper::map_points(&cloud, &points, None, &settings).unwrap();
         for (i, s) in r.status.iter().enumerate() {
@@ -145,19 +148,7 @@ fn linear_fields_are_exact_at_interior_points_of_a_uniform_grid() {
 fn kiddo_search_equals_brute_force() {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     for dim in [2usize, 3] {
-        let mut pts: Vec<[f64; 3]> = (0..3000)
-            .map(|_| {
-                [
-                    rng.random_range(-5.0..5.0),
-                    rng.random_range(-5.0..5.0),
-                    if dim == 3 {
-                        rng.random_range(-5.0..5.0)
-                    } else {
-                        0.0
-                    },
-                ]
-            })
-            .collect();
+        let mut pts = random_points(&mut rng, dim, 3000, -5.0..5.0);
         // Many duplicates and a tight cluster.
         for _ in 0..300 {
             pts.push([1.0, 1.0, if dim == 3 { 1.0 } else { 0.0 }]);
@@ -165,15 +156,7 @@ fn kiddo_search_equals_brute_force() {
         let index = NeighbourIndex::new(&pts, dim);
         let mut got = Vec::new();
         for _ in 0..200 {
-            let q = [
-                rng.random_range(-6.0..6.0),
-                rng.random_range(-6.0..6.0),
-                if dim == 3 {
-                    rng.random_range(-6.0..6.0)
-                } else {
-                    0.0
-                },
-            ];
+            let q = random_point(&mut rng, dim, -6.0..6.0);
             let r = rng.random_range(0.0..2.5);
             index.within(q, r, &mut got);
             let want = within_brute_force(&pts, dim, q, r);
@@ -192,15 +175,7 @@ fn kiddo_search_equals_brute_force() {
 #[test]
 fn parallel_map_equals_serial_map_bit_for_bit() {
     let mut rng = ChaCha8Rng::seed_from_u64(11);
-    let nodes: Vec<[f64; 3]> = (0..20_000)
-        .map(|_| {
-            [
-                rng.random_range(0.0..50.0),
-                rng.random_range(0.0..50.0),
-                0.0,
-            ]
-        })
-        .collect();
+    let nodes = random_points(&mut rng, 2, 20_000, 0.0..50.0);
     let values: Vec<f64> = nodes
         .iter()
         .flat_map(|p| [p[0].sin() * 100.0 + p[1], p[1] * p[1] * 0.3])
@@ -217,15 +192,7 @@ fn parallel_map_equals_serial_map_bit_for_bit() {
         group: Some(&groups),
         node_volume: 0.125,
     };
-    let points: Vec<[f64; 3]> = (0..10_000)
-        .map(|_| {
-            [
-                rng.random_range(0.0..50.0),
-                rng.random_range(0.0..50.0),
-                0.0,
-            ]
-        })
-        .collect();
+    let points = random_points(&mut rng, 2, 10_000, 0.0..50.0);
     let point_groups: Vec<u32> = points
         .iter()
         .map(|p| if p[1] < 20.0 { 1 } else { 2 })
@@ -240,11 +207,7 @@ fn parallel_map_equals_serial_map_bit_for_bit() {
         let serial =
             mapper::map_points_serial(&cloud, &points, Some(&point_groups), &settings).unwrap();
         for threads in [1, 2, 4] {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            let parallel = pool.install(|| {
+            let parallel = in_pool(threads, || {
                 mapper::map_points(&cloud, &points, Some(&point_groups), &settings).unwrap()
             });
             assert!(
@@ -350,19 +313,7 @@ fn null_points_follow_the_policy() {
 
 /// Random clouds with duplicates and a tight cluster, in 2D and 3D.
 fn cloud_with_duplicates(rng: &mut ChaCha8Rng, dim: usize, n: usize) -> Vec<[f64; 3]> {
-    let mut pts: Vec<[f64; 3]> = (0..n)
-        .map(|_| {
-            [
-                rng.random_range(-5.0..5.0),
-                rng.random_range(-5.0..5.0),
-                if dim == 3 {
-                    rng.random_range(-5.0..5.0)
-                } else {
-                    0.0
-                },
-            ]
-        })
-        .collect();
+    let mut pts = random_points(rng, dim, n, -5.0..5.0);
     for _ in 0..n / 10 {
         pts.push([1.0, 1.0, if dim == 3 { 1.0 } else { 0.0 }]);
     }
@@ -379,15 +330,7 @@ fn grid_and_kiddo_searches_equal_brute_force_bit_for_bit() {
             let grid = Grid::new(&pts, dim, radius);
             let (mut a, mut b) = (Vec::new(), Vec::new());
             for _ in 0..300 {
-                let q = [
-                    rng.random_range(-7.0..7.0),
-                    rng.random_range(-7.0..7.0),
-                    if dim == 3 {
-                        rng.random_range(-7.0..7.0)
-                    } else {
-                        0.0
-                    },
-                ];
+                let q = random_point(&mut rng, dim, -7.0..7.0);
                 let want = within_brute_force(&pts, dim, q, radius);
                 grid.within(q, radius, &mut a);
                 index.within(q, radius, &mut b);

@@ -310,17 +310,7 @@ fn bad_inputs_exit_2_and_leave_no_output() {
             std::fs::write(&fem, &text).unwrap();
         }
         let out = dir.join("out");
-        let mut args = vec![
-            "map",
-            "--fem",
-            fem.to_str().unwrap(),
-            "--mpm",
-            gom.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ];
-        args.extend(extra);
-        let (code, stderr) = run(&args);
+        let (code, stderr) = run_map(&gom, &fem, &out, &extra);
         assert_eq!(code, 2, "{name}: {stderr}");
         assert!(
             stderr.contains(expected),
@@ -344,19 +334,7 @@ fn conflicting_joins_are_errors() {
     let b = tmp.path().join("b.csv");
     std::fs::write(&a, "Node,X,Y,PWP\n1,0,0,1\n2,1,0,2\n3,0,1,3\n").unwrap();
     let out = tmp.path().join("o");
-    let join = || {
-        run(&[
-            "map",
-            "--fem",
-            a.to_str().unwrap(),
-            "--fem",
-            b.to_str().unwrap(),
-            "--mpm",
-            gom.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
-    };
+    let join = || run_map(&gom, &a, &out, &["--fem", b.to_str().unwrap()]);
     std::fs::write(&b, "Node,X,Y,PWP\n1,0,0,1\n2,1,0,5\n3,0,1,3\n").unwrap();
     let (code, stderr) = join();
     assert_eq!(code, 2);
@@ -376,19 +354,8 @@ fn real_geostudio_node_csv_with_mesh_ply() {
     let node = dir.join("1-initial-steady-state_001_node.csv");
     let ply = dir.join("1-initial-steady-state_Mesh.ply");
     let gom = fixture("anura3d-rapid-drawdown/rapid_drawdown.GOM");
-    let args = [
-        "map",
-        "--fem",
-        node.to_str().unwrap(),
-        "--fem-mesh",
-        ply.to_str().unwrap(),
-        "--mpm",
-        gom.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--generate-cps",
-    ];
-    let (code, stderr) = run(&args);
+    let mesh_args = ["--fem-mesh", ply.to_str().unwrap(), "--generate-cps"];
+    let (code, stderr) = run_map(&gom, &node, &out, &mesh_args);
     assert_eq!(code, 0, "{stderr}");
     let (points, states) = mps_table::read_states(&out.join("mps.csv")).unwrap();
     assert_eq!(points.len(), 992 * 3);

@@ -3,6 +3,8 @@
 //! every helper.
 #![allow(dead_code)]
 
+pub mod random;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
