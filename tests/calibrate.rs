@@ -112,9 +112,7 @@ fn loo_with_reused_lists_equals_brute_force() {
 
 #[test]
 fn penalty_applies_when_h_is_too_small() {
-    let pos: Vec<[f64; 3]> = (0..100)
-        .map(|k| [(k % 10) as f64, (k / 10) as f64, 0.0])
-        .collect();
+    let pos = grid_nodes(10, 1.0);
     let values: Vec<f64> = pos.iter().map(|p| p[1]).collect();
     let obj = LooObjective::new(&pos, 2, &values, 1, KernelKind::Cubic, 2.0).unwrap();
     // At h = 0.4 the cubic support (0.8) reaches no other node: every node pays |f − mean|.

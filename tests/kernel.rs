@@ -105,9 +105,7 @@ proptest! {
 #[test]
 fn linear_fields_are_exact_at_interior_points_of_a_uniform_grid() {
     let n = 21;
-    let nodes: Vec<[f64; 3]> = (0..n * n)
-        .map(|k| [(k % n) as f64 * 0.5, (k / n) as f64 * 0.5, 0.0])
-        .collect();
+    let nodes = grid_nodes(n, 0.5);
     let f = |p: &[f64; 3]| 3.0 * p[0] - 2.0 * p[1] + 7.0;
     let values: Vec<f64> = nodes.iter().map(f).collect();
     let cloud = NodeCloud {
@@ -228,9 +226,7 @@ fn parallel_map_equals_serial_map_bit_for_bit() {
 fn groups_keep_a_material_step_sharp() {
     // Two materials meeting at y = 5 with a jump in the field; no smoothing across.
     let n = 21;
-    let nodes: Vec<[f64; 3]> = (0..n * n)
-        .map(|k| [(k % n) as f64 * 0.5, (k / n) as f64 * 0.5, 0.0])
-        .collect();
+    let nodes = grid_nodes(n, 0.5);
     let groups: Vec<u32> = nodes
         .iter()
         .map(|p| if p[1] <= 5.0 { 1 } else { 2 })
@@ -269,9 +265,7 @@ fn groups_keep_a_material_step_sharp() {
 
 #[test]
 fn null_points_follow_the_policy() {
-    let nodes: Vec<[f64; 3]> = (0..100)
-        .map(|k| [(k % 10) as f64, (k / 10) as f64, 0.0])
-        .collect();
+    let nodes = grid_nodes(10, 1.0);
     let values: Vec<f64> = nodes.iter().map(|p| p[0]).collect();
     let cloud = NodeCloud {
         positions: &nodes,

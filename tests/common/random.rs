@@ -39,3 +39,11 @@ pub fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
         .unwrap()
         .install(f)
 }
+
+/// The `n × n` nodes of a square grid of `spacing` from the origin in the
+/// plane z = 0, x running fastest.
+pub fn grid_nodes(n: usize, spacing: f64) -> Vec<[f64; 3]> {
+    (0..n * n)
+        .map(|k| [(k % n) as f64 * spacing, (k / n) as f64 * spacing, 0.0])
+        .collect()
+}
