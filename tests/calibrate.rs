@@ -62,8 +62,7 @@ fn annealer_finds_known_minima() {
 
 #[test]
 fn same_seed_same_result_any_thread_count() {
-    let mut rng = ChaCha8Rng::seed_from_u64(5);
-    let pos = random_points(&mut rng, 2, 2000, 0.0..50.0);
+    let pos = random_points(&mut ChaCha8Rng::seed_from_u64(5), 2, 2000, 0.0..50.0);
     let values: Vec<f64> = pos.iter().map(|p| 9.81 * (50.0 - p[1])).collect();
     let run = |threads: usize| {
         in_pool(threads, || {
@@ -87,8 +86,7 @@ fn same_seed_same_result_any_thread_count() {
 
 #[test]
 fn loo_with_reused_lists_equals_brute_force() {
-    let mut rng = ChaCha8Rng::seed_from_u64(3);
-    let pos = random_points(&mut rng, 2, 400, 0.0..20.0);
+    let pos = random_points(&mut ChaCha8Rng::seed_from_u64(3), 2, 400, 0.0..20.0);
     let values: Vec<f64> = pos
         .iter()
         .map(|p| (p[0] * 0.3).sin() * 10.0 + p[1])

@@ -108,14 +108,7 @@ fn linear_fields_are_exact_at_interior_points_of_a_uniform_grid() {
     let nodes = grid_nodes(n, 0.5);
     let f = |p: &[f64; 3]| 3.0 * p[0] - 2.0 * p[1] + 7.0;
     let values: Vec<f64> = nodes.iter().map(f).collect();
-    let cloud = NodeCloud {
-        positions: &nodes,
-        dim: 2,
-        values: &values,
-        n_fields: 1,
-        group: None,
-        node_volume: 0.25,
-    };
+    let cloud = plane_cloud(&nodes, &values, 1, None, 0.25);
     // Interior grid points and cell centres: symmetric stencils.
     let points: Vec<[f64; 3]> = vec![
         [5.0, 5.0, 0.0],
@@ -182,14 +175,7 @@ fn parallel_map_equals_serial_map_bit_for_bit() {
         .iter()
         .map(|p| if p[1] < 20.0 { 1 } else { 2 })
         .collect();
-    let cloud = NodeCloud {
-        positions: &nodes,
-        dim: 2,
-        values: &values,
-        n_fields: 2,
-        group: Some(&groups),
-        node_volume: 0.125,
-    };
+    let cloud = plane_cloud(&nodes, &values, 2, Some(&groups), 0.125);
     let points = random_points(&mut rng, 2, 10_000, 0.0..50.0);
     let point_groups: Vec<u32> = points
         .iter()
@@ -235,14 +221,7 @@ fn groups_keep_a_material_step_sharp() {
         .iter()
         .map(|&g| if g == 1 { 10.0 } else { 100.0 })
         .collect();
-    let cloud = NodeCloud {
-        positions: &nodes,
-        dim: 2,
-        values: &values,
-        n_fields: 1,
-        group: Some(&groups),
-        node_volume: 0.25,
-    };
+    let cloud = plane_cloud(&nodes, &values, 1, Some(&groups), 0.25);
     let points = [[4.0, 4.9, 0.0], [4.0, 5.1, 0.0]];
     let settings = MapSettings {
         kernel: KernelKind::Cubic,
@@ -267,14 +246,7 @@ fn groups_keep_a_material_step_sharp() {
 fn null_points_follow_the_policy() {
     let nodes = grid_nodes(10, 1.0);
     let values: Vec<f64> = nodes.iter().map(|p| p[0]).collect();
-    let cloud = NodeCloud {
-        positions: &nodes,
-        dim: 2,
-        values: &values,
-        n_fields: 1,
-        group: None,
-        node_volume: 1.0,
-    };
+    let cloud = plane_cloud(&nodes, &values, 1, None, 1.0);
     let points = [[4.5, 4.5, 0.0], [30.0, 4.0, 0.0], [-20.0, 0.0, 0.0]];
     let mut settings = MapSettings {
         kernel: KernelKind::Cubic,
@@ -303,6 +275,24 @@ fn null_points_follow_the_policy() {
     settings.outside = OutsidePolicy::Skip;
     let r = mapper::map_points(&cloud, &points, None, &settings).unwrap();
     assert!(r.values[1].is_nan() && r.status[2] == PointStatus::Skipped);
+}
+
+/// A node cloud in the plane (dim 2).
+fn plane_cloud<'a>(
+    nodes: &'a [[f64; 3]],
+    values: &'a [f64],
+    n_fields: usize,
+    group: Option<&'a [u32]>,
+    node_volume: f64,
+) -> NodeCloud<'a> {
+    NodeCloud {
+        positions: nodes,
+        dim: 2,
+        values,
+        n_fields,
+        group,
+        node_volume,
+    }
 }
 
 /// Random clouds with duplicates and a tight cluster, in 2D and 3D.
