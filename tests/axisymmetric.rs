@@ -10,7 +10,7 @@
 //! per radian (weight × det J × radius), as in Anura3D.
 
 mod common;
-use common::{fixture, run as cli};
+use common::{assert_contains, fixture, run as cli};
 
 use a3d_init::formats::gom::GomDocument;
 use a3d_init::model::{AnuraModel, Dimension, MaterialPoint, MpState, gamma_water};
@@ -342,7 +342,7 @@ fn cc_axi_sample_verifies_as_a_collapsing_column() {
 
     let (code, text) = cli(&["verify", out.to_str().expect("utf-8")]);
     assert_eq!(code, 1, "{text}");
-    assert!(text.contains("NOT IN EQUILIBRIUM"), "{text}");
+    assert_contains(&text, &["NOT IN EQUILIBRIUM"]);
     let report: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(out.join("verify/verify.json")).expect("verify.json"),
     )

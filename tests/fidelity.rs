@@ -45,18 +45,21 @@ fn map(project: &Path, fem: &Path, out: &Path, extra: &[&str]) -> String {
     text
 }
 
+/// [`block_project`] (MPM-MP, 3 MPs per element) mapped into `dir/out`.
+fn mapped_mpm_block(dir: &Path) -> PathBuf {
+    let (project, fem) = block_project(dir, "MPM-MP", 3);
+    let out = dir.join("out");
+    map(&project, &fem, &out, &[]);
+    out
+}
+
 #[test]
 fn verify_judges_the_mapf_not_mps_csv() {
     let tmp = tempfile::tempdir().unwrap();
-    let (project, fem) = block_project(tmp.path(), "MPM-MP", 3);
-    let out = tmp.path().join("out");
-    map(&project, &fem, &out, &[]);
+    let out = mapped_mpm_block(tmp.path());
     let (code, text) = run(&["verify", out.to_str().unwrap()]);
     assert_eq!(code, 0, "{text}");
-    assert!(
-        text.contains("mps.csv agrees with what Anura3D reads"),
-        "{text}"
-    );
+    assert_contains(&text, &["mps.csv agrees with what Anura3D reads"]);
     // start.csv holds what Anura3D will hold: here the mapped state itself.
     let (_, start) = mps_table::read_states(&out.join("verify/start.csv")).unwrap();
     let (_, mapped) = mps_table::read_states(&out.join("mps.csv")).unwrap();
@@ -88,20 +91,15 @@ fn verify_judges_the_mapf_not_mps_csv() {
     std::fs::write(&path, text_out).unwrap();
     let (code, text) = run(&["verify", out.to_str().unwrap()]);
     assert_eq!(code, 1, "{text}");
-    assert!(text.contains("NOT IN EQUILIBRIUM"), "{text}");
-    assert!(
-        text.contains("mps.csv and the MAPF disagree on 240 of 240 MPs"),
-        "{text}"
-    );
-    assert!(text.contains("out of balance"), "{text}");
+    assert_contains(&text, &["NOT IN EQUILIBRIUM"]);
+    assert_contains(&text, &["mps.csv and the MAPF disagree on 240 of 240 MPs"]);
+    assert_contains(&text, &["out of balance"]);
 }
 
 #[test]
 fn verify_names_mps_anura3d_holds_as_nan() {
     let tmp = tempfile::tempdir().unwrap();
-    let (project, fem) = block_project(tmp.path(), "MPM-MP", 3);
-    let out = tmp.path().join("out");
-    map(&project, &fem, &out, &[]);
+    let out = mapped_mpm_block(tmp.path());
     // Keep only the first 30 rows: the other MPs have no row within 2h.
     let path = out.join("block.MAPF");
     let text = std::fs::read_to_string(&path).unwrap();
@@ -109,7 +107,7 @@ fn verify_names_mps_anura3d_holds_as_nan() {
     std::fs::write(&path, kept.join("\n") + "\n").unwrap();
     let (code, text) = run(&["verify", out.to_str().unwrap()]);
     assert_eq!(code, 1, "{text}");
-    assert!(text.contains("210 MPs will hold NaN in Anura3D"), "{text}");
+    assert_contains(&text, &["210 MPs will hold NaN in Anura3D"]);
     let start = std::fs::read_to_string(out.join("verify/start.csv")).unwrap();
     assert_eq!(start.lines().filter(|l| l.ends_with(",nan")).count(), 210);
 }
@@ -158,7 +156,7 @@ fn mixed_elements_carry_their_mean_state() {
     map(&project, &fem, &mean, &[]);
     let per_mp = tmp.path().join("per-mp");
     let text = map(&project, &fem, &per_mp, &["--mixed-state", "per-mp"]);
-    assert!(text.contains("MPM-MP"), "{text}");
+    assert_contains(&text, &["MPM-MP"]);
     let (points, a) = mps_table::read_states(&mean.join("mps.csv")).unwrap();
     let (_, b) = mps_table::read_states(&per_mp.join("mps.csv")).unwrap();
     for e in 0..80u32 {
@@ -183,10 +181,7 @@ fn mixed_elements_carry_their_mean_state() {
     assert_eq!(report["computation_method"], "MpmMixed");
     // verify models the collapse to the first MP: the per-MP folder reports the spread.
     let (_, text) = run(&["verify", per_mp.to_str().unwrap()]);
-    assert!(
-        text.contains("MPM-MIXED: the first step gives every MP"),
-        "{text}"
-    );
+    assert_contains(&text, &["MPM-MIXED: the first step gives every MP"]);
 }
 
 /// The §1.7 two-material model with a third, undrained material block written
@@ -229,10 +224,9 @@ fn undrained_material_in_the_newer_order_is_read_by_name() {
     std::fs::write(&gom, undrained_gom("2.2e6")).unwrap();
     let (code, text) = run(&["inspect", gom.to_str().unwrap()]);
     assert_eq!(code, 2, "{text}");
-    assert!(
-        text.contains("TwoMat.GOM:")
-            && text.contains("K0_VALUE_SOLID = 2200000 must lie in [0, 1]"),
-        "{text}"
+    assert_contains(
+        &text,
+        &["TwoMat.GOM:", "K0_VALUE_SOLID = 2200000 must lie in [0, 1]"],
     );
 }
 
@@ -307,10 +301,7 @@ fn dry_materials_carry_no_pore_water() {
     let c = table.column("Pwp[kPa]").unwrap();
     assert!(table.rows.iter().all(|r| r[c] == 0.0));
     let report = std::fs::read_to_string(out.join("report.json")).unwrap();
-    assert!(
-        report.contains("FEM pore pressure dropped") && report.contains("`dry`"),
-        "{report}"
-    );
+    assert_contains(&report, &["FEM pore pressure dropped", "`dry`"]);
     let (_, text) = run(&["verify", out.to_str().unwrap()]);
     let (_, start) = mps_table::read_states(&out.join("verify/start.csv")).unwrap();
     assert!(start.iter().all(|s| s.pwp == 0.0), "{text}");
@@ -323,7 +314,7 @@ fn demo_prints_only_measured_words() {
     let (code, text) = run(&["demo", "--no-fos", "--out", out.to_str().unwrap()]);
     assert_eq!(code, 0, "{text}");
     assert!(!text.contains("FS ≈ 1"), "{text}");
-    assert!(text.contains("σ'zz := τxy"), "{text}");
+    assert_contains(&text, &["σ'zz := τxy"]);
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert!(

@@ -63,7 +63,7 @@ fn shipped_sample_reads_step_010_like_the_extracted_csv() {
     assert_eq!(a.steps[5].time, Some(12960.0));
     let (nodes, _, note) =
         read_step(&gsz, None, &StepChoice::Number(10), &CsvOptions::default()).unwrap();
-    assert!(note.contains("step 010 at t = 12960 s"), "{note}");
+    assert_contains(&note, &["step 010 at t = 12960 s"]);
     assert_eq!(nodes.len(), 306);
     let extracted = std::fs::read_to_string(fixture(
         "geostudio-gsz-internal/1d-unsaturated-column/seepw-analysis_010_node.csv",
@@ -123,10 +123,12 @@ fn shipped_sample_maps_end_to_end() {
         )
     };
     assert_eq!(code, 0);
-    assert!(
-        stdout.contains("analysis   1 `SEEP/W Analysis`: SEEP/W Transient")
-            && stdout.contains("306 nodes (2D), fields: pwp"),
-        "{stdout}"
+    assert_contains(
+        &stdout,
+        &[
+            "analysis   1 `SEEP/W Analysis`: SEEP/W Transient",
+            "306 nodes (2D), fields: pwp",
+        ],
     );
 }
 
@@ -158,10 +160,7 @@ fn imperial_project_is_converted() {
         &CsvOptions::default(),
     )
     .unwrap();
-    assert!(
-        note.contains("Imperial (ft, psf; converted to m and kPa)"),
-        "{note}"
-    );
+    assert_contains(&note, &["Imperial (ft, psf; converted to m and kPa)"]);
     assert!(
         (fem.positions[1][0] - 3.048).abs() < 1e-12 && (fem.positions[2][1] - 3.048).abs() < 1e-12
     );
@@ -248,8 +247,5 @@ fn corrupted_archives_exit_2() {
     std::fs::write(&truncated, &bytes[..bytes.len() / 2]).unwrap();
     let (code, stderr) = run_map(&gom, &truncated, &tmp.path().join("t-out"), &[]);
     assert_eq!(code, 2, "{stderr}");
-    assert!(
-        stderr.contains("not a readable .gsz (zip) archive"),
-        "{stderr}"
-    );
+    assert_contains(&stderr, &["not a readable .gsz (zip) archive"]);
 }

@@ -338,11 +338,11 @@ fn conflicting_joins_are_errors() {
     std::fs::write(&b, "Node,X,Y,PWP\n1,0,0,1\n2,1,0,5\n3,0,1,3\n").unwrap();
     let (code, stderr) = join();
     assert_eq!(code, 2);
-    assert!(stderr.contains("pwp of node 2 is -5 but -2"), "{stderr}");
+    assert_contains(&stderr, &["pwp of node 2 is -5 but -2"]);
     std::fs::write(&b, "Node,X,Y,PWP\n1,0,0,1\n2,1,0,2\n4,0,1,3\n").unwrap();
     let (code, stderr) = join();
     assert_eq!(code, 2);
-    assert!(stderr.contains("node 3 of"), "{stderr}");
+    assert_contains(&stderr, &["node 3 of"]);
     assert!(!tmp.path().join("o").exists());
 }
 
@@ -387,9 +387,9 @@ fn real_geostudio_node_csv_with_mesh_ply() {
     // Without the mesh the node.csv has no coordinates: a clear error.
     let (code, stderr) = run_map(&gom, &node, &tmp.path().join("x"), &["--generate-cps"]);
     assert_eq!(code, 2);
-    assert!(
-        stderr.contains("no X and Y columns; give the GeoStudio mesh with --fem-mesh"),
-        "{stderr}"
+    assert_contains(
+        &stderr,
+        &["no X and Y columns; give the GeoStudio mesh with --fem-mesh"],
     );
 }
 

@@ -68,10 +68,10 @@ fn gid_project_folder_maps_with_its_own_cps() {
     let gid = real("Block.gid");
     let (code, stdout, stderr) = run_split(&["inspect", s(&gid)]);
     assert_eq!(code, 0, "{stderr}");
-    assert!(stdout.contains("Block-1.dat"), "{stdout}");
-    assert!(
-        stdout.contains("names      map writes Block.GOM, Block.CPS_001 (CPS header 2024"),
-        "{stdout}"
+    assert_contains(&stdout, &["Block-1.dat"]);
+    assert_contains(
+        &stdout,
+        &["names      map writes Block.GOM, Block.CPS_001 (CPS header 2024"],
     );
     assert!(
         stdout.contains("CPS Anura3D_2024") || stdout.contains("CPS 2024"),
@@ -158,8 +158,8 @@ fn no_cps_refuses_map_unless_a_cps_is_generated() {
     let (code, _, stderr) =
         run_split(&["map", "--mpm", s(&gom), "--fem", s(&fem), "--out", s(&out)]);
     assert_eq!(code, 2, "{stderr}");
-    assert!(stderr.contains("Bare.GOM: no CPS"), "{stderr}");
-    assert!(stderr.contains("--generate-cps"), "{stderr}");
+    assert_contains(&stderr, &["Bare.GOM: no CPS"]);
+    assert_contains(&stderr, &["--generate-cps"]);
     assert!(!out.exists());
     let (code, _, stderr) = run_map_split(&gom, &fem, &out, &["--generate-cps"]);
     assert_eq!(code, 0, "{stderr}");
@@ -223,11 +223,13 @@ fn misnamed_project_file_is_reported_and_the_obvious_project_used() {
     let (code, stdout, stderr) = run_split(&["inspect", s(&gom)]);
     assert_eq!(code, 0, "{stderr}");
     assert!(stdout.starts_with("project    X\n"), "{stdout}");
-    assert!(stdout.contains("X.CPS_001"), "{stdout}");
-    assert!(
-        stdout.contains("Anura3D will look for X.GOM_stage0")
-            && stdout.contains("the run would fail with the files as named"),
-        "{stdout}"
+    assert_contains(&stdout, &["X.CPS_001"]);
+    assert_contains(
+        &stdout,
+        &[
+            "Anura3D will look for X.GOM_stage0",
+            "the run would fail with the files as named",
+        ],
     );
     // The folder finds the same project.
     let (code, stdout, _) = run_split(&["inspect", s(&real("misnamed"))]);
@@ -236,7 +238,7 @@ fn misnamed_project_file_is_reported_and_the_obvious_project_used() {
     let out = tmp.path().join("out");
     let (code, _, stderr) = run_map_split(&gom, &real("hydrostatic.csv"), &out, &[]);
     assert_eq!(code, 0, "{stderr}");
-    assert!(stderr.contains("will look for X.GOM_stage0"), "{stderr}");
+    assert_contains(&stderr, &["will look for X.GOM_stage0"]);
     for f in ["X.GOM_stage0", "X.CPS_001", "X.OPD_stage0", "X.MAPF"] {
         assert!(out.join(f).exists(), "{f} missing");
     }
@@ -271,11 +273,8 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
     let mesh = rd_mesh();
     let (code, stdout, stderr) = run_split(&["inspect", "--fem", s(&node), "--fem-mesh", s(&mesh)]);
     assert_eq!(code, 0, "{stderr}");
-    assert!(stdout.contains("nodes      492 (2D)"), "{stdout}");
-    assert!(
-        stdout.contains("lists 492 of the 553 mesh nodes"),
-        "{stdout}"
-    );
+    assert_contains(&stdout, &["nodes      492 (2D)"]);
+    assert_contains(&stdout, &["lists 492 of the 553 mesh nodes"]);
     let cal = tmp.path().join("cal");
     let (code, _, stderr) = run_split(&[
         "calibrate",
@@ -313,7 +312,7 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
     );
     let (code, stdout, stderr) = run_split(&["inspect", s(&gsz)]);
     assert_eq!(code, 0, "{stderr}");
-    assert!(stdout.contains("492 nodes (2D)"), "{stdout}");
+    assert_contains(&stdout, &["492 nodes (2D)"]);
     let out2 = tmp.path().join("out2");
     let (code, _, stderr) = run_map_split(
         &gom,
@@ -353,7 +352,7 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
         let (code, _, stderr) =
             run_map_split(&gom, &bad, &tmp.path().join("never"), &["--generate-cps"]);
         assert_eq!(code, 2, "{stderr}");
-        assert!(stderr.contains("node.csv:12:1: "), "{stderr}");
+        assert_contains(&stderr, &["node.csv:12:1: "]);
     }
 }
 
@@ -410,14 +409,13 @@ fn fem_covering_part_of_the_model_names_file_and_extents() {
     let (code, _, stderr) =
         run_map_split(&real("offset/Site.GOM"), &fem, &tmp.path().join("out"), &[]);
     assert_eq!(code, 2, "{stderr}");
-    assert!(stderr.contains("part.csv: "), "{stderr}");
-    assert!(
-        stderr.contains("have no FEM node inside the kernel support"),
-        "{stderr}"
-    );
-    assert!(
-        stderr.contains("FEM nodes: x 1000.000 .. 1007.000, y 200.000 .. 205.000 m; model mesh: x 1000.000 .. 1010.000"),
-        "{stderr}"
+    assert_contains(&stderr, &["part.csv: "]);
+    assert_contains(&stderr, &["have no FEM node inside the kernel support"]);
+    assert_contains(
+        &stderr,
+        &[
+            "FEM nodes: x 1000.000 .. 1007.000, y 200.000 .. 205.000 m; model mesh: x 1000.000 .. 1010.000",
+        ],
     );
 }
 
@@ -433,13 +431,13 @@ fn implausible_pore_pressures_are_warned_not_refused() {
     assert!(!stderr.contains("warning"), "{stderr}");
     let (code, _, stderr) = map("hydrostatic-psf.csv", "psf");
     assert_eq!(code, 0, "{stderr}");
-    assert!(
-        stderr.contains("exceeds 1.5× the total vertical stress") && stderr.contains("Worst: MP "),
-        "{stderr}"
+    assert_contains(
+        &stderr,
+        &["exceeds 1.5× the total vertical stress", "Worst: MP "],
     );
     let (code, _, stderr) = map("hydrostatic-flipped.csv", "flipped");
     assert_eq!(code, 0, "{stderr}");
-    assert!(stderr.contains("above the model's top"), "{stderr}");
+    assert_contains(&stderr, &["above the model's top"]);
     for line in stderr.lines().filter(|l| l.contains("warning")) {
         for path in [real("hydrostatic-flipped.csv"), gid.clone()] {
             assert!(line.matches(s(&path)).count() <= 1, "{line}");
@@ -451,9 +449,9 @@ fn implausible_pore_pressures_are_warned_not_refused() {
 fn inspect_fem_prints_the_coordinate_range() {
     let (code, stdout, stderr) = run_split(&["inspect", "--fem", s(&real("site-m.csv"))]);
     assert_eq!(code, 0, "{stderr}");
-    assert!(
-        stdout.contains("extent     x 1000.000 .. 1010.000, y 200.000 .. 205.000 m"),
-        "{stdout}"
+    assert_contains(
+        &stdout,
+        &["extent     x 1000.000 .. 1010.000, y 200.000 .. 205.000 m"],
     );
 }
 
@@ -468,8 +466,8 @@ fn inspect_on_an_unreadable_gsz_exits_2() {
     make_gsz(&gsz, &node, &mesh[..header_end + 4 + 240]);
     let (code, stdout, stderr) = run_split(&["inspect", s(&gsz)]);
     assert_eq!(code, 2, "{stdout}\n{stderr}");
-    assert!(stdout.contains("unreadable"), "{stdout}");
-    assert!(stderr.contains("truncated PLY"), "{stderr}");
+    assert_contains(&stdout, &["unreadable"]);
+    assert_contains(&stderr, &["truncated PLY"]);
     let (code, _, _) = run_split(&["inspect", "--json", s(&gsz)]);
     assert_eq!(code, 2);
 }

@@ -102,3 +102,11 @@ pub fn hydrostatic_grid_csv(header: &str, nx: usize, ny: usize, gamma_w: f64, to
     }
     csv
 }
+
+/// Asserts that `text` contains every one of `parts`, showing `text` otherwise.
+#[track_caller]
+pub fn assert_contains(text: &str, parts: &[&str]) {
+    for part in parts {
+        assert!(text.contains(part), "expected `{part}` in:\n{text}");
+    }
+}
