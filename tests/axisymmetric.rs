@@ -10,31 +10,17 @@
 //! per radian (weight × det J × radius), as in Anura3D.
 
 mod common;
+use common::column::*;
 use common::{assert_contains, fixture, run as cli};
 
 use a3d_init::formats::gom::GomDocument;
 use a3d_init::model::{AnuraModel, Dimension, MaterialPoint, MpState, gamma_water};
-use a3d_init::mpm::{Reason, RunOutput, RunSettings, Verdict, run, verify};
+use a3d_init::mpm::{RunOutput, RunSettings, verify};
 use a3d_init::place::place_material_points;
-use a3d_init::testkit::{column_tri3, elastic_material, geostatic_states, zero_states};
+use a3d_init::testkit::{column_tri3, elastic_material, zero_states};
 
-const G: f64 = 9.81;
-/// Stiff enough that the settling displacements stay far below an element.
-const YOUNG: f64 = 1e5;
-const POISSON: f64 = 0.3;
-const RHO_S: f64 = 2650.0;
-const POROSITY: f64 = 0.3;
 const HEIGHT: f64 = 10.0;
 const LAYERS: usize = 20;
-
-fn k0() -> f64 {
-    POISSON / (1.0 - POISSON)
-}
-
-/// Dry unit weight (kN/m³).
-fn gamma() -> f64 {
-    (1.0 - POROSITY) * RHO_S * G / 1000.0
-}
 
 /// A `width` × 10 m column of `nx` × 20 cells, both sides on rollers, base
 /// fixed, starting at radius `inner` (0: a solid cylinder around the axis).
@@ -194,18 +180,7 @@ fn unconfined_cylinder_carries_its_weight_uniaxially() {
 fn geostatic_axisymmetric_column_is_in_equilibrium() {
     for inner in [0.0, 2.0] {
         let (model, points) = cylinder(Dimension::Axisymmetric, inner, 1.0, 2);
-        let states = geostatic_states(&model, &points, G, k0(), None);
-        let report = verify(&model, &points, &states, &RunSettings::verify()).expect("valid");
-        assert!(
-            report.initial_residual_ratio < 1e-12,
-            "inner {inner}: {}",
-            report.initial_residual_ratio
-        );
-        assert!(
-            report.max_displacement < 1e-12,
-            "{}",
-            report.max_displacement
-        );
+        let report = verify_exact_geostatic(&model, &points);
         assert!(report.steps > 100, "{} steps", report.steps);
         assert!(report.verdict.is_equilibrium(), "{:?}", report.verdict);
         for (p, s) in points.iter().zip(&report.final_stresses) {
@@ -219,24 +194,9 @@ fn geostatic_axisymmetric_column_is_in_equilibrium() {
 #[test]
 fn axisymmetric_stresses_twenty_percent_low_are_not_in_equilibrium() {
     let (model, points) = cylinder(Dimension::Axisymmetric, 0.0, 1.0, 2);
-    let mut states = geostatic_states(&model, &points, G, k0(), None);
-    for s in &mut states {
-        for c in &mut s.total {
-            *c *= 0.8;
-        }
-    }
-    let report = verify(&model, &points, &states, &RunSettings::verify()).expect("valid");
-    let Verdict::NotInEquilibrium { reasons } = &report.verdict else {
-        panic!("expected no equilibrium, got {:?}", report.verdict);
-    };
     // The missing 20 % of the weight is out of balance at the first step
     // (the radial balance stays exact: 0.8 × zero).
-    assert!(
-        reasons.iter().any(
-            |r| matches!(r, Reason::InitialResidual { ratio, .. } if (ratio - 0.2).abs() < 1e-6)
-        ),
-        "{reasons:?}"
-    );
+    let report = verify_twenty_percent_low(&model, &points);
     assert!(report.final_residual_ratio < 1e-2);
     // Settlement: u_r = 0 keeps the column one-dimensional, so the top takes
     // up 20 % of the geostatic strain, 0.2·γH²/(2M), as in plane strain.
@@ -361,21 +321,6 @@ fn cc_axi_sample_verifies_as_a_collapsing_column() {
             "residual away from the free face: {element}"
         );
     }
-}
-
-fn run_in_pool(
-    threads: usize,
-    model: &AnuraModel,
-    points: &[MaterialPoint],
-    states: &[MpState],
-    settings: &RunSettings,
-) -> RunOutput {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("thread pool");
-    pool.install(|| run(model, points, states, settings))
-        .expect("valid")
 }
 
 #[test]

@@ -3,6 +3,7 @@
 //! every helper.
 #![allow(dead_code)]
 
+pub mod column;
 pub mod random;
 
 use std::path::{Path, PathBuf};
