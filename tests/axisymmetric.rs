@@ -15,7 +15,7 @@ use common::{assert_contains, fixture, run as cli};
 
 use a3d_init::formats::gom::GomDocument;
 use a3d_init::model::{AnuraModel, Dimension, MaterialPoint, MpState, gamma_water};
-use a3d_init::mpm::{RunOutput, RunSettings, verify};
+use a3d_init::mpm::{RunSettings, verify};
 use a3d_init::place::place_material_points;
 use a3d_init::testkit::{column_tri3, elastic_material, zero_states};
 
@@ -87,13 +87,7 @@ fn confined_cylinder_settles_to_the_k0_column() {
     let plane_layers = layer_averages(&plane_points, &plane.final_stresses, 4);
     for inner in [0.0, 2.0] {
         let (model, points) = cylinder(Dimension::Axisymmetric, inner, 1.0, 2);
-        let report = verify(
-            &model,
-            &points,
-            &zero_states(&points),
-            &RunSettings::verify(),
-        )
-        .expect("valid");
+        let report = verify_from_zero(&model, &points);
         assert!(report.final_residual_ratio < 1e-2, "inner radius {inner}");
         let layers = layer_averages(&points, &report.final_stresses, 4);
         let h = HEIGHT / LAYERS as f64;
@@ -139,13 +133,7 @@ fn unconfined_cylinder_carries_its_weight_uniaxially() {
         for (node, fixed) in model.mesh.nodes.iter().zip(model.solid_fixity.iter_mut()) {
             *fixed = [node[0] == 0.0, node[1] == 0.0, false];
         }
-        let report = verify(
-            &model,
-            &points,
-            &zero_states(&points),
-            &RunSettings::verify(),
-        )
-        .expect("valid");
+        let report = verify_from_zero(&model, &points);
         assert!(report.final_residual_ratio < 1e-2, "inner radius {inner}");
         let layers = layer_averages(&points, &report.final_stresses, 4);
         let h = HEIGHT / LAYERS as f64;
@@ -327,16 +315,7 @@ fn cc_axi_sample_verifies_as_a_collapsing_column() {
 fn serial_and_parallel_axisymmetric_runs_are_bit_identical() {
     // 20 × 20 cells: 2400 MPs, more than one rayon chunk of 1024.
     let (model, points) = cylinder(Dimension::Axisymmetric, 0.0, 2.0, 20);
-    let states = zero_states(&points);
-    let settings = RunSettings {
-        max_steps: 60,
-        ..RunSettings::verify()
-    };
-    let one = run_in_pool(1, &model, &points, &states, &settings);
-    let two = run_in_pool(2, &model, &points, &states, &settings);
-    assert!(one.report.max_displacement > 0.0);
-    let json = |o: &RunOutput| serde_json::to_string(o).expect("serialisable");
-    assert_eq!(json(&one), json(&two));
+    assert_zero_stress_runs_bit_identical(&model, &points);
 }
 
 #[test]

@@ -127,13 +127,7 @@ fn assert_layers_converged(
 fn column_from_zero_stress_converges_to_geostatic_2d() {
     let model = column_tri3(1.0, 10.0, 2, 20, elastic());
     let points = place_points(&model);
-    let report = verify(
-        &model,
-        &points,
-        &zero_states(&points),
-        &RunSettings::verify(),
-    )
-    .expect("valid");
+    let report = verify_from_zero(&model, &points);
     assert!(report.final_residual_ratio < 1e-2);
     assert_layers_converged(&points, &report.final_stresses, 20, 4);
     // Zero stress under gravity is as far from equilibrium as it gets.
@@ -145,13 +139,7 @@ fn column_from_zero_stress_converges_to_geostatic_2d() {
 fn column_from_zero_stress_converges_to_geostatic_3d() {
     let model = column_tet(1.0, 10.0, 1.0, 1, 10, 1, elastic());
     let points = place_points(&model);
-    let report = verify(
-        &model,
-        &points,
-        &zero_states(&points),
-        &RunSettings::verify(),
-    )
-    .expect("valid");
+    let report = verify_from_zero(&model, &points);
     assert!(report.final_residual_ratio < 1e-2);
     assert_layers_converged(&points, &report.final_stresses, 10, 6);
 }
@@ -429,15 +417,7 @@ fn serial_and_parallel_runs_are_bit_identical() {
     // 3D: a column released from zero stress.
     let model = column_tet(1.0, 4.0, 1.0, 2, 8, 2, elastic());
     let points = place_points(&model);
-    let states = zero_states(&points);
-    let settings = RunSettings {
-        max_steps: 60,
-        ..RunSettings::verify()
-    };
-    let one = run_in_pool(1, &model, &points, &states, &settings);
-    let two = run_in_pool(2, &model, &points, &states, &settings);
-    assert!(one.report.max_displacement > 0.0);
-    assert_eq!(json(&one), json(&two));
+    assert_zero_stress_runs_bit_identical(&model, &points);
 }
 
 #[test]

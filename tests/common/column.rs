@@ -3,7 +3,7 @@
 
 use a3d_init::model::{AnuraModel, Material, MaterialPoint, MpState};
 use a3d_init::mpm::{Reason, RunOutput, RunReport, RunSettings, Verdict, run, verify};
-use a3d_init::testkit::{elastic_material, geostatic_states};
+use a3d_init::testkit::{elastic_material, geostatic_states, zero_states};
 
 pub const G: f64 = 9.81;
 /// Stiff enough that the settling displacements stay far below an element.
@@ -77,4 +77,26 @@ pub fn run_in_pool(
     settings: &RunSettings,
 ) -> RunOutput {
     super::random::in_pool(threads, || run(model, points, states, settings)).expect("valid")
+}
+
+/// Verifies `model` released from zero stress.
+pub fn verify_from_zero(model: &AnuraModel, points: &[MaterialPoint]) -> RunReport {
+    verify(model, points, &zero_states(points), &RunSettings::verify()).expect("valid")
+}
+
+/// Runs `model` from zero stress for 60 steps in pools of 1 and 2 threads and
+/// checks that it moves and that both outputs are the same to the bit (JSON
+/// text, shortest round-trip digits).
+#[track_caller]
+pub fn assert_zero_stress_runs_bit_identical(model: &AnuraModel, points: &[MaterialPoint]) {
+    let states = zero_states(points);
+    let settings = RunSettings {
+        max_steps: 60,
+        ..RunSettings::verify()
+    };
+    let one = run_in_pool(1, model, points, &states, &settings);
+    let two = run_in_pool(2, model, points, &states, &settings);
+    assert!(one.report.max_displacement > 0.0);
+    let json = |o: &RunOutput| serde_json::to_string(o).expect("serialisable");
+    assert_eq!(json(&one), json(&two));
 }
