@@ -117,12 +117,7 @@ fn linear_fields_are_exact_at_interior_points_of_a_uniform_grid() {
         [6.0, 3.0, 0.0],
     ];
     for kernel in KERNELS {
-        let settings = MapSettings {
-            kernel,
-            h: 0.6,
-            min_shepard: 0.0,
-            outside: OutsidePolicy::Error,
-        };
+        let settings = map_settings(kernel, 0.6, 0.0, OutsidePolicy::Error);
         let r = mapper::map_points(&cloud, &points, None, &settings).unwrap();
         for (p, v) in points.iter().zip(&r.values) {
             assert!(
@@ -182,12 +177,7 @@ fn parallel_map_equals_serial_map_bit_for_bit() {
         .map(|p| if p[1] < 20.0 { 1 } else { 2 })
         .collect();
     for kernel in KERNELS {
-        let settings = MapSettings {
-            kernel,
-            h: 0.5,
-            min_shepard: 0.0,
-            outside: OutsidePolicy::Nearest,
-        };
+        let settings = map_settings(kernel, 0.5, 0.0, OutsidePolicy::Nearest);
         let serial =
             mapper::map_points_serial(&cloud, &points, Some(&point_groups), &settings).unwrap();
         for threads in [1, 2, 4] {
@@ -223,12 +213,7 @@ fn groups_keep_a_material_step_sharp() {
         .collect();
     let cloud = plane_cloud(&nodes, &values, 1, Some(&groups), 0.25);
     let points = [[4.0, 4.9, 0.0], [4.0, 5.1, 0.0]];
-    let settings = MapSettings {
-        kernel: KernelKind::Cubic,
-        h: 1.0,
-        min_shepard: 0.0,
-        outside: OutsidePolicy::Error,
-    };
+    let settings = map_settings(KernelKind::Cubic, 1.0, 0.0, OutsidePolicy::Error);
     let r = mapper::map_points(&cloud, &points, Some(&[1, 2]), &settings).unwrap();
     assert!(
         (r.values[0] - 10.0).abs() < 1e-12 && (r.values[1] - 100.0).abs() < 1e-12,
@@ -248,12 +233,7 @@ fn null_points_follow_the_policy() {
     let values: Vec<f64> = nodes.iter().map(|p| p[0]).collect();
     let cloud = plane_cloud(&nodes, &values, 1, None, 1.0);
     let points = [[4.5, 4.5, 0.0], [30.0, 4.0, 0.0], [-20.0, 0.0, 0.0]];
-    let mut settings = MapSettings {
-        kernel: KernelKind::Cubic,
-        h: 1.0,
-        min_shepard: 0.02,
-        outside: OutsidePolicy::Error,
-    };
+    let mut settings = map_settings(KernelKind::Cubic, 1.0, 0.02, OutsidePolicy::Error);
     let err = mapper::map_points(&cloud, &points, None, &settings)
         .unwrap_err()
         .to_string();
@@ -275,6 +255,20 @@ fn null_points_follow_the_policy() {
     settings.outside = OutsidePolicy::Skip;
     let r = mapper::map_points(&cloud, &points, None, &settings).unwrap();
     assert!(r.values[1].is_nan() && r.status[2] == PointStatus::Skipped);
+}
+
+fn map_settings(
+    kernel: KernelKind,
+    h: f64,
+    min_shepard: f64,
+    outside: OutsidePolicy,
+) -> MapSettings {
+    MapSettings {
+        kernel,
+        h,
+        min_shepard,
+        outside,
+    }
 }
 
 /// A node cloud in the plane (dim 2).
@@ -354,12 +348,7 @@ fn grid_map_equals_kiddo_map_bit_for_bit() {
         let point_groups: Vec<u32> = points.iter().map(|p| 1 + (p[1] > 0.5) as u32).collect();
         for kernel in KERNELS {
             for (h, outside) in [(0.3, OutsidePolicy::Nearest), (0.05, OutsidePolicy::Skip)] {
-                let settings = MapSettings {
-                    kernel,
-                    h,
-                    min_shepard: 0.01,
-                    outside,
-                };
+                let settings = map_settings(kernel, h, 0.01, outside);
                 for groups in [None, Some(&point_groups[..])] {
                     let reference = mapper::map_points_with(
                         &cloud,

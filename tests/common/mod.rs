@@ -111,3 +111,47 @@ pub fn assert_contains(text: &str, parts: &[&str]) {
         assert!(text.contains(part), "expected `{part}` in:\n{text}");
     }
 }
+
+/// Runs the binary with stdin closed, killing it after `limit`: (exit code,
+/// stderr followed by stdout), or `None` if it had to be killed.
+pub fn run_within(args: &[&std::ffi::OsStr], limit: std::time::Duration) -> Option<(i32, String)> {
+    use std::process::Stdio;
+    let mut child = bin()
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = std::time::Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            return None;
+        }
+        std::thread::sleep(std::time::Duration::from_millis(10));
+    }
+    let out = child.wait_with_output().unwrap();
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stderr),
+        String::from_utf8_lossy(&out.stdout)
+    );
+    Some((out.status.code().unwrap_or(-1), text))
+}
+
+/// The FEM table of the mini two-material model (`fixtures/anura3d-mini`): a
+/// 0.25 m grid over 2 × 1 m with hydrostatic pwp and a region column (clay left
+/// of x = 1, sand from there).
+pub fn mini_regions_csv() -> String {
+    let mut csv = String::from("X (m),Y (m),PWP (kPa),Material\n");
+    for j in 0..5 {
+        for i in 0..9 {
+            let (x, y) = (i as f64 * 0.25, j as f64 * 0.25);
+            let region = if x < 1.0 { "clay" } else { "sand" };
+            csv.push_str(&format!("{x},{y},{},{region}\n", 9.81 * (1.0 - y)));
+        }
+    }
+    csv
+}
