@@ -245,13 +245,7 @@ fn cc_axi_sample_confined_is_in_equilibrium() {
             }
         })
         .collect();
-    let report = verify(&model, &points, &states, &RunSettings::verify()).expect("valid");
-    assert!(
-        report.initial_residual_ratio < 1e-9,
-        "{}",
-        report.initial_residual_ratio
-    );
-    assert!(report.verdict.is_equilibrium(), "{:?}", report.verdict);
+    verify_in_equilibrium(&model, &points, &states, 1e-9);
 }
 
 /// `map` then `verify` on the shipped sample as it is: a free-standing,

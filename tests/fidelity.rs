@@ -57,8 +57,7 @@ fn mapped_mpm_block(dir: &Path) -> PathBuf {
 fn verify_judges_the_mapf_not_mps_csv() {
     let tmp = tempfile::tempdir().unwrap();
     let out = mapped_mpm_block(tmp.path());
-    let (code, text) = run(&["verify", out.to_str().unwrap()]);
-    assert_eq!(code, 0, "{text}");
+    let text = run_ok(&["verify", out.to_str().unwrap()]);
     assert_contains(&text, &["mps.csv agrees with what Anura3D reads"]);
     // start.csv holds what Anura3D will hold: here the mapped state itself.
     let (_, start) = mps_table::read_states(&out.join("verify/start.csv")).unwrap();
@@ -67,8 +66,7 @@ fn verify_judges_the_mapf_not_mps_csv() {
         assert!((a.pwp - b.pwp).abs() < 1e-12 && (a.total[1] - b.total[1]).abs() < 1e-9);
     }
     // A rerun replaces verify/ without --force.
-    let (code, text) = run(&["verify", out.to_str().unwrap()]);
-    assert_eq!(code, 0, "{text}");
+    run_ok(&["verify", out.to_str().unwrap()]);
 
     // Lower every MAPF stress by 20 %, leave mps.csv untouched: not in equilibrium.
     let path = out.join("block.MAPF");
@@ -311,8 +309,7 @@ fn dry_materials_carry_no_pore_water() {
 fn demo_prints_only_measured_words() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("demo");
-    let (code, text) = run(&["demo", "--no-fos", "--out", out.to_str().unwrap()]);
-    assert_eq!(code, 0, "{text}");
+    let text = run_ok(&["demo", "--no-fos", "--out", out.to_str().unwrap()]);
     assert!(!text.contains("FS ≈ 1"), "{text}");
     assert_contains(&text, &["σ'zz := τxy"]);
     let report: serde_json::Value =

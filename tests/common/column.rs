@@ -100,3 +100,22 @@ pub fn assert_zero_stress_runs_bit_identical(model: &AnuraModel, points: &[Mater
     let json = |o: &RunOutput| serde_json::to_string(o).expect("serialisable");
     assert_eq!(json(&one), json(&two));
 }
+
+/// Verifies `states` and checks that they are in equilibrium with an initial
+/// residual ratio below `tolerance`.
+#[track_caller]
+pub fn verify_in_equilibrium(
+    model: &AnuraModel,
+    points: &[MaterialPoint],
+    states: &[MpState],
+    tolerance: f64,
+) -> RunReport {
+    let report = verify(model, points, states, &RunSettings::verify()).expect("valid");
+    assert!(
+        report.initial_residual_ratio < tolerance,
+        "{}",
+        report.initial_residual_ratio
+    );
+    assert!(report.verdict.is_equilibrium(), "{:?}", report.verdict);
+    report
+}

@@ -41,6 +41,14 @@ pub fn run(args: &[&str]) -> (i32, String) {
     (code, stdout + &stderr)
 }
 
+/// Runs the binary and checks that it exits 0: stdout followed by stderr.
+#[track_caller]
+pub fn run_ok(args: &[&str]) -> String {
+    let (code, text) = run(args);
+    assert_eq!(code, 0, "{text}");
+    text
+}
+
 /// `a3d-init map --mpm <mpm> --fem <fem> --out <out> <extra…>`: (exit code,
 /// stdout, stderr).
 pub fn run_map_split(mpm: &Path, fem: &Path, out: &Path, extra: &[&str]) -> (i32, String, String) {
