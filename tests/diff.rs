@@ -35,20 +35,24 @@ fn gom_and_cps_semantics() {
         "same.GOM",
         &base.replace("1.0 1.0\n", "1.0 1.0000000000001\n"),
     );
-    let moved = write(
-        tmp.path(),
-        "moved.GOM",
-        &base
-            .replace("$$FORMULATION\nsingle-point\n", "")
-            .replace("$$FINISH", "$$FORMULATION\nsingle-point\n$$FINISH"),
-    );
-    let changed = write(
-        tmp.path(),
-        "changed.GOM",
-        &base
-            .replace("1.0 1.0\n", "1.0 1.01\n")
-            .replace("mohr_coulomb", "linear_elasticity_x"),
-    );
+    // moved: a block moved to the end; changed: a value and a material type.
+    let [moved, changed] = [
+        (
+            "moved.GOM",
+            [
+                ("$$FORMULATION\nsingle-point\n", ""),
+                ("$$FINISH", "$$FORMULATION\nsingle-point\n$$FINISH"),
+            ],
+        ),
+        (
+            "changed.GOM",
+            [
+                ("1.0 1.0\n", "1.0 1.01\n"),
+                ("mohr_coulomb", "linear_elasticity_x"),
+            ],
+        ),
+    ]
+    .map(|(name, [(a, b), (c, d)])| write(tmp.path(), name, &base.replace(a, b).replace(c, d)));
     assert_eq!(diff(&[&a, &a]).0, 0);
     let (code, out) = diff(&[&a, &same]);
     assert_eq!(code, 0, "a change below tolerance is equal: {out}");
