@@ -57,7 +57,7 @@ fn mapped_mpm_block(dir: &Path) -> PathBuf {
 fn verify_judges_the_mapf_not_mps_csv() {
     let tmp = tempfile::tempdir().unwrap();
     let out = mapped_mpm_block(tmp.path());
-    let text = run_ok(&["verify", out.to_str().unwrap()]);
+    let text = verify_ok(&out);
     assert_contains(&text, &["mps.csv agrees with what Anura3D reads"]);
     // start.csv holds what Anura3D will hold: here the mapped state itself.
     let (_, start) = mps_table::read_states(&out.join("verify/start.csv")).unwrap();
@@ -66,7 +66,7 @@ fn verify_judges_the_mapf_not_mps_csv() {
         assert!((a.pwp - b.pwp).abs() < 1e-12 && (a.total[1] - b.total[1]).abs() < 1e-9);
     }
     // A rerun replaces verify/ without --force.
-    run_ok(&["verify", out.to_str().unwrap()]);
+    verify_ok(&out);
 
     // Lower every MAPF stress by 20 %, leave mps.csv untouched: not in equilibrium.
     let path = out.join("block.MAPF");

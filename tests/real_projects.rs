@@ -28,6 +28,14 @@ fn block_gom(version: &str, origin: (f64, f64)) -> String {
     gom_text(mesh, &soil_spec(0.5, 1e4, 1e-10), version)
 }
 
+/// `a3d-init inspect <path>`, which must exit 0: its stdout.
+#[track_caller]
+fn inspect_ok(path: &Path) -> String {
+    let (code, stdout, stderr) = run_split(&["inspect", s(path)]);
+    assert_eq!(code, 0, "{stderr}");
+    stdout
+}
+
 /// (fixture path, version, origin) of every generated GOM.
 const GOMS: &[(&str, &str, (f64, f64))] = &[
     ("Block.gid/Block-2.dat", "2024", (0.0, 0.0)),
@@ -66,8 +74,7 @@ fn lines(text: &str) -> Vec<&str> {
 fn gid_project_folder_maps_with_its_own_cps() {
     let tmp = tempfile::tempdir().unwrap();
     let gid = real("Block.gid");
-    let (code, stdout, stderr) = run_split(&["inspect", s(&gid)]);
-    assert_eq!(code, 0, "{stderr}");
+    let stdout = inspect_ok(&gid);
     assert_contains(&stdout, &["Block-1.dat"]);
     assert_contains(
         &stdout,
@@ -220,8 +227,7 @@ fn generated_cps_covers_the_sample_cps_files() {
 fn misnamed_project_file_is_reported_and_the_obvious_project_used() {
     let tmp = tempfile::tempdir().unwrap();
     let gom = real("misnamed/X.GOM.GOM_stage0");
-    let (code, stdout, stderr) = run_split(&["inspect", s(&gom)]);
-    assert_eq!(code, 0, "{stderr}");
+    let stdout = inspect_ok(&gom);
     assert!(stdout.starts_with("project    X\n"), "{stdout}");
     assert_contains(&stdout, &["X.CPS_001"]);
     assert_contains(
@@ -310,8 +316,7 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
         &std::fs::read(&node).unwrap(),
         &std::fs::read(&mesh).unwrap(),
     );
-    let (code, stdout, stderr) = run_split(&["inspect", s(&gsz)]);
-    assert_eq!(code, 0, "{stderr}");
+    let stdout = inspect_ok(&gsz);
     assert_contains(&stdout, &["492 nodes (2D)"]);
     let out2 = tmp.path().join("out2");
     let (code, _, stderr) = run_map_split(

@@ -26,7 +26,7 @@ fn mapped_block(dir: &Path) -> PathBuf {
 fn flat_geostatic_block_is_in_equilibrium() {
     let tmp = tempfile::tempdir().unwrap();
     let out = mapped_block(tmp.path());
-    let text = run_ok(&["verify", out.to_str().unwrap()]);
+    let text = verify_ok(&out);
     assert_contains(&text, &["verdict    IN EQUILIBRIUM"]);
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("verify/verify.json")).unwrap())

@@ -49,6 +49,12 @@ pub fn run_ok(args: &[&str]) -> String {
     text
 }
 
+/// `a3d-init verify <out>`, which must exit 0: stdout followed by stderr.
+#[track_caller]
+pub fn verify_ok(out: &Path) -> String {
+    run_ok(&["verify", out.to_str().unwrap()])
+}
+
 /// `a3d-init map --mpm <mpm> --fem <fem> --out <out> <extra…>`: (exit code,
 /// stdout, stderr).
 pub fn run_map_split(mpm: &Path, fem: &Path, out: &Path, extra: &[&str]) -> (i32, String, String) {
