@@ -45,18 +45,19 @@ fn map(project: &Path, fem: &Path, out: &Path, extra: &[&str]) -> String {
     text
 }
 
-/// [`block_project`] (MPM-MP, 3 MPs per element) mapped into `dir/out`.
-fn mapped_mpm_block(dir: &Path) -> PathBuf {
-    let (project, fem) = block_project(dir, "MPM-MP", 3);
-    let out = dir.join("out");
+/// [`block_project`] (MPM-MP, 3 MPs per element) mapped into `out/` of a new
+/// temporary folder: (the folder, `out`).
+fn mapped_mpm_block() -> (tempfile::TempDir, PathBuf) {
+    let tmp = tempfile::tempdir().unwrap();
+    let (project, fem) = block_project(tmp.path(), "MPM-MP", 3);
+    let out = tmp.path().join("out");
     map(&project, &fem, &out, &[]);
-    out
+    (tmp, out)
 }
 
 #[test]
 fn verify_judges_the_mapf_not_mps_csv() {
-    let tmp = tempfile::tempdir().unwrap();
-    let out = mapped_mpm_block(tmp.path());
+    let (_tmp, out) = mapped_mpm_block();
     let text = verify_ok(&out);
     assert_contains(&text, &["mps.csv agrees with what Anura3D reads"]);
     // start.csv holds what Anura3D will hold: here the mapped state itself.
@@ -96,8 +97,7 @@ fn verify_judges_the_mapf_not_mps_csv() {
 
 #[test]
 fn verify_names_mps_anura3d_holds_as_nan() {
-    let tmp = tempfile::tempdir().unwrap();
-    let out = mapped_mpm_block(tmp.path());
+    let (_tmp, out) = mapped_mpm_block();
     // Keep only the first 30 rows: the other MPs have no row within 2h.
     let path = out.join("block.MAPF");
     let text = std::fs::read_to_string(&path).unwrap();
