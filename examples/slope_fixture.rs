@@ -78,15 +78,13 @@ fn mesh(nx: usize, ny_clay: usize, ny_sand: usize) -> (Mesh, Vec<u32>) {
             material.extend([m, m]);
         }
     }
-    (
-        Mesh {
-            dimension: Dimension::PlaneStrain,
-            element_type: ElementType::Tri3,
-            nodes,
-            connectivity,
-        },
-        material,
-    )
+    let mesh = Mesh {
+        dimension: Dimension::PlaneStrain,
+        element_type: ElementType::Tri3,
+        nodes,
+        connectivity,
+    };
+    (mesh, material)
 }
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {

@@ -2,6 +2,9 @@
 //! `fixtures/anura3d/`: byte-identical round trips, typed views, edits that touch
 //! one block only, and malformed inputs that must give `path:line:col` errors.
 
+mod common;
+use common::soil_spec;
+
 use std::path::{Path, PathBuf};
 
 use a3d_init::formats::cps::CpsDocument;
@@ -362,24 +365,18 @@ fn malformed_cps_gives_positioned_errors() {
 fn generated_models_survive_write_then_read() {
     use a3d_init::formats::gom::write::model_to_text;
     use a3d_init::model::RetentionCurve;
-    use a3d_init::model::generate::{self, MaterialSpec};
-    let spec = MaterialSpec {
-        name: "sand".into(),
-        porosity: 0.58,
-        density_solid: 2718.0,
-        density_liquid: Some(1000.0),
-        k0: 0.4554,
-        young_modulus: 2500.0,
-        poisson_ratio: 0.3,
-        mohr_coulomb: Some((33.0, 0.0, 0.0)),
-        retention: Some(RetentionCurve::VanGenuchten {
-            s_min: 0.1,
-            s_max: 1.0,
-            p0: 1.0 / 0.51,
-            lambda: 1.0 - 1.0 / 2.73,
-        }),
-        permeability: 2.087e-11,
-    };
+    use a3d_init::model::generate;
+    // A saturated Mohr–Coulomb sand with van Genuchten retention.
+    let mut spec = soil_spec(0.4554, 2500.0, 2.087e-11);
+    spec.name = "sand".into();
+    (spec.porosity, spec.density_solid) = (0.58, 2718.0);
+    spec.mohr_coulomb = Some((33.0, 0.0, 0.0));
+    spec.retention = Some(RetentionCurve::VanGenuchten {
+        s_min: 0.1,
+        s_max: 1.0,
+        p0: 1.0 / 0.51,
+        lambda: 1.0 - 1.0 / 2.73,
+    });
     for mesh in [
         generate::structured_tri_mesh(0.0, -1.0, 2.0, 3.0, 4, 5),
         generate::structured_tet_mesh(1.0, 0.0, 2.0, 1.0, 2, 3, 1),

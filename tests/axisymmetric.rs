@@ -10,31 +10,17 @@
 //! per radian (weight × det J × radius), as in Anura3D.
 
 mod common;
-use common::{fixture, run as cli};
+use common::column::*;
+use common::{assert_contains, fixture, run as cli};
 
 use a3d_init::formats::gom::GomDocument;
 use a3d_init::model::{AnuraModel, Dimension, MaterialPoint, MpState, gamma_water};
-use a3d_init::mpm::{Reason, RunOutput, RunSettings, Verdict, run, verify};
+use a3d_init::mpm::{RunSettings, verify};
 use a3d_init::place::place_material_points;
-use a3d_init::testkit::{column_tri3, elastic_material, geostatic_states, zero_states};
+use a3d_init::testkit::{column_tri3, elastic_material, zero_states};
 
-const G: f64 = 9.81;
-/// Stiff enough that the settling displacements stay far below an element.
-const YOUNG: f64 = 1e5;
-const POISSON: f64 = 0.3;
-const RHO_S: f64 = 2650.0;
-const POROSITY: f64 = 0.3;
 const HEIGHT: f64 = 10.0;
 const LAYERS: usize = 20;
-
-fn k0() -> f64 {
-    POISSON / (1.0 - POISSON)
-}
-
-/// Dry unit weight (kN/m³).
-fn gamma() -> f64 {
-    (1.0 - POROSITY) * RHO_S * G / 1000.0
-}
 
 /// A `width` × 10 m column of `nx` × 20 cells, both sides on rollers, base
 /// fixed, starting at radius `inner` (0: a solid cylinder around the axis).
@@ -101,13 +87,7 @@ fn confined_cylinder_settles_to_the_k0_column() {
     let plane_layers = layer_averages(&plane_points, &plane.final_stresses, 4);
     for inner in [0.0, 2.0] {
         let (model, points) = cylinder(Dimension::Axisymmetric, inner, 1.0, 2);
-        let report = verify(
-            &model,
-            &points,
-            &zero_states(&points),
-            &RunSettings::verify(),
-        )
-        .expect("valid");
+        let report = verify_from_zero(&model, &points);
         assert!(report.final_residual_ratio < 1e-2, "inner radius {inner}");
         let layers = layer_averages(&points, &report.final_stresses, 4);
         let h = HEIGHT / LAYERS as f64;
@@ -119,20 +99,14 @@ fn confined_cylinder_settles_to_the_k0_column() {
             let vertical = -gamma() * (HEIGHT - mid);
             let expected = [k0() * vertical, vertical, k0() * vertical];
             for k in 0..3 {
-                let error = ((axi[k] - expected[k]) / expected[k]).abs();
-                assert!(
-                    error < 1e-2,
-                    "inner {inner}, layer {layer}, component {k}: {} vs analytic {}",
-                    axi[k],
-                    expected[k]
-                );
-                let versus_plane = ((axi[k] - flat[k]) / flat[k]).abs();
-                assert!(
-                    versus_plane < 1e-2,
-                    "inner {inner}, layer {layer}, component {k}: {} vs plane strain {}",
-                    axi[k],
-                    flat[k]
-                );
+                for (reference, what) in [(expected[k], "analytic"), (flat[k], "plane strain")] {
+                    let error = ((axi[k] - reference) / reference).abs();
+                    assert!(
+                        error < 1e-2,
+                        "inner {inner}, layer {layer}, component {k}: {} vs {what} {reference}",
+                        axi[k]
+                    );
+                }
             }
         }
     }
@@ -153,13 +127,7 @@ fn unconfined_cylinder_carries_its_weight_uniaxially() {
         for (node, fixed) in model.mesh.nodes.iter().zip(model.solid_fixity.iter_mut()) {
             *fixed = [node[0] == 0.0, node[1] == 0.0, false];
         }
-        let report = verify(
-            &model,
-            &points,
-            &zero_states(&points),
-            &RunSettings::verify(),
-        )
-        .expect("valid");
+        let report = verify_from_zero(&model, &points);
         assert!(report.final_residual_ratio < 1e-2, "inner radius {inner}");
         let layers = layer_averages(&points, &report.final_stresses, 4);
         let h = HEIGHT / LAYERS as f64;
@@ -194,18 +162,7 @@ fn unconfined_cylinder_carries_its_weight_uniaxially() {
 fn geostatic_axisymmetric_column_is_in_equilibrium() {
     for inner in [0.0, 2.0] {
         let (model, points) = cylinder(Dimension::Axisymmetric, inner, 1.0, 2);
-        let states = geostatic_states(&model, &points, G, k0(), None);
-        let report = verify(&model, &points, &states, &RunSettings::verify()).expect("valid");
-        assert!(
-            report.initial_residual_ratio < 1e-12,
-            "inner {inner}: {}",
-            report.initial_residual_ratio
-        );
-        assert!(
-            report.max_displacement < 1e-12,
-            "{}",
-            report.max_displacement
-        );
+        let report = verify_exact_geostatic(&model, &points);
         assert!(report.steps > 100, "{} steps", report.steps);
         assert!(report.verdict.is_equilibrium(), "{:?}", report.verdict);
         for (p, s) in points.iter().zip(&report.final_stresses) {
@@ -219,24 +176,9 @@ fn geostatic_axisymmetric_column_is_in_equilibrium() {
 #[test]
 fn axisymmetric_stresses_twenty_percent_low_are_not_in_equilibrium() {
     let (model, points) = cylinder(Dimension::Axisymmetric, 0.0, 1.0, 2);
-    let mut states = geostatic_states(&model, &points, G, k0(), None);
-    for s in &mut states {
-        for c in &mut s.total {
-            *c *= 0.8;
-        }
-    }
-    let report = verify(&model, &points, &states, &RunSettings::verify()).expect("valid");
-    let Verdict::NotInEquilibrium { reasons } = &report.verdict else {
-        panic!("expected no equilibrium, got {:?}", report.verdict);
-    };
     // The missing 20 % of the weight is out of balance at the first step
     // (the radial balance stays exact: 0.8 × zero).
-    assert!(
-        reasons.iter().any(
-            |r| matches!(r, Reason::InitialResidual { ratio, .. } if (ratio - 0.2).abs() < 1e-6)
-        ),
-        "{reasons:?}"
-    );
+    let report = verify_twenty_percent_low(&model, &points);
     assert!(report.final_residual_ratio < 1e-2);
     // Settlement: u_r = 0 keeps the column one-dimensional, so the top takes
     // up 20 % of the geostatic strain, 0.2·γH²/(2M), as in plane strain.
@@ -297,13 +239,7 @@ fn cc_axi_sample_confined_is_in_equilibrium() {
             }
         })
         .collect();
-    let report = verify(&model, &points, &states, &RunSettings::verify()).expect("valid");
-    assert!(
-        report.initial_residual_ratio < 1e-9,
-        "{}",
-        report.initial_residual_ratio
-    );
-    assert!(report.verdict.is_equilibrium(), "{:?}", report.verdict);
+    verify_in_equilibrium(&model, &points, &states, 1e-9);
 }
 
 /// `map` then `verify` on the shipped sample as it is: a free-standing,
@@ -342,7 +278,7 @@ fn cc_axi_sample_verifies_as_a_collapsing_column() {
 
     let (code, text) = cli(&["verify", out.to_str().expect("utf-8")]);
     assert_eq!(code, 1, "{text}");
-    assert!(text.contains("NOT IN EQUILIBRIUM"), "{text}");
+    assert_contains(&text, &["NOT IN EQUILIBRIUM"]);
     let report: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(out.join("verify/verify.json")).expect("verify.json"),
     )
@@ -363,35 +299,11 @@ fn cc_axi_sample_verifies_as_a_collapsing_column() {
     }
 }
 
-fn run_in_pool(
-    threads: usize,
-    model: &AnuraModel,
-    points: &[MaterialPoint],
-    states: &[MpState],
-    settings: &RunSettings,
-) -> RunOutput {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("thread pool");
-    pool.install(|| run(model, points, states, settings))
-        .expect("valid")
-}
-
 #[test]
 fn serial_and_parallel_axisymmetric_runs_are_bit_identical() {
     // 20 × 20 cells: 2400 MPs, more than one rayon chunk of 1024.
     let (model, points) = cylinder(Dimension::Axisymmetric, 0.0, 2.0, 20);
-    let states = zero_states(&points);
-    let settings = RunSettings {
-        max_steps: 60,
-        ..RunSettings::verify()
-    };
-    let one = run_in_pool(1, &model, &points, &states, &settings);
-    let two = run_in_pool(2, &model, &points, &states, &settings);
-    assert!(one.report.max_displacement > 0.0);
-    let json = |o: &RunOutput| serde_json::to_string(o).expect("serialisable");
-    assert_eq!(json(&one), json(&two));
+    assert_zero_stress_runs_bit_identical(&model, &points);
 }
 
 #[test]

@@ -2,10 +2,13 @@
 //! determinism for a seed, the leave-one-out objective against its O(n²) oracle,
 //! the no-neighbour penalty, and bad inputs.
 
+mod common;
+use common::random::*;
+
 use a3d_init::calibrate::{AnnealSettings, calibrate};
 use a3d_init::kernel::KernelKind;
 use a3d_init::kernel::loo::{LooError, LooObjective, Norm, loo_brute_force};
-use rand::{RngExt, SeedableRng};
+use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 
 #[test]
@@ -59,23 +62,10 @@ fn annealer_finds_known_minima() {
 
 #[test]
 fn same_seed_same_result_any_thread_count() {
-    let mut rng = ChaCha8Rng::seed_from_u64(5);
-    let pos: Vec<[f64; 3]> = (0..2000)
-        .map(|_| {
-            [
-                rng.random_range(0.0..50.0),
-                rng.random_range(0.0..50.0),
-                0.0,
-            ]
-        })
-        .collect();
+    let pos = random_points(&mut ChaCha8Rng::seed_from_u64(5), 2, 2000, 0.0..50.0);
     let values: Vec<f64> = pos.iter().map(|p| 9.81 * (50.0 - p[1])).collect();
     let run = |threads: usize| {
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(threads)
-            .build()
-            .unwrap();
-        pool.install(|| {
+        in_pool(threads, || {
             let obj = LooObjective::new(&pos, 2, &values, 1, KernelKind::Cubic, 6.0).unwrap();
             calibrate(
                 |h| obj.evaluate(h, Norm::L1),
@@ -96,16 +86,7 @@ fn same_seed_same_result_any_thread_count() {
 
 #[test]
 fn loo_with_reused_lists_equals_brute_force() {
-    let mut rng = ChaCha8Rng::seed_from_u64(3);
-    let pos: Vec<[f64; 3]> = (0..400)
-        .map(|_| {
-            [
-                rng.random_range(0.0..20.0),
-                rng.random_range(0.0..20.0),
-                0.0,
-            ]
-        })
-        .collect();
+    let pos = random_points(&mut ChaCha8Rng::seed_from_u64(3), 2, 400, 0.0..20.0);
     let values: Vec<f64> = pos
         .iter()
         .map(|p| (p[0] * 0.3).sin() * 10.0 + p[1])
@@ -129,9 +110,7 @@ fn loo_with_reused_lists_equals_brute_force() {
 
 #[test]
 fn penalty_applies_when_h_is_too_small() {
-    let pos: Vec<[f64; 3]> = (0..100)
-        .map(|k| [(k % 10) as f64, (k / 10) as f64, 0.0])
-        .collect();
+    let pos = grid_nodes(10, 1.0);
     let values: Vec<f64> = pos.iter().map(|p| p[1]).collect();
     let obj = LooObjective::new(&pos, 2, &values, 1, KernelKind::Cubic, 2.0).unwrap();
     // At h = 0.4 the cubic support (0.8) reaches no other node: every node pays |f − mean|.

@@ -9,7 +9,7 @@ fn inspect_a_sample_project() {
     let dir = fixture("anura3d/K0_phreaticSurf_Geom");
     let (code, stdout, stderr) = run_split(&["inspect", dir.to_str().unwrap()]);
     assert_eq!(code, 0, "{stderr}");
-    assert!(stdout.contains("MPs        993"), "{stdout}");
+    assert_contains(&stdout, &["MPs        993"]);
     assert!(stdout.contains("K0_phreaticSurf_Geom.CPS_001"));
     let (code, json, _) = run_split(&[
         "inspect",
@@ -44,7 +44,7 @@ fn inspect_writes_the_mp_table_and_refuses_to_overwrite() {
         csv.to_str().unwrap(),
     ]);
     assert_eq!(code, 2);
-    assert!(stderr.contains("exists; pass --force"), "{stderr}");
+    assert_contains(&stderr, &["exists; pass --force"]);
 }
 
 #[test]

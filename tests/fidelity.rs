@@ -16,18 +16,7 @@ use a3d_init::formats::{mapf, mps_table};
 use a3d_init::model::generate::{self, MaterialSpec};
 
 fn saturated_spec() -> MaterialSpec {
-    MaterialSpec {
-        name: "soil".into(),
-        porosity: 0.4,
-        density_solid: 2650.0,
-        density_liquid: Some(1000.0),
-        k0: 0.3 / 0.7,
-        young_modulus: 2e4,
-        poisson_ratio: 0.3,
-        mohr_coulomb: None,
-        retention: None,
-        permeability: 1e-10,
-    }
+    soil_spec(0.3 / 0.7, 2e4, 1e-10)
 }
 
 /// A 4 m × 10 m saturated block (TRI3, 3 MPs per element) with a CPS using
@@ -45,46 +34,32 @@ fn block_project(dir: &Path, method: &str, mps: u32) -> (PathBuf, PathBuf) {
         ),
     )
     .unwrap();
-    let mut csv = String::from("X,Y,PWP\n");
-    for j in 0..=20 {
-        for i in 0..=8 {
-            let (x, y) = (i as f64 * 0.5, j as f64 * 0.5);
-            csv.push_str(&format!("{x},{y},{}\n", 9.81 * (10.0 - y)));
-        }
-    }
     let fem = dir.join("seep.csv");
-    std::fs::write(&fem, csv).unwrap();
+    std::fs::write(&fem, hydrostatic_grid_csv("X,Y,PWP", 8, 20, 9.81, 10.0)).unwrap();
     (project, fem)
 }
 
 fn map(project: &Path, fem: &Path, out: &Path, extra: &[&str]) -> String {
-    let mut args = vec![
-        "map",
-        "--fem",
-        fem.to_str().unwrap(),
-        "--mpm",
-        project.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    args.extend_from_slice(extra);
-    let (code, text) = run(&args);
+    let (code, text) = run_map(project, fem, out, extra);
     assert_eq!(code, 0, "{text}");
     text
 }
 
-#[test]
-fn verify_judges_the_mapf_not_mps_csv() {
+/// [`block_project`] (MPM-MP, 3 MPs per element) mapped into `out/` of a new
+/// temporary folder: (the folder, `out`).
+fn mapped_mpm_block() -> (tempfile::TempDir, PathBuf) {
     let tmp = tempfile::tempdir().unwrap();
     let (project, fem) = block_project(tmp.path(), "MPM-MP", 3);
     let out = tmp.path().join("out");
     map(&project, &fem, &out, &[]);
-    let (code, text) = run(&["verify", out.to_str().unwrap()]);
-    assert_eq!(code, 0, "{text}");
-    assert!(
-        text.contains("mps.csv agrees with what Anura3D reads"),
-        "{text}"
-    );
+    (tmp, out)
+}
+
+#[test]
+fn verify_judges_the_mapf_not_mps_csv() {
+    let (_tmp, out) = mapped_mpm_block();
+    let text = verify_ok(&out);
+    assert_contains(&text, &["mps.csv agrees with what Anura3D reads"]);
     // start.csv holds what Anura3D will hold: here the mapped state itself.
     let (_, start) = mps_table::read_states(&out.join("verify/start.csv")).unwrap();
     let (_, mapped) = mps_table::read_states(&out.join("mps.csv")).unwrap();
@@ -92,8 +67,7 @@ fn verify_judges_the_mapf_not_mps_csv() {
         assert!((a.pwp - b.pwp).abs() < 1e-12 && (a.total[1] - b.total[1]).abs() < 1e-9);
     }
     // A rerun replaces verify/ without --force.
-    let (code, text) = run(&["verify", out.to_str().unwrap()]);
-    assert_eq!(code, 0, "{text}");
+    verify_ok(&out);
 
     // Lower every MAPF stress by 20 %, leave mps.csv untouched: not in equilibrium.
     let path = out.join("block.MAPF");
@@ -116,20 +90,14 @@ fn verify_judges_the_mapf_not_mps_csv() {
     std::fs::write(&path, text_out).unwrap();
     let (code, text) = run(&["verify", out.to_str().unwrap()]);
     assert_eq!(code, 1, "{text}");
-    assert!(text.contains("NOT IN EQUILIBRIUM"), "{text}");
-    assert!(
-        text.contains("mps.csv and the MAPF disagree on 240 of 240 MPs"),
-        "{text}"
-    );
-    assert!(text.contains("out of balance"), "{text}");
+    assert_contains(&text, &["NOT IN EQUILIBRIUM"]);
+    assert_contains(&text, &["mps.csv and the MAPF disagree on 240 of 240 MPs"]);
+    assert_contains(&text, &["out of balance"]);
 }
 
 #[test]
 fn verify_names_mps_anura3d_holds_as_nan() {
-    let tmp = tempfile::tempdir().unwrap();
-    let (project, fem) = block_project(tmp.path(), "MPM-MP", 3);
-    let out = tmp.path().join("out");
-    map(&project, &fem, &out, &[]);
+    let (_tmp, out) = mapped_mpm_block();
     // Keep only the first 30 rows: the other MPs have no row within 2h.
     let path = out.join("block.MAPF");
     let text = std::fs::read_to_string(&path).unwrap();
@@ -137,7 +105,7 @@ fn verify_names_mps_anura3d_holds_as_nan() {
     std::fs::write(&path, kept.join("\n") + "\n").unwrap();
     let (code, text) = run(&["verify", out.to_str().unwrap()]);
     assert_eq!(code, 1, "{text}");
-    assert!(text.contains("210 MPs will hold NaN in Anura3D"), "{text}");
+    assert_contains(&text, &["210 MPs will hold NaN in Anura3D"]);
     let start = std::fs::read_to_string(out.join("verify/start.csv")).unwrap();
     assert_eq!(start.lines().filter(|l| l.ends_with(",nan")).count(), 210);
 }
@@ -186,7 +154,7 @@ fn mixed_elements_carry_their_mean_state() {
     map(&project, &fem, &mean, &[]);
     let per_mp = tmp.path().join("per-mp");
     let text = map(&project, &fem, &per_mp, &["--mixed-state", "per-mp"]);
-    assert!(text.contains("MPM-MP"), "{text}");
+    assert_contains(&text, &["MPM-MP"]);
     let (points, a) = mps_table::read_states(&mean.join("mps.csv")).unwrap();
     let (_, b) = mps_table::read_states(&per_mp.join("mps.csv")).unwrap();
     for e in 0..80u32 {
@@ -211,10 +179,7 @@ fn mixed_elements_carry_their_mean_state() {
     assert_eq!(report["computation_method"], "MpmMixed");
     // verify models the collapse to the first MP: the per-MP folder reports the spread.
     let (_, text) = run(&["verify", per_mp.to_str().unwrap()]);
-    assert!(
-        text.contains("MPM-MIXED: the first step gives every MP"),
-        "{text}"
-    );
+    assert_contains(&text, &["MPM-MIXED: the first step gives every MP"]);
 }
 
 /// The §1.7 two-material model with a third, undrained material block written
@@ -257,10 +222,9 @@ fn undrained_material_in_the_newer_order_is_read_by_name() {
     std::fs::write(&gom, undrained_gom("2.2e6")).unwrap();
     let (code, text) = run(&["inspect", gom.to_str().unwrap()]);
     assert_eq!(code, 2, "{text}");
-    assert!(
-        text.contains("TwoMat.GOM:")
-            && text.contains("K0_VALUE_SOLID = 2200000 must lie in [0, 1]"),
-        "{text}"
+    assert_contains(
+        &text,
+        &["TwoMat.GOM:", "K0_VALUE_SOLID = 2200000 must lie in [0, 1]"],
     );
 }
 
@@ -335,10 +299,7 @@ fn dry_materials_carry_no_pore_water() {
     let c = table.column("Pwp[kPa]").unwrap();
     assert!(table.rows.iter().all(|r| r[c] == 0.0));
     let report = std::fs::read_to_string(out.join("report.json")).unwrap();
-    assert!(
-        report.contains("FEM pore pressure dropped") && report.contains("`dry`"),
-        "{report}"
-    );
+    assert_contains(&report, &["FEM pore pressure dropped", "`dry`"]);
     let (_, text) = run(&["verify", out.to_str().unwrap()]);
     let (_, start) = mps_table::read_states(&out.join("verify/start.csv")).unwrap();
     assert!(start.iter().all(|s| s.pwp == 0.0), "{text}");
@@ -348,10 +309,9 @@ fn dry_materials_carry_no_pore_water() {
 fn demo_prints_only_measured_words() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("demo");
-    let (code, text) = run(&["demo", "--no-fos", "--out", out.to_str().unwrap()]);
-    assert_eq!(code, 0, "{text}");
+    let text = run_ok(&["demo", "--no-fos", "--out", out.to_str().unwrap()]);
     assert!(!text.contains("FS ≈ 1"), "{text}");
-    assert!(text.contains("σ'zz := τxy"), "{text}");
+    assert_contains(&text, &["σ'zz := τxy"]);
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert!(

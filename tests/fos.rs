@@ -69,6 +69,19 @@ fn show(report: &FosReport) -> String {
     )
 }
 
+/// Checks that the search bracketed a factor within `tolerance` (relative) of
+/// `reference`, the value of `what`.
+#[track_caller]
+fn assert_bracketed_near(report: &FosReport, reference: f64, tolerance: f64, what: &str) {
+    assert_eq!(report.outcome, FosOutcome::Bracketed);
+    assert!(
+        (report.factor / reference - 1.0).abs() < tolerance,
+        "FS = {} vs {what} = {reference}\n{}",
+        report.factor,
+        show(report)
+    );
+}
+
 /// Reference: dry cohesionless infinite slope, FS = tan φ′ / tan β
 /// (e.g. Duncan, Wright & Brandon 2014, *Soil Strength and Slope Stability*,
 /// §6.2). Within 5 %.
@@ -77,13 +90,7 @@ fn dry_infinite_slope_matches_tan_phi_over_tan_beta() {
     let (model, points, states, settings) = layer(false);
     let report = strength_reduction(&model, &points, &states, &settings).unwrap();
     let reference = PHI.to_radians().tan() / BETA.to_radians().tan();
-    assert_eq!(report.outcome, FosOutcome::Bracketed);
-    assert!(
-        (report.factor / reference - 1.0).abs() < 0.05,
-        "FS = {} vs tan φ′/tan β = {reference}\n{}",
-        report.factor,
-        show(&report)
-    );
+    assert_bracketed_near(&report, reference, 0.05, "tan φ′/tan β");
 }
 
 /// Reference: the same dry slope of a non-associated material (ψ = 0)
@@ -95,13 +102,7 @@ fn non_associated_infinite_slope_matches_davis() {
     let (model, points, states, settings) = layer_with_dilatancy(false, 0.0);
     let report = strength_reduction(&model, &points, &states, &settings).unwrap();
     let reference = PHI.to_radians().tan() / BETA.to_radians().tan().asin().tan();
-    assert_eq!(report.outcome, FosOutcome::Bracketed);
-    assert!(
-        (report.factor / reference - 1.0).abs() < 0.05,
-        "FS = {} vs tan φ′/tan(asin(tan β)) = {reference}\n{}",
-        report.factor,
-        show(&report)
-    );
+    assert_bracketed_near(&report, reference, 0.05, "tan φ′/tan(asin(tan β))");
 }
 
 /// Reference: cohesionless infinite slope with seepage parallel to the
@@ -115,13 +116,7 @@ fn seeping_infinite_slope_matches_buoyant_ratio() {
     let gamma_sat = model.materials[0].gamma_at_saturation(1.0, G);
     let gamma_buoyant = gamma_sat - a3d_init::model::gamma_water(G);
     let reference = gamma_buoyant / gamma_sat * PHI.to_radians().tan() / BETA.to_radians().tan();
-    assert_eq!(report.outcome, FosOutcome::Bracketed);
-    assert!(
-        (report.factor / reference - 1.0).abs() < 0.05,
-        "FS = {} vs (γ′/γsat)·tan φ′/tan β = {reference}\n{}",
-        report.factor,
-        show(&report)
-    );
+    assert_bracketed_near(&report, reference, 0.05, "(γ′/γsat)·tan φ′/tan β");
 }
 
 /// A vertical cut of `height` in a Tresca soil (φ = 0, c, no tension
@@ -153,13 +148,7 @@ fn vertical_cut_matches_critical_height() {
     let report = strength_reduction(&model, &points, &states, &FosSettings::default()).unwrap();
     let gamma = model.materials[0].gamma_at_saturation(1.0, G);
     let reference = 3.83 * cohesion / (gamma * height);
-    assert_eq!(report.outcome, FosOutcome::Bracketed);
-    assert!(
-        (report.factor / reference - 1.0).abs() < 0.10,
-        "FS = {} vs 3.83 c/(γH) = {reference}\n{}",
-        report.factor,
-        show(&report)
-    );
+    assert_bracketed_near(&report, reference, 0.10, "3.83 c/(γH)");
     let mechanism = report.mechanism.as_ref().unwrap();
     assert!(mechanism.factor > report.factor);
     // The mechanism is at the face: the MPs in motion lie near the cut.

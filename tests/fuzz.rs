@@ -13,9 +13,12 @@
 //! case number are printed; every crash found becomes a named test in
 //! `tests/hardening.rs`.
 
+mod common;
+use common::{fixture, mini_regions_csv, run_within};
+
 use std::io::Write;
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use a3d_init::formats::cps::CpsDocument;
 use a3d_init::formats::fem_csv::{self, CsvOptions};
@@ -25,12 +28,6 @@ use a3d_init::formats::{gsz, mapf, ply};
 use a3d_init::model::MpState;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
-
-fn fixture(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(rel)
-}
 
 fn env_u64(name: &str, default: u64) -> u64 {
     std::env::var(name)
@@ -409,33 +406,8 @@ fn fuzz_gsz() {
 
 /// Runs the binary, killed after 30 s: (exit code, stderr + stdout).
 fn run_bin(args: &[&std::ffi::OsStr]) -> (i32, String) {
-    use std::process::{Command, Stdio};
-    use std::time::{Duration, Instant};
-    let mut child = Command::new(env!("CARGO_BIN_EXE_a3d-init"))
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > Duration::from_secs(30) {
-            let _ = child.kill();
-            let _ = child.wait();
-            return (-9, format!("hung: {args:?}"));
-        }
-        std::thread::sleep(Duration::from_millis(10));
-    }
-    let out = child.wait_with_output().unwrap();
-    (
-        out.status.code().unwrap_or(-1),
-        format!(
-            "{}{}",
-            String::from_utf8_lossy(&out.stderr),
-            String::from_utf8_lossy(&out.stdout)
-        ),
-    )
+    run_within(args, std::time::Duration::from_secs(30))
+        .unwrap_or_else(|| (-9, format!("hung: {args:?}")))
 }
 
 /// The whole pipeline through the real binary: `map` on a mutated GOM, CPS or
@@ -448,15 +420,7 @@ fn fuzz_cli_pipeline() {
     let n = env_u64("A3D_FUZZ_CLI_CASES", 100) as usize;
     let gom = std::fs::read(fixture("anura3d-mini/TwoMat.GOM")).unwrap();
     let cps = std::fs::read(fixture("anura3d-mini/TwoMat.CPS_001")).unwrap();
-    let mut fem = String::from("X (m),Y (m),PWP (kPa),Material\n");
-    for j in 0..5 {
-        for i in 0..9 {
-            let (x, y) = (i as f64 * 0.25, j as f64 * 0.25);
-            let region = if x < 1.0 { "clay" } else { "sand" };
-            fem.push_str(&format!("{x},{y},{},{region}\n", 9.81 * (1.0 - y)));
-        }
-    }
-    let fem = fem.into_bytes();
+    let fem = mini_regions_csv().into_bytes();
     let mut rng = ChaCha8Rng::seed_from_u64(seed() ^ hash("cli"));
     let tmp = tempfile::tempdir().unwrap();
     let mut failures = Vec::new();

@@ -9,10 +9,9 @@ use std::path::Path;
 use std::process::Command;
 
 use a3d_init::formats::fem_csv::CsvOptions;
-use a3d_init::formats::gom::write::model_to_text;
 use a3d_init::formats::gsz::{StepChoice, read_project, read_step};
 use a3d_init::model::Quantity;
-use a3d_init::model::generate::{self, MaterialSpec};
+use a3d_init::model::generate;
 
 fn ply_bytes(nodes: &[[f64; 3]], header_override: Option<&str>) -> Vec<u8> {
     let header = header_override.map(str::to_string).unwrap_or_else(|| {
@@ -64,7 +63,7 @@ fn shipped_sample_reads_step_010_like_the_extracted_csv() {
     assert_eq!(a.steps[5].time, Some(12960.0));
     let (nodes, _, note) =
         read_step(&gsz, None, &StepChoice::Number(10), &CsvOptions::default()).unwrap();
-    assert!(note.contains("step 010 at t = 12960 s"), "{note}");
+    assert_contains(&note, &["step 010 at t = 12960 s"]);
     assert_eq!(nodes.len(), 306);
     let extracted = std::fs::read_to_string(fixture(
         "geostudio-gsz-internal/1d-unsaturated-column/seepw-analysis_010_node.csv",
@@ -99,39 +98,15 @@ fn shipped_sample_maps_end_to_end() {
     }
     let (w, h) = (hi[0] - lo[0], hi[1] - lo[1]);
     let mesh = generate::structured_tri_mesh(lo[0], lo[1], w, h, 2, 20);
-    let spec = MaterialSpec {
-        name: "soil".into(),
-        porosity: 0.4,
-        density_solid: 2650.0,
-        density_liquid: Some(1000.0),
-        k0: 0.5,
-        young_modulus: 1e4,
-        poisson_ratio: 0.3,
-        mohr_coulomb: None,
-        retention: None,
-        permeability: 1e-11,
-    };
     let gom = tmp.path().join("column.GOM");
-    std::fs::write(
-        &gom,
-        model_to_text(&generate::single_material_model(mesh, &spec, 3), "2023"),
-    )
-    .unwrap();
+    write_gom(&gom, mesh, &soil_spec(0.5, 1e4, 1e-11));
     let out = tmp.path().join("out");
-    let (code, stderr) = run(&[
-        "map",
-        "--fem",
-        gsz.to_str().unwrap(),
-        "--step",
-        "10",
-        "--mpm",
-        gom.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--outside",
-        "nearest",
-        "--generate-cps",
-    ]);
+    let (code, stderr) = run_map(
+        &gom,
+        &gsz,
+        &out,
+        &["--step", "10", "--outside", "nearest", "--generate-cps"],
+    );
     assert_eq!(code, 0, "{stderr}");
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
@@ -148,10 +123,12 @@ fn shipped_sample_maps_end_to_end() {
         )
     };
     assert_eq!(code, 0);
-    assert!(
-        stdout.contains("analysis   1 `SEEP/W Analysis`: SEEP/W Transient")
-            && stdout.contains("306 nodes (2D), fields: pwp"),
-        "{stdout}"
+    assert_contains(
+        &stdout,
+        &[
+            "analysis   1 `SEEP/W Analysis`: SEEP/W Transient",
+            "306 nodes (2D), fields: pwp",
+        ],
     );
 }
 
@@ -183,10 +160,7 @@ fn imperial_project_is_converted() {
         &CsvOptions::default(),
     )
     .unwrap();
-    assert!(
-        note.contains("Imperial (ft, psf; converted to m and kPa)"),
-        "{note}"
-    );
+    assert_contains(&note, &["Imperial (ft, psf; converted to m and kPa)"]);
     assert!(
         (fem.positions[1][0] - 3.048).abs() < 1e-12 && (fem.positions[2][1] - 3.048).abs() < 1e-12
     );
@@ -250,15 +224,7 @@ fn corrupted_archives_exit_2() {
         let path = tmp.path().join(format!("{name}.gsz"));
         make_gsz(&path, "Metric", &files);
         let out = tmp.path().join(format!("{name}-out"));
-        let (code, stderr) = run(&[
-            "map",
-            "--fem",
-            path.to_str().unwrap(),
-            "--mpm",
-            gom.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ]);
+        let (code, stderr) = run_map(&gom, &path, &out, &[]);
         assert_eq!(code, 2, "{name}: {stderr}");
         assert!(
             stderr.contains(expected),
@@ -279,18 +245,7 @@ fn corrupted_archives_exit_2() {
     let bytes = std::fs::read(&good).unwrap();
     let truncated = tmp.path().join("truncated.gsz");
     std::fs::write(&truncated, &bytes[..bytes.len() / 2]).unwrap();
-    let (code, stderr) = run(&[
-        "map",
-        "--fem",
-        truncated.to_str().unwrap(),
-        "--mpm",
-        gom.to_str().unwrap(),
-        "--out",
-        tmp.path().join("t-out").to_str().unwrap(),
-    ]);
+    let (code, stderr) = run_map(&gom, &truncated, &tmp.path().join("t-out"), &[]);
     assert_eq!(code, 2, "{stderr}");
-    assert!(
-        stderr.contains("not a readable .gsz (zip) archive"),
-        "{stderr}"
-    );
+    assert_contains(&stderr, &["not a readable .gsz (zip) archive"]);
 }

@@ -5,52 +5,23 @@
 //! options end as exit 2 with a positioned message, never a panic or a hang.
 //! Every run is killed after 30 s, so a hang fails instead of blocking CI.
 
+mod common;
+use common::{fixture, mini_regions_csv, run_within};
+
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
-use std::time::{Duration, Instant};
-
-fn fixture(rel: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(rel)
-}
+use std::process::Command;
+use std::time::Duration;
 
 /// Runs the binary with a 30 s limit: (exit code, stderr + stdout).
 fn run(args: &[&dyn AsRef<std::ffi::OsStr>]) -> (i32, String) {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_a3d-init"))
-        .args(args.iter().map(|a| a.as_ref()))
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .unwrap();
-    let start = Instant::now();
-    loop {
-        if child.try_wait().unwrap().is_some() {
-            break;
-        }
-        if start.elapsed() > Duration::from_secs(30) {
-            let _ = child.kill();
-            let _ = child.wait();
-            panic!(
-                "a3d-init {:?} hung (killed after 30 s)",
-                args.iter()
-                    .map(|a| a.as_ref().to_owned())
-                    .collect::<Vec<_>>()
-            );
-        }
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    let out = child.wait_with_output().unwrap();
-    let text = format!(
-        "{}{}",
-        String::from_utf8_lossy(&out.stderr),
-        String::from_utf8_lossy(&out.stdout)
-    );
+    let os: Vec<&std::ffi::OsStr> = args.iter().map(|a| a.as_ref()).collect();
+    let Some((code, text)) = run_within(&os, Duration::from_secs(30)) else {
+        panic!("a3d-init {os:?} hung (killed after 30 s)");
+    };
     assert!(!text.contains("panicked"), "{text}");
     assert!(!text.contains("internal error"), "{text}");
-    (out.status.code().unwrap_or(-1), text)
+    (code, text)
 }
 
 /// The mini two-material model with a FEM table that has a region column, in
@@ -63,15 +34,7 @@ fn mini_project(dir: &Path) -> (PathBuf, PathBuf) {
     for f in ["TwoMat.GOM", "TwoMat.CPS_001"] {
         std::fs::copy(fixture("anura3d-mini").join(f), model.join(f)).unwrap();
     }
-    let mut csv = String::from("X (m),Y (m),PWP (kPa),Material\n");
-    for j in 0..5 {
-        for i in 0..9 {
-            let (x, y) = (i as f64 * 0.25, j as f64 * 0.25);
-            let region = if x < 1.0 { "clay" } else { "sand" };
-            csv.push_str(&format!("{x},{y},{},{region}\n", 9.81 * (1.0 - y)));
-        }
-    }
-    std::fs::write(fem.join("fem.csv"), csv).unwrap();
+    std::fs::write(fem.join("fem.csv"), mini_regions_csv()).unwrap();
     (model.join("TwoMat.GOM"), fem.join("fem.csv"))
 }
 

@@ -2,6 +2,9 @@
 //! normalisation, partition of unity, constant and linear fields, brute-force
 //! neighbour search, and the serial mapper (bit for bit, any thread count).
 
+mod common;
+use common::random::*;
+
 use a3d_init::kernel::grid::Grid;
 use a3d_init::kernel::mapper::{self, MapSettings, NodeCloud, OutsidePolicy, PointStatus, Search};
 use a3d_init::kernel::neighbours::{NeighbourIndex, within_brute_force};
@@ -85,10 +88,10 @@ proptest! {
     #[test]
     fn normalised_weights_sum_to_one_and_constants_are_exact(seed in 0u64..10_000, k in 0usize..3, c in -500.0f64..500.0) {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let nodes: Vec<[f64; 3]> = (0..200).map(|_| [rng.random_range(0.0..10.0), rng.random_range(0.0..10.0), 0.0]).collect();
+        let nodes = random_points(&mut rng, 2, 200, 0.0..10.0);
         let values = vec![c; nodes.len()];
         let cloud = NodeCloud { positions: &nodes, dim: 2, values: &values, n_fields: 1, group: None, node_volume: 0.5 };
-        let points: Vec<[f64; 3]> = (0..50).map(|_| [rng.random_range(1.0..9.0), rng.random_range(1.0..9.0), 0.0]).collect();
+        let points = random_points(&mut rng, 2, 50, 1.0..9.0);
         let settings = MapSettings { kernel: KERNELS[k], h: 1.2, min_shepard: 0.0, outside: OutsidePolicy::Skip };
         let r = mapper::map_points(&cloud, &points, None, &settings).unwrap();
         for (i, s) in r.status.iter().enumerate() {
@@ -102,19 +105,10 @@ proptest! {
 #[test]
 fn linear_fields_are_exact_at_interior_points_of_a_uniform_grid() {
     let n = 21;
-    let nodes: Vec<[f64; 3]> = (0..n * n)
-        .map(|k| [(k % n) as f64 * 0.5, (k / n) as f64 * 0.5, 0.0])
-        .collect();
+    let nodes = grid_nodes(n, 0.5);
     let f = |p: &[f64; 3]| 3.0 * p[0] - 2.0 * p[1] + 7.0;
     let values: Vec<f64> = nodes.iter().map(f).collect();
-    let cloud = NodeCloud {
-        positions: &nodes,
-        dim: 2,
-        values: &values,
-        n_fields: 1,
-        group: None,
-        node_volume: 0.25,
-    };
+    let cloud = plane_cloud(&nodes, &values, 1, None, 0.25);
     // Interior grid points and cell centres: symmetric stencils.
     let points: Vec<[f64; 3]> = vec![
         [5.0, 5.0, 0.0],
@@ -123,12 +117,7 @@ fn linear_fields_are_exact_at_interior_points_of_a_uniform_grid() {
         [6.0, 3.0, 0.0],
     ];
     for kernel in KERNELS {
-        let settings = MapSettings {
-            kernel,
-            h: 0.6,
-            min_shepard: 0.0,
-            outside: OutsidePolicy::Error,
-        };
+        let settings = map_settings(kernel, 0.6, 0.0, OutsidePolicy::Error);
         let r = mapper::map_points(&cloud, &points, None, &settings).unwrap();
         for (p, v) in points.iter().zip(&r.values) {
             assert!(
@@ -145,19 +134,7 @@ fn linear_fields_are_exact_at_interior_points_of_a_uniform_grid() {
 fn kiddo_search_equals_brute_force() {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     for dim in [2usize, 3] {
-        let mut pts: Vec<[f64; 3]> = (0..3000)
-            .map(|_| {
-                [
-                    rng.random_range(-5.0..5.0),
-                    rng.random_range(-5.0..5.0),
-                    if dim == 3 {
-                        rng.random_range(-5.0..5.0)
-                    } else {
-                        0.0
-                    },
-                ]
-            })
-            .collect();
+        let mut pts = random_points(&mut rng, dim, 3000, -5.0..5.0);
         // Many duplicates and a tight cluster.
         for _ in 0..300 {
             pts.push([1.0, 1.0, if dim == 3 { 1.0 } else { 0.0 }]);
@@ -165,15 +142,7 @@ fn kiddo_search_equals_brute_force() {
         let index = NeighbourIndex::new(&pts, dim);
         let mut got = Vec::new();
         for _ in 0..200 {
-            let q = [
-                rng.random_range(-6.0..6.0),
-                rng.random_range(-6.0..6.0),
-                if dim == 3 {
-                    rng.random_range(-6.0..6.0)
-                } else {
-                    0.0
-                },
-            ];
+            let q = random_point(&mut rng, dim, -6.0..6.0);
             let r = rng.random_range(0.0..2.5);
             index.within(q, r, &mut got);
             let want = within_brute_force(&pts, dim, q, r);
@@ -192,15 +161,7 @@ fn kiddo_search_equals_brute_force() {
 #[test]
 fn parallel_map_equals_serial_map_bit_for_bit() {
     let mut rng = ChaCha8Rng::seed_from_u64(11);
-    let nodes: Vec<[f64; 3]> = (0..20_000)
-        .map(|_| {
-            [
-                rng.random_range(0.0..50.0),
-                rng.random_range(0.0..50.0),
-                0.0,
-            ]
-        })
-        .collect();
+    let nodes = random_points(&mut rng, 2, 20_000, 0.0..50.0);
     let values: Vec<f64> = nodes
         .iter()
         .flat_map(|p| [p[0].sin() * 100.0 + p[1], p[1] * p[1] * 0.3])
@@ -209,42 +170,18 @@ fn parallel_map_equals_serial_map_bit_for_bit() {
         .iter()
         .map(|p| if p[1] < 20.0 { 1 } else { 2 })
         .collect();
-    let cloud = NodeCloud {
-        positions: &nodes,
-        dim: 2,
-        values: &values,
-        n_fields: 2,
-        group: Some(&groups),
-        node_volume: 0.125,
-    };
-    let points: Vec<[f64; 3]> = (0..10_000)
-        .map(|_| {
-            [
-                rng.random_range(0.0..50.0),
-                rng.random_range(0.0..50.0),
-                0.0,
-            ]
-        })
-        .collect();
+    let cloud = plane_cloud(&nodes, &values, 2, Some(&groups), 0.125);
+    let points = random_points(&mut rng, 2, 10_000, 0.0..50.0);
     let point_groups: Vec<u32> = points
         .iter()
         .map(|p| if p[1] < 20.0 { 1 } else { 2 })
         .collect();
     for kernel in KERNELS {
-        let settings = MapSettings {
-            kernel,
-            h: 0.5,
-            min_shepard: 0.0,
-            outside: OutsidePolicy::Nearest,
-        };
+        let settings = map_settings(kernel, 0.5, 0.0, OutsidePolicy::Nearest);
         let serial =
             mapper::map_points_serial(&cloud, &points, Some(&point_groups), &settings).unwrap();
         for threads in [1, 2, 4] {
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(threads)
-                .build()
-                .unwrap();
-            let parallel = pool.install(|| {
+            let parallel = in_pool(threads, || {
                 mapper::map_points(&cloud, &points, Some(&point_groups), &settings).unwrap()
             });
             assert!(
@@ -265,9 +202,7 @@ fn parallel_map_equals_serial_map_bit_for_bit() {
 fn groups_keep_a_material_step_sharp() {
     // Two materials meeting at y = 5 with a jump in the field; no smoothing across.
     let n = 21;
-    let nodes: Vec<[f64; 3]> = (0..n * n)
-        .map(|k| [(k % n) as f64 * 0.5, (k / n) as f64 * 0.5, 0.0])
-        .collect();
+    let nodes = grid_nodes(n, 0.5);
     let groups: Vec<u32> = nodes
         .iter()
         .map(|p| if p[1] <= 5.0 { 1 } else { 2 })
@@ -276,21 +211,9 @@ fn groups_keep_a_material_step_sharp() {
         .iter()
         .map(|&g| if g == 1 { 10.0 } else { 100.0 })
         .collect();
-    let cloud = NodeCloud {
-        positions: &nodes,
-        dim: 2,
-        values: &values,
-        n_fields: 1,
-        group: Some(&groups),
-        node_volume: 0.25,
-    };
+    let cloud = plane_cloud(&nodes, &values, 1, Some(&groups), 0.25);
     let points = [[4.0, 4.9, 0.0], [4.0, 5.1, 0.0]];
-    let settings = MapSettings {
-        kernel: KernelKind::Cubic,
-        h: 1.0,
-        min_shepard: 0.0,
-        outside: OutsidePolicy::Error,
-    };
+    let settings = map_settings(KernelKind::Cubic, 1.0, 0.0, OutsidePolicy::Error);
     let r = mapper::map_points(&cloud, &points, Some(&[1, 2]), &settings).unwrap();
     assert!(
         (r.values[0] - 10.0).abs() < 1e-12 && (r.values[1] - 100.0).abs() < 1e-12,
@@ -306,25 +229,11 @@ fn groups_keep_a_material_step_sharp() {
 
 #[test]
 fn null_points_follow_the_policy() {
-    let nodes: Vec<[f64; 3]> = (0..100)
-        .map(|k| [(k % 10) as f64, (k / 10) as f64, 0.0])
-        .collect();
+    let nodes = grid_nodes(10, 1.0);
     let values: Vec<f64> = nodes.iter().map(|p| p[0]).collect();
-    let cloud = NodeCloud {
-        positions: &nodes,
-        dim: 2,
-        values: &values,
-        n_fields: 1,
-        group: None,
-        node_volume: 1.0,
-    };
+    let cloud = plane_cloud(&nodes, &values, 1, None, 1.0);
     let points = [[4.5, 4.5, 0.0], [30.0, 4.0, 0.0], [-20.0, 0.0, 0.0]];
-    let mut settings = MapSettings {
-        kernel: KernelKind::Cubic,
-        h: 1.0,
-        min_shepard: 0.02,
-        outside: OutsidePolicy::Error,
-    };
+    let mut settings = map_settings(KernelKind::Cubic, 1.0, 0.02, OutsidePolicy::Error);
     let err = mapper::map_points(&cloud, &points, None, &settings)
         .unwrap_err()
         .to_string();
@@ -348,21 +257,41 @@ fn null_points_follow_the_policy() {
     assert!(r.values[1].is_nan() && r.status[2] == PointStatus::Skipped);
 }
 
+fn map_settings(
+    kernel: KernelKind,
+    h: f64,
+    min_shepard: f64,
+    outside: OutsidePolicy,
+) -> MapSettings {
+    MapSettings {
+        kernel,
+        h,
+        min_shepard,
+        outside,
+    }
+}
+
+/// A node cloud in the plane (dim 2).
+fn plane_cloud<'a>(
+    nodes: &'a [[f64; 3]],
+    values: &'a [f64],
+    n_fields: usize,
+    group: Option<&'a [u32]>,
+    node_volume: f64,
+) -> NodeCloud<'a> {
+    NodeCloud {
+        positions: nodes,
+        dim: 2,
+        values,
+        n_fields,
+        group,
+        node_volume,
+    }
+}
+
 /// Random clouds with duplicates and a tight cluster, in 2D and 3D.
 fn cloud_with_duplicates(rng: &mut ChaCha8Rng, dim: usize, n: usize) -> Vec<[f64; 3]> {
-    let mut pts: Vec<[f64; 3]> = (0..n)
-        .map(|_| {
-            [
-                rng.random_range(-5.0..5.0),
-                rng.random_range(-5.0..5.0),
-                if dim == 3 {
-                    rng.random_range(-5.0..5.0)
-                } else {
-                    0.0
-                },
-            ]
-        })
-        .collect();
+    let mut pts = random_points(rng, dim, n, -5.0..5.0);
     for _ in 0..n / 10 {
         pts.push([1.0, 1.0, if dim == 3 { 1.0 } else { 0.0 }]);
     }
@@ -379,15 +308,7 @@ fn grid_and_kiddo_searches_equal_brute_force_bit_for_bit() {
             let grid = Grid::new(&pts, dim, radius);
             let (mut a, mut b) = (Vec::new(), Vec::new());
             for _ in 0..300 {
-                let q = [
-                    rng.random_range(-7.0..7.0),
-                    rng.random_range(-7.0..7.0),
-                    if dim == 3 {
-                        rng.random_range(-7.0..7.0)
-                    } else {
-                        0.0
-                    },
-                ];
+                let q = random_point(&mut rng, dim, -7.0..7.0);
                 let want = within_brute_force(&pts, dim, q, radius);
                 grid.within(q, radius, &mut a);
                 index.within(q, radius, &mut b);
@@ -427,12 +348,7 @@ fn grid_map_equals_kiddo_map_bit_for_bit() {
         let point_groups: Vec<u32> = points.iter().map(|p| 1 + (p[1] > 0.5) as u32).collect();
         for kernel in KERNELS {
             for (h, outside) in [(0.3, OutsidePolicy::Nearest), (0.05, OutsidePolicy::Skip)] {
-                let settings = MapSettings {
-                    kernel,
-                    h,
-                    min_shepard: 0.01,
-                    outside,
-                };
+                let settings = map_settings(kernel, h, 0.01, outside);
                 for groups in [None, Some(&point_groups[..])] {
                     let reference = mapper::map_points_with(
                         &cloud,

@@ -15,18 +15,7 @@ use a3d_init::model::generate::{self, MaterialSpec};
 const GAMMA_W: f64 = 9.807;
 
 fn block_spec() -> MaterialSpec {
-    MaterialSpec {
-        name: "soil".into(),
-        porosity: 0.4,
-        density_solid: 2650.0,
-        density_liquid: Some(1000.0),
-        k0: 0.5,
-        young_modulus: 1e4,
-        poisson_ratio: 0.3,
-        mohr_coulomb: None,
-        retention: None,
-        permeability: 1e-10,
-    }
+    soil_spec(0.5, 1e4, 1e-10)
 }
 
 /// A 20 × 10 m block (TRI3, 1 m cells, 3 MPs each) and FEM nodes on a 0.5 m grid
@@ -41,14 +30,8 @@ fn write_block(dir: &Path) -> (PathBuf, PathBuf) {
         "### Anura3D_2023 ###\n$$GRAVITY_ACCELERATION\n9.81\n$$K0_PROCEDURE\n1\n$$END\n",
     )
     .unwrap();
-    let mut csv = String::from("X (m),Y (m),PWP (kPa)\n");
-    for j in 0..=20 {
-        for i in 0..=40 {
-            let (x, y) = (i as f64 * 0.5, j as f64 * 0.5);
-            csv.push_str(&format!("{x},{y},{}\n", GAMMA_W * (10.0 - y)));
-        }
-    }
     let fem = dir.join("seep.csv");
+    let csv = hydrostatic_grid_csv("X (m),Y (m),PWP (kPa)", 40, 20, GAMMA_W, 10.0);
     std::fs::write(&fem, csv).unwrap();
     (gom, fem)
 }
@@ -58,18 +41,13 @@ fn hydrostatic_block_maps_to_the_analytic_state() {
     let tmp = tempfile::tempdir().unwrap();
     let (gom, fem) = write_block(tmp.path());
     let out = tmp.path().join("out");
-    let (code, stderr) = run(&[
-        "map",
-        "--fem",
-        fem.to_str().unwrap(),
-        "--mpm",
-        gom.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
+    let (code, stderr) = run_map(
+        &gom,
+        &fem,
+        &out,
         // Per-MP values are what this test checks against the analytic field.
-        "--mixed-state",
-        "per-mp",
-    ]);
+        &["--mixed-state", "per-mp"],
+    );
     assert_eq!(code, 0, "{stderr}");
     let (points, states) = mps_table::read_states(&out.join("mps.csv")).unwrap();
     assert_eq!(points.len(), 20 * 10 * 2 * 3);
@@ -126,17 +104,7 @@ fn sample_project_round_trip_through_map() {
     let out = tmp.path().join("slope");
     let fem = fixture("geostudio-csv/k0-slope-hydrostatic.csv");
     let model_dir = fixture("anura3d/K0_phreaticSurf_Geom");
-    let (code, stderr) = run(&[
-        "map",
-        "--fem",
-        fem.to_str().unwrap(),
-        "--mpm",
-        model_dir.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--mixed-state",
-        "per-mp",
-    ]);
+    let (code, stderr) = run_map(&model_dir, &fem, &out, &["--mixed-state", "per-mp"]);
     assert_eq!(code, 0, "{stderr}");
     // GOM byte-identical.
     assert_eq!(
@@ -201,15 +169,7 @@ fn sample_project_round_trip_through_map() {
         );
     }
     // Refuses to overwrite without --force, and leaves the old folder intact.
-    let (code, stderr) = run(&[
-        "map",
-        "--fem",
-        fem.to_str().unwrap(),
-        "--mpm",
-        model_dir.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (code, stderr) = run_map(&model_dir, &fem, &out, &[]);
     assert_eq!(code, 2);
     assert!(stderr.contains("exists; pass --force"));
     assert!(out.join("report.json").exists());
@@ -350,17 +310,7 @@ fn bad_inputs_exit_2_and_leave_no_output() {
             std::fs::write(&fem, &text).unwrap();
         }
         let out = dir.join("out");
-        let mut args = vec![
-            "map",
-            "--fem",
-            fem.to_str().unwrap(),
-            "--mpm",
-            gom.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ];
-        args.extend(extra);
-        let (code, stderr) = run(&args);
+        let (code, stderr) = run_map(&gom, &fem, &out, &extra);
         assert_eq!(code, 2, "{name}: {stderr}");
         assert!(
             stderr.contains(expected),
@@ -384,27 +334,15 @@ fn conflicting_joins_are_errors() {
     let b = tmp.path().join("b.csv");
     std::fs::write(&a, "Node,X,Y,PWP\n1,0,0,1\n2,1,0,2\n3,0,1,3\n").unwrap();
     let out = tmp.path().join("o");
-    let join = || {
-        run(&[
-            "map",
-            "--fem",
-            a.to_str().unwrap(),
-            "--fem",
-            b.to_str().unwrap(),
-            "--mpm",
-            gom.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-        ])
-    };
+    let join = || run_map(&gom, &a, &out, &["--fem", b.to_str().unwrap()]);
     std::fs::write(&b, "Node,X,Y,PWP\n1,0,0,1\n2,1,0,5\n3,0,1,3\n").unwrap();
     let (code, stderr) = join();
     assert_eq!(code, 2);
-    assert!(stderr.contains("pwp of node 2 is -5 but -2"), "{stderr}");
+    assert_contains(&stderr, &["pwp of node 2 is -5 but -2"]);
     std::fs::write(&b, "Node,X,Y,PWP\n1,0,0,1\n2,1,0,2\n4,0,1,3\n").unwrap();
     let (code, stderr) = join();
     assert_eq!(code, 2);
-    assert!(stderr.contains("node 3 of"), "{stderr}");
+    assert_contains(&stderr, &["node 3 of"]);
     assert!(!tmp.path().join("o").exists());
 }
 
@@ -416,19 +354,8 @@ fn real_geostudio_node_csv_with_mesh_ply() {
     let node = dir.join("1-initial-steady-state_001_node.csv");
     let ply = dir.join("1-initial-steady-state_Mesh.ply");
     let gom = fixture("anura3d-rapid-drawdown/rapid_drawdown.GOM");
-    let args = [
-        "map",
-        "--fem",
-        node.to_str().unwrap(),
-        "--fem-mesh",
-        ply.to_str().unwrap(),
-        "--mpm",
-        gom.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--generate-cps",
-    ];
-    let (code, stderr) = run(&args);
+    let mesh_args = ["--fem-mesh", ply.to_str().unwrap(), "--generate-cps"];
+    let (code, stderr) = run_map(&gom, &node, &out, &mesh_args);
     assert_eq!(code, 0, "{stderr}");
     let (points, states) = mps_table::read_states(&out.join("mps.csv")).unwrap();
     assert_eq!(points.len(), 992 * 3);
@@ -458,20 +385,11 @@ fn real_geostudio_node_csv_with_mesh_ply() {
         least.0.position
     );
     // Without the mesh the node.csv has no coordinates: a clear error.
-    let (code, stderr) = run(&[
-        "map",
-        "--fem",
-        node.to_str().unwrap(),
-        "--mpm",
-        gom.to_str().unwrap(),
-        "--out",
-        tmp.path().join("x").to_str().unwrap(),
-        "--generate-cps",
-    ]);
+    let (code, stderr) = run_map(&gom, &node, &tmp.path().join("x"), &["--generate-cps"]);
     assert_eq!(code, 2);
-    assert!(
-        stderr.contains("no X and Y columns; give the GeoStudio mesh with --fem-mesh"),
-        "{stderr}"
+    assert_contains(
+        &stderr,
+        &["no X and Y columns; give the GeoStudio mesh with --fem-mesh"],
     );
 }
 

@@ -7,36 +7,19 @@
 //! Every oracle is analytic or a second code path; tolerances are stated where
 //! they are used.
 
+mod common;
+use common::column::*;
+
 use a3d_init::model::{AnuraModel, MaterialPoint, MpState};
 use a3d_init::mpm::{
     Elasticity, MohrCoulomb, MpmError, Reason, ReturnKind, RunSettings, Simulation, SolidModel,
     Verdict, run, verify,
 };
 use a3d_init::testkit::{
-    column_tet, column_tri3, elastic_material, geostatic_states, mohr_coulomb_material,
-    place_points, saturated, zero_states,
+    column_tet, column_tri3, geostatic_states, mohr_coulomb_material, place_points, saturated,
+    zero_states,
 };
 use proptest::prelude::*;
-
-const G: f64 = 9.81;
-/// Stiff enough that the settling displacements stay far below an element.
-const YOUNG: f64 = 1e5;
-const POISSON: f64 = 0.3;
-const RHO_S: f64 = 2650.0;
-const POROSITY: f64 = 0.3;
-
-fn k0() -> f64 {
-    POISSON / (1.0 - POISSON)
-}
-
-fn elastic() -> a3d_init::model::Material {
-    elastic_material(YOUNG, POISSON, RHO_S, POROSITY)
-}
-
-/// Dry unit weight (kN/m³).
-fn gamma() -> f64 {
-    (1.0 - POROSITY) * RHO_S * G / 1000.0
-}
 
 /// Checks every MP's effective stress against σ′v = −γ′(H − y), σ′h = K0·σ′v
 /// (y of the MP's initial position) within `relative` of the local value.
@@ -69,20 +52,9 @@ fn assert_geostatic(
 fn geostatic_column_2d_stays_in_equilibrium() {
     let model = column_tri3(1.0, 10.0, 2, 20, elastic());
     let points = place_points(&model);
-    let states = geostatic_states(&model, &points, G, k0(), None);
-    let report = verify(&model, &points, &states, &RunSettings::verify()).expect("valid model");
     // The exact state is also the discrete equilibrium: the 3-point rule
     // integrates the linear stress field and the linear shape functions exactly.
-    assert!(
-        report.initial_residual_ratio < 1e-12,
-        "{}",
-        report.initial_residual_ratio
-    );
-    assert!(
-        report.max_displacement < 1e-12,
-        "{}",
-        report.max_displacement
-    );
+    let report = verify_exact_geostatic(&model, &points);
     assert!(
         report.steps > 100,
         "the run must actually run: {} steps",
@@ -97,18 +69,7 @@ fn geostatic_column_2d_stays_in_equilibrium() {
 fn geostatic_column_3d_stays_in_equilibrium() {
     let model = column_tet(1.0, 10.0, 1.0, 2, 20, 2, elastic());
     let points = place_points(&model);
-    let states = geostatic_states(&model, &points, G, k0(), None);
-    let report = verify(&model, &points, &states, &RunSettings::verify()).expect("valid model");
-    assert!(
-        report.initial_residual_ratio < 1e-12,
-        "{}",
-        report.initial_residual_ratio
-    );
-    assert!(
-        report.max_displacement < 1e-12,
-        "{}",
-        report.max_displacement
-    );
+    let report = verify_exact_geostatic(&model, &points);
     assert_geostatic(&points, &report.final_stresses, gamma(), 10.0, 1e-2);
     assert!(report.verdict.is_equilibrium(), "{:?}", report.verdict);
 }
@@ -166,13 +127,7 @@ fn assert_layers_converged(
 fn column_from_zero_stress_converges_to_geostatic_2d() {
     let model = column_tri3(1.0, 10.0, 2, 20, elastic());
     let points = place_points(&model);
-    let report = verify(
-        &model,
-        &points,
-        &zero_states(&points),
-        &RunSettings::verify(),
-    )
-    .expect("valid");
+    let report = verify_from_zero(&model, &points);
     assert!(report.final_residual_ratio < 1e-2);
     assert_layers_converged(&points, &report.final_stresses, 20, 4);
     // Zero stress under gravity is as far from equilibrium as it gets.
@@ -184,13 +139,7 @@ fn column_from_zero_stress_converges_to_geostatic_2d() {
 fn column_from_zero_stress_converges_to_geostatic_3d() {
     let model = column_tet(1.0, 10.0, 1.0, 1, 10, 1, elastic());
     let points = place_points(&model);
-    let report = verify(
-        &model,
-        &points,
-        &zero_states(&points),
-        &RunSettings::verify(),
-    )
-    .expect("valid");
+    let report = verify_from_zero(&model, &points);
     assert!(report.final_residual_ratio < 1e-2);
     assert_layers_converged(&points, &report.final_stresses, 10, 6);
 }
@@ -199,23 +148,8 @@ fn column_from_zero_stress_converges_to_geostatic_3d() {
 fn stresses_twenty_percent_low_are_not_in_equilibrium_and_settle() {
     let model = column_tri3(1.0, 10.0, 2, 20, elastic());
     let points = place_points(&model);
-    let mut states = geostatic_states(&model, &points, G, k0(), None);
-    for s in &mut states {
-        for c in &mut s.total {
-            *c *= 0.8;
-        }
-    }
-    let report = verify(&model, &points, &states, &RunSettings::verify()).expect("valid");
-    let Verdict::NotInEquilibrium { reasons } = &report.verdict else {
-        panic!("expected no equilibrium, got {:?}", report.verdict);
-    };
     // The missing 20 % of the weight is out of balance at the first step.
-    assert!(
-        reasons.iter().any(
-            |r| matches!(r, Reason::InitialResidual { ratio, .. } if (ratio - 0.2).abs() < 1e-6)
-        ),
-        "{reasons:?}"
-    );
+    let report = verify_twenty_percent_low(&model, &points);
     // Settlement: the top takes up 20 % of the geostatic strain,
     // 0.2·γH²/(2M) = 1.35 mm; the exact state moved less than 1e-12 m.
     let m = Elasticity::from_young_poisson(YOUNG, POISSON)
@@ -305,13 +239,7 @@ fn saturated_column_with_hydrostatic_pore_pressure_is_in_equilibrium() {
     let model = column_tri3(1.0, 10.0, 2, 20, material.clone());
     let points = place_points(&model);
     let states = geostatic_states(&model, &points, G, k0(), Some(10.0));
-    let report = verify(&model, &points, &states, &RunSettings::verify()).expect("valid");
-    assert!(
-        report.initial_residual_ratio < 1e-12,
-        "{}",
-        report.initial_residual_ratio
-    );
-    assert!(report.verdict.is_equilibrium(), "{:?}", report.verdict);
+    let report = verify_in_equilibrium(&model, &points, &states, 1e-12);
     let submerged = material.gamma_at_saturation(1.0, G) - G;
     assert_geostatic(&points, &report.final_stresses, submerged, 10.0, 1e-2);
     // Forgetting the pore pressure (effective stress written as total) leaves
@@ -459,22 +387,6 @@ fn mohr_coulomb_block_collapses() {
     assert!(moved > 0.01, "largest x displacement {moved}");
 }
 
-/// Results of a run inside a rayon pool of `threads` threads.
-fn run_in_pool(
-    threads: usize,
-    model: &AnuraModel,
-    points: &[MaterialPoint],
-    states: &[MpState],
-    settings: &RunSettings,
-) -> a3d_init::mpm::RunOutput {
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("thread pool");
-    pool.install(|| run(model, points, states, settings))
-        .expect("valid")
-}
-
 #[test]
 fn serial_and_parallel_runs_are_bit_identical() {
     // 2D: a collapsing block (plasticity, MPs changing element, empty nodes);
@@ -499,15 +411,7 @@ fn serial_and_parallel_runs_are_bit_identical() {
     // 3D: a column released from zero stress.
     let model = column_tet(1.0, 4.0, 1.0, 2, 8, 2, elastic());
     let points = place_points(&model);
-    let states = zero_states(&points);
-    let settings = RunSettings {
-        max_steps: 60,
-        ..RunSettings::verify()
-    };
-    let one = run_in_pool(1, &model, &points, &states, &settings);
-    let two = run_in_pool(2, &model, &points, &states, &settings);
-    assert!(one.report.max_displacement > 0.0);
-    assert_eq!(json(&one), json(&two));
+    assert_zero_stress_runs_bit_identical(&model, &points);
 }
 
 #[test]

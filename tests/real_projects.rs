@@ -11,8 +11,7 @@ use common::*;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use a3d_init::formats::gom::write::model_to_text;
-use a3d_init::model::generate::{self, MaterialSpec};
+use a3d_init::model::generate;
 
 fn real(rel: &str) -> PathBuf {
     fixture("real-projects").join(rel)
@@ -26,19 +25,15 @@ fn s(p: &Path) -> &str {
 /// at `origin`, with header `version`.
 fn block_gom(version: &str, origin: (f64, f64)) -> String {
     let mesh = generate::structured_tri_mesh(origin.0, origin.1, 10.0, 5.0, 10, 5);
-    let spec = MaterialSpec {
-        name: "soil".into(),
-        porosity: 0.4,
-        density_solid: 2650.0,
-        density_liquid: Some(1000.0),
-        k0: 0.5,
-        young_modulus: 1e4,
-        poisson_ratio: 0.3,
-        mohr_coulomb: None,
-        retention: None,
-        permeability: 1e-10,
-    };
-    model_to_text(&generate::single_material_model(mesh, &spec, 3), version)
+    gom_text(mesh, &soil_spec(0.5, 1e4, 1e-10), version)
+}
+
+/// `a3d-init inspect <path>`, which must exit 0: its stdout.
+#[track_caller]
+fn inspect_ok(path: &Path) -> String {
+    let (code, stdout, stderr) = run_split(&["inspect", s(path)]);
+    assert_eq!(code, 0, "{stderr}");
+    stdout
 }
 
 /// (fixture path, version, origin) of every generated GOM.
@@ -79,27 +74,18 @@ fn lines(text: &str) -> Vec<&str> {
 fn gid_project_folder_maps_with_its_own_cps() {
     let tmp = tempfile::tempdir().unwrap();
     let gid = real("Block.gid");
-    let (code, stdout, stderr) = run_split(&["inspect", s(&gid)]);
-    assert_eq!(code, 0, "{stderr}");
-    assert!(stdout.contains("Block-1.dat"), "{stdout}");
-    assert!(
-        stdout.contains("names      map writes Block.GOM, Block.CPS_001 (CPS header 2024"),
-        "{stdout}"
+    let stdout = inspect_ok(&gid);
+    assert_contains(&stdout, &["Block-1.dat"]);
+    assert_contains(
+        &stdout,
+        &["names      map writes Block.GOM, Block.CPS_001 (CPS header 2024"],
     );
     assert!(
         stdout.contains("CPS Anura3D_2024") || stdout.contains("CPS 2024"),
         "{stdout}"
     );
     let out = tmp.path().join("out");
-    let (code, _, stderr) = run_split(&[
-        "map",
-        "--mpm",
-        s(&gid),
-        "--fem",
-        s(&real("hydrostatic.csv")),
-        "--out",
-        s(&out),
-    ]);
+    let (code, _, stderr) = run_map_split(&gid, &real("hydrostatic.csv"), &out, &[]);
     assert_eq!(code, 0, "{stderr}");
     assert!(!stderr.contains("defaults are used"), "{stderr}");
     let mut files: Vec<String> = std::fs::read_dir(&out)
@@ -145,15 +131,12 @@ fn gid_project_folder_maps_with_its_own_cps() {
 fn gid_project_folder_2025_uses_staged_names() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("out");
-    let (code, _, stderr) = run_split(&[
-        "map",
-        "--mpm",
-        s(&real("Stage.gid/Stage-2.dat")),
-        "--fem",
-        s(&real("hydrostatic.csv")),
-        "--out",
-        s(&out),
-    ]);
+    let (code, _, stderr) = run_map_split(
+        &real("Stage.gid/Stage-2.dat"),
+        &real("hydrostatic.csv"),
+        &out,
+        &[],
+    );
     assert_eq!(code, 0, "{stderr}");
     for f in [
         "Stage.GOM_stage0",
@@ -182,19 +165,10 @@ fn no_cps_refuses_map_unless_a_cps_is_generated() {
     let (code, _, stderr) =
         run_split(&["map", "--mpm", s(&gom), "--fem", s(&fem), "--out", s(&out)]);
     assert_eq!(code, 2, "{stderr}");
-    assert!(stderr.contains("Bare.GOM: no CPS"), "{stderr}");
-    assert!(stderr.contains("--generate-cps"), "{stderr}");
+    assert_contains(&stderr, &["Bare.GOM: no CPS"]);
+    assert_contains(&stderr, &["--generate-cps"]);
     assert!(!out.exists());
-    let (code, _, stderr) = run_split(&[
-        "map",
-        "--mpm",
-        s(&gom),
-        "--fem",
-        s(&fem),
-        "--out",
-        s(&out),
-        "--generate-cps",
-    ]);
+    let (code, _, stderr) = run_map_split(&gom, &fem, &out, &["--generate-cps"]);
     assert_eq!(code, 0, "{stderr}");
     let cps = std::fs::read_to_string(out.join("Bare.CPS_001")).unwrap();
     assert!(cps.starts_with("### Anura3D_2024 ###\n"), "{cps}");
@@ -253,31 +227,24 @@ fn generated_cps_covers_the_sample_cps_files() {
 fn misnamed_project_file_is_reported_and_the_obvious_project_used() {
     let tmp = tempfile::tempdir().unwrap();
     let gom = real("misnamed/X.GOM.GOM_stage0");
-    let (code, stdout, stderr) = run_split(&["inspect", s(&gom)]);
-    assert_eq!(code, 0, "{stderr}");
+    let stdout = inspect_ok(&gom);
     assert!(stdout.starts_with("project    X\n"), "{stdout}");
-    assert!(stdout.contains("X.CPS_001"), "{stdout}");
-    assert!(
-        stdout.contains("Anura3D will look for X.GOM_stage0")
-            && stdout.contains("the run would fail with the files as named"),
-        "{stdout}"
+    assert_contains(&stdout, &["X.CPS_001"]);
+    assert_contains(
+        &stdout,
+        &[
+            "Anura3D will look for X.GOM_stage0",
+            "the run would fail with the files as named",
+        ],
     );
     // The folder finds the same project.
     let (code, stdout, _) = run_split(&["inspect", s(&real("misnamed"))]);
     assert_eq!(code, 0);
     assert!(stdout.starts_with("project    X\n"), "{stdout}");
     let out = tmp.path().join("out");
-    let (code, _, stderr) = run_split(&[
-        "map",
-        "--mpm",
-        s(&gom),
-        "--fem",
-        s(&real("hydrostatic.csv")),
-        "--out",
-        s(&out),
-    ]);
+    let (code, _, stderr) = run_map_split(&gom, &real("hydrostatic.csv"), &out, &[]);
     assert_eq!(code, 0, "{stderr}");
-    assert!(stderr.contains("will look for X.GOM_stage0"), "{stderr}");
+    assert_contains(&stderr, &["will look for X.GOM_stage0"]);
     for f in ["X.GOM_stage0", "X.CPS_001", "X.OPD_stage0", "X.MAPF"] {
         assert!(out.join(f).exists(), "{f} missing");
     }
@@ -312,11 +279,8 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
     let mesh = rd_mesh();
     let (code, stdout, stderr) = run_split(&["inspect", "--fem", s(&node), "--fem-mesh", s(&mesh)]);
     assert_eq!(code, 0, "{stderr}");
-    assert!(stdout.contains("nodes      492 (2D)"), "{stdout}");
-    assert!(
-        stdout.contains("lists 492 of the 553 mesh nodes"),
-        "{stdout}"
-    );
+    assert_contains(&stdout, &["nodes      492 (2D)"]);
+    assert_contains(&stdout, &["lists 492 of the 553 mesh nodes"]);
     let cal = tmp.path().join("cal");
     let (code, _, stderr) = run_split(&[
         "calibrate",
@@ -330,20 +294,18 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
     assert_eq!(code, 0, "{stderr}");
     let out = tmp.path().join("out");
     let gom = fixture("anura3d-rapid-drawdown/rapid_drawdown.GOM");
-    let (code, _, stderr) = run_split(&[
-        "map",
-        "--mpm",
-        s(&gom),
-        "--fem",
-        s(&node),
-        "--fem-mesh",
-        s(&mesh),
-        "--out",
-        s(&out),
-        "--generate-cps",
-        "--outside",
-        "nearest",
-    ]);
+    let (code, _, stderr) = run_map_split(
+        &gom,
+        &node,
+        &out,
+        &[
+            "--fem-mesh",
+            s(&mesh),
+            "--generate-cps",
+            "--outside",
+            "nearest",
+        ],
+    );
     assert_eq!(code, 0, "{stderr}");
     let report = std::fs::read_to_string(out.join("report.json")).unwrap();
     assert!(report.contains("lists 492 of the 553 mesh nodes"));
@@ -354,22 +316,15 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
         &std::fs::read(&node).unwrap(),
         &std::fs::read(&mesh).unwrap(),
     );
-    let (code, stdout, stderr) = run_split(&["inspect", s(&gsz)]);
-    assert_eq!(code, 0, "{stderr}");
-    assert!(stdout.contains("492 nodes (2D)"), "{stdout}");
+    let stdout = inspect_ok(&gsz);
+    assert_contains(&stdout, &["492 nodes (2D)"]);
     let out2 = tmp.path().join("out2");
-    let (code, _, stderr) = run_split(&[
-        "map",
-        "--mpm",
-        s(&gom),
-        "--fem",
-        s(&gsz),
-        "--out",
-        s(&out2),
-        "--generate-cps",
-        "--outside",
-        "nearest",
-    ]);
+    let (code, _, stderr) = run_map_split(
+        &gom,
+        &gsz,
+        &out2,
+        &["--generate-cps", "--outside", "nearest"],
+    );
     assert_eq!(code, 0, "{stderr}");
     // Informational notes are not warnings.
     assert!(
@@ -399,18 +354,10 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
         );
         let (code, _, stderr) = run_split(&["inspect", s(&bad)]);
         assert_eq!(code, 2, "{stderr}");
-        let (code, _, stderr) = run_split(&[
-            "map",
-            "--mpm",
-            s(&gom),
-            "--fem",
-            s(&bad),
-            "--out",
-            s(&tmp.path().join("never")),
-            "--generate-cps",
-        ]);
+        let (code, _, stderr) =
+            run_map_split(&gom, &bad, &tmp.path().join("never"), &["--generate-cps"]);
         assert_eq!(code, 2, "{stderr}");
-        assert!(stderr.contains("node.csv:12:1: "), "{stderr}");
+        assert_contains(&stderr, &["node.csv:12:1: "]);
     }
 }
 
@@ -421,15 +368,7 @@ fn fem_in_feet_is_named_with_both_extents_and_the_factor() {
     let tmp = tempfile::tempdir().unwrap();
     let gom = real("offset/Site.GOM");
     let fem = real("site-ft.csv");
-    let (code, _, stderr) = run_split(&[
-        "map",
-        "--mpm",
-        s(&gom),
-        "--fem",
-        s(&fem),
-        "--out",
-        s(&tmp.path().join("a")),
-    ]);
+    let (code, _, stderr) = run_map_split(&gom, &fem, &tmp.path().join("a"), &[]);
     assert_eq!(code, 2, "{stderr}");
     for part in [
         "site-ft.csv: the FEM nodes do not reach the model",
@@ -439,17 +378,12 @@ fn fem_in_feet_is_named_with_both_extents_and_the_factor() {
     ] {
         assert!(stderr.contains(part), "{part}: {stderr}");
     }
-    let (code, _, stderr) = run_split(&[
-        "map",
-        "--mpm",
-        s(&gom),
-        "--fem",
-        s(&fem),
-        "--fem-units",
-        "length=ft",
-        "--out",
-        s(&tmp.path().join("b")),
-    ]);
+    let (code, _, stderr) = run_map_split(
+        &gom,
+        &fem,
+        &tmp.path().join("b"),
+        &["--fem-units", "length=ft"],
+    );
     assert_eq!(code, 0, "{stderr}");
     let (code, _, stderr) = run_split(&[
         "calibrate",
@@ -477,24 +411,16 @@ fn fem_covering_part_of_the_model_names_file_and_extents() {
         .collect();
     let fem = tmp.path().join("part.csv");
     std::fs::write(&fem, part).unwrap();
-    let (code, _, stderr) = run_split(&[
-        "map",
-        "--mpm",
-        s(&real("offset/Site.GOM")),
-        "--fem",
-        s(&fem),
-        "--out",
-        s(&tmp.path().join("out")),
-    ]);
+    let (code, _, stderr) =
+        run_map_split(&real("offset/Site.GOM"), &fem, &tmp.path().join("out"), &[]);
     assert_eq!(code, 2, "{stderr}");
-    assert!(stderr.contains("part.csv: "), "{stderr}");
-    assert!(
-        stderr.contains("have no FEM node inside the kernel support"),
-        "{stderr}"
-    );
-    assert!(
-        stderr.contains("FEM nodes: x 1000.000 .. 1007.000, y 200.000 .. 205.000 m; model mesh: x 1000.000 .. 1010.000"),
-        "{stderr}"
+    assert_contains(&stderr, &["part.csv: "]);
+    assert_contains(&stderr, &["have no FEM node inside the kernel support"]);
+    assert_contains(
+        &stderr,
+        &[
+            "FEM nodes: x 1000.000 .. 1007.000, y 200.000 .. 205.000 m; model mesh: x 1000.000 .. 1010.000",
+        ],
     );
 }
 
@@ -504,29 +430,19 @@ fn fem_covering_part_of_the_model_names_file_and_extents() {
 fn implausible_pore_pressures_are_warned_not_refused() {
     let tmp = tempfile::tempdir().unwrap();
     let gid = real("Block.gid");
-    let map = |fem: &str, out: &str| {
-        run_split(&[
-            "map",
-            "--mpm",
-            s(&gid),
-            "--fem",
-            s(&real(fem)),
-            "--out",
-            s(&tmp.path().join(out)),
-        ])
-    };
+    let map = |fem: &str, out: &str| run_map_split(&gid, &real(fem), &tmp.path().join(out), &[]);
     let (code, _, stderr) = map("hydrostatic.csv", "ok");
     assert_eq!(code, 0, "{stderr}");
     assert!(!stderr.contains("warning"), "{stderr}");
     let (code, _, stderr) = map("hydrostatic-psf.csv", "psf");
     assert_eq!(code, 0, "{stderr}");
-    assert!(
-        stderr.contains("exceeds 1.5× the total vertical stress") && stderr.contains("Worst: MP "),
-        "{stderr}"
+    assert_contains(
+        &stderr,
+        &["exceeds 1.5× the total vertical stress", "Worst: MP "],
     );
     let (code, _, stderr) = map("hydrostatic-flipped.csv", "flipped");
     assert_eq!(code, 0, "{stderr}");
-    assert!(stderr.contains("above the model's top"), "{stderr}");
+    assert_contains(&stderr, &["above the model's top"]);
     for line in stderr.lines().filter(|l| l.contains("warning")) {
         for path in [real("hydrostatic-flipped.csv"), gid.clone()] {
             assert!(line.matches(s(&path)).count() <= 1, "{line}");
@@ -538,9 +454,9 @@ fn implausible_pore_pressures_are_warned_not_refused() {
 fn inspect_fem_prints_the_coordinate_range() {
     let (code, stdout, stderr) = run_split(&["inspect", "--fem", s(&real("site-m.csv"))]);
     assert_eq!(code, 0, "{stderr}");
-    assert!(
-        stdout.contains("extent     x 1000.000 .. 1010.000, y 200.000 .. 205.000 m"),
-        "{stdout}"
+    assert_contains(
+        &stdout,
+        &["extent     x 1000.000 .. 1010.000, y 200.000 .. 205.000 m"],
     );
 }
 
@@ -555,8 +471,8 @@ fn inspect_on_an_unreadable_gsz_exits_2() {
     make_gsz(&gsz, &node, &mesh[..header_end + 4 + 240]);
     let (code, stdout, stderr) = run_split(&["inspect", s(&gsz)]);
     assert_eq!(code, 2, "{stdout}\n{stderr}");
-    assert!(stdout.contains("unreadable"), "{stdout}");
-    assert!(stderr.contains("truncated PLY"), "{stderr}");
+    assert_contains(&stdout, &["unreadable"]);
+    assert_contains(&stderr, &["truncated PLY"]);
     let (code, _, _) = run_split(&["inspect", "--json", s(&gsz)]);
     assert_eq!(code, 2);
 }
