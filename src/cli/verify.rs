@@ -67,6 +67,8 @@ struct Loaded {
     kernel: Option<KernelCheck>,
     /// The state at t = 0 as Anura3D holds it (before the MIXED collapse).
     start: Vec<MpState>,
+    /// Per MP: MAPF rows in reach (empty for a state table).
+    rows_in_reach: Vec<u32>,
     out: PathBuf,
     /// The output folder is verify's own default subfolder: rerunning replaces it.
     own_subfolder: bool,
@@ -95,6 +97,7 @@ fn load_folder(args: &VerifyArgs, dir: &Path, default_out: &str) -> anyhow::Resu
         states: judged.run_start,
         kernel: Some(judged.check),
         start: judged.start,
+        rows_in_reach: judged.rows_in_reach,
         out,
         own_subfolder: args.out.is_none(),
         inputs: judged.inputs,
@@ -125,6 +128,7 @@ fn load_state_table(
         project,
         points,
         start: states.clone(),
+        rows_in_reach: Vec::new(),
         states,
         kernel: None,
         out,
@@ -313,8 +317,9 @@ pub fn verify_core(args: &VerifyArgs) -> anyhow::Result<(VerifyOutcome, PathBuf)
     let diagnostics: Vec<mps_table::MpDiagnostics> = l
         .start
         .iter()
-        .map(|s| mps_table::MpDiagnostics {
-            neighbours: 0,
+        .enumerate()
+        .map(|(i, s)| mps_table::MpDiagnostics {
+            neighbours: l.rows_in_reach.get(i).copied().unwrap_or(0),
             shepard: 0.0,
             status: if s.pwp.is_finite() && s.total.iter().all(|v| v.is_finite()) {
                 "anura3d"

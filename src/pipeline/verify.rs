@@ -63,6 +63,8 @@ pub struct Judged {
     pub start: Vec<MpState>,
     /// The runner's start: `start` with the MPM-MIXED collapse applied.
     pub run_start: Vec<MpState>,
+    /// Per MP: MAPF rows Anura3D weighs (non-zero kernel value).
+    pub rows_in_reach: Vec<u32>,
     /// The files read.
     pub inputs: Vec<PathBuf>,
 }
@@ -209,6 +211,7 @@ pub fn judge_folder(project: &Project) -> Result<Judged, PipelineError> {
     };
     Ok(Judged {
         check,
+        rows_in_reach: kernel.rows_in_reach,
         start: kernel.states,
         run_start: states,
         inputs,
