@@ -6,7 +6,7 @@
 //! Every run is killed after 30 s, so a hang fails instead of blocking CI.
 
 mod common;
-use common::{fixture, mini_regions_csv, run_within};
+use common::{assert_contains, fixture, mini_regions_csv, run_map, run_within};
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -552,4 +552,21 @@ fn verify_with_zero_gravity_plots_without_panicking() {
     let (code, text) = run(&[&"verify", &out, &"--max-steps", &"100"]);
     assert!(matches!(code, 0..=2), "{text}");
     no_staging_left(&out);
+}
+
+/// A smoothing length wider than the whole FEM would make every MP average
+/// every node at O(MPs × nodes) cost (a 60k-MP model ran past 60 s): refused.
+#[test]
+fn a_smoothing_length_wider_than_the_fem_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let (code, text) = run_map(
+        &fixture("anura3d/K0_phreaticSurf_Geom"),
+        &fixture("geostudio-csv/k0-slope-hydrostatic.csv"),
+        &out,
+        &["--h", "1000"],
+    );
+    assert_eq!(code, 2, "{text}");
+    assert_contains(&text, &["--h 1000", "more than twice the FEM's extent"]);
+    assert!(!out.exists());
 }

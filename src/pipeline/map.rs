@@ -244,6 +244,21 @@ pub fn map(
             (h, rule)
         }
         SmoothingLength::Metres(h) if *h > 0.0 && h.is_finite() => {
+            // A support wider than the whole FEM makes every MP weigh every
+            // node (a global average at O(MPs × nodes) cost): refused.
+            let diagonal =
+                crate::diagnose::Extent::of(&fem.nodes.positions, dim).map_or(0.0, |e| {
+                    (0..dim)
+                        .map(|k| (e.hi[k] - e.lo[k]).powi(2))
+                        .sum::<f64>()
+                        .sqrt()
+                });
+            if diagonal > 0.0 && kernel.support() * h > 2.0 * diagonal {
+                return Err(input_err!(
+                    "--h {h}: the kernel support {:.4} m is more than twice the FEM's extent ({diagonal:.4} m across), so every MP would average every node; give an h near the node spacing l = {spacing:.4} m, or --h auto",
+                    kernel.support() * h
+                ));
+            }
             (*h, "given with --h".to_string())
         }
         SmoothingLength::Metres(h) => {
