@@ -165,6 +165,9 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         "  pwp {:.3} .. {:.3} kPa, σyy {:.3} .. {:.3} kPa (Anura3D signs)",
         r.pwp_range.0, r.pwp_range.1, r.sigma_yy_range.0, r.sigma_yy_range.1
     );
+    for n in &r.notes {
+        eprintln!("  note: {n}");
+    }
     for w in &r.warnings {
         eprintln!("  warning: {w}");
     }
