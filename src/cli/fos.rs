@@ -85,27 +85,7 @@ fn load(args: &FosArgs) -> anyhow::Result<Loaded> {
         _ => bail!("give a folder written by `map`, or --mpm MODEL --state mps.csv"),
     };
     let project = super::inspect::load_project(&model_path)?;
-    let (points, states) = mps_table::read_states(&state_path)?;
-    if points.len() != project.points.len() {
-        bail!(
-            "{}: {} MPs, but the model places {}",
-            state_path.display(),
-            points.len(),
-            project.points.len()
-        );
-    }
-    if let Some((a, b)) = points
-        .iter()
-        .zip(&project.points)
-        .find(|(a, b)| a.id != b.id || a.element != b.element)
-    {
-        bail!(
-            "{}: MP {} does not match the model's MP {}: the state belongs to another model",
-            state_path.display(),
-            a.id,
-            b.id
-        );
-    }
+    let (points, states) = mps_table::read_states_for(&state_path, &project.points)?;
     let out = args
         .out
         .clone()
@@ -128,16 +108,7 @@ pub fn settings(
     window: Option<f64>,
 ) -> FosSettings {
     let mut s = FosSettings::default();
-    if let Some(cps) = cps {
-        s.run.gravity = cps.gravity();
-        if let Some(c) = cps.get_real("$$COURANT_NUMBER", 0) {
-            s.run.courant = c.min(0.9);
-        }
-    }
-    s.run.damping = damping
-        .or_else(|| cps.and_then(CpsDocument::local_damping))
-        .unwrap_or(0.75)
-        .clamp(0.0, 0.99);
+    s.run = super::verify::with_cps(s.run, cps, damping);
     s.tolerance = tolerance;
     s.window = window;
     s

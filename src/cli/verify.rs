@@ -137,19 +137,28 @@ fn load_state_table(
     })
 }
 
-fn settings(args: &VerifyArgs, cps: Option<&CpsDocument>) -> RunSettings {
-    let mut s = RunSettings::verify();
+/// `s` with the CPS's gravity and Courant number (capped at 0.9) and the local
+/// damping α: `damping`, else the CPS `$$HOMOGENEOUS_LOCAL_DAMPING`, else 0.75.
+pub(super) fn with_cps(
+    mut s: RunSettings,
+    cps: Option<&CpsDocument>,
+    damping: Option<f64>,
+) -> RunSettings {
     if let Some(cps) = cps {
         s.gravity = cps.gravity();
         if let Some(c) = cps.get_real("$$COURANT_NUMBER", 0) {
             s.courant = c.min(0.9);
         }
     }
-    s.damping = args
-        .damping
+    s.damping = damping
         .or_else(|| cps.and_then(CpsDocument::local_damping))
         .unwrap_or(0.75)
         .clamp(0.0, 0.99);
+    s
+}
+
+fn settings(args: &VerifyArgs, cps: Option<&CpsDocument>) -> RunSettings {
+    let mut s = with_cps(RunSettings::verify(), cps, args.damping);
     s.max_steps = args.max_steps;
     s.record_every = 10;
     s

@@ -184,14 +184,7 @@ pub fn read_states_for(
         .into());
     }
     for (k, (a, b)) in points.iter().zip(expected).enumerate() {
-        let d = (0..3)
-            .map(|c| (a.position[c] - b.position[c]).powi(2))
-            .sum::<f64>()
-            .sqrt();
-        if a.id != b.id
-            || a.element != b.element
-            || d > 1e-9 * (1.0 + b.position[0].abs() + b.position[1].abs())
-        {
+        if !a.same_as(b) {
             return Err(ParseError::at(
                 path,
                 lines[k],

@@ -19,6 +19,21 @@ pub struct MaterialPoint {
     pub volume: f64,
 }
 
+impl MaterialPoint {
+    /// True when `other` is the same MP: same id and element, and a position
+    /// equal within 1e-9 of the coordinates' size (a state table written for
+    /// this model, read back).
+    pub fn same_as(&self, other: &MaterialPoint) -> bool {
+        let d = (0..3)
+            .map(|k| (self.position[k] - other.position[k]).powi(2))
+            .sum::<f64>()
+            .sqrt();
+        self.id == other.id
+            && self.element == other.element
+            && d <= 1e-9 * (1.0 + other.position[0].abs() + other.position[1].abs())
+    }
+}
+
 /// The mapped initial state of one MP, in Anura3D signs (tension positive,
 /// pore pressure negative in compression), kPa.
 #[derive(Clone, Copy, Debug, PartialEq, Default, serde::Serialize)]

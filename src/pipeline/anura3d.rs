@@ -20,7 +20,6 @@
 //!
 //! Pure computation over parsed documents; no printing.
 
-use crate::formats::cps::CpsDocument;
 use crate::formats::mapf::MapfTable;
 use crate::kernel::neighbours::NeighbourIndex;
 use crate::model::{Material, MaterialPoint, MpState};
@@ -349,10 +348,4 @@ pub fn differing_points(
         .collect();
     out.sort_by(|x, y| y.1.total_cmp(&x.1));
     out
-}
-
-/// CPS keyword values a check needs.
-pub fn degree_of_filling(cps: Option<&CpsDocument>) -> f64 {
-    cps.and_then(|c| c.get_real("$$DEGREE_OF_FILLING", 0))
-        .unwrap_or(0.9)
 }

@@ -220,14 +220,5 @@ pub fn judge_folder(project: &Project) -> Result<Judged, PipelineError> {
 
 /// True when two MP lists are the same MPs (ids, elements, positions).
 pub fn same_points(a: &[MaterialPoint], b: &[MaterialPoint]) -> bool {
-    a.len() == b.len()
-        && a.iter().zip(b).all(|(x, y)| {
-            let d = (0..3)
-                .map(|k| (x.position[k] - y.position[k]).powi(2))
-                .sum::<f64>()
-                .sqrt();
-            x.id == y.id
-                && x.element == y.element
-                && d <= 1e-9 * (1.0 + y.position[0].abs() + y.position[1].abs())
-        })
+    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.same_as(y))
 }
