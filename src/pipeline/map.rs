@@ -571,11 +571,10 @@ pub fn map(
         warnings.extend(found.into_iter().map(|f| f.message));
     }
     let mixed = if project.method == crate::model::ComputationMethod::MpmMixed {
-        let fully_filled = state::mixed::fully_filled_elements(&project.model, points);
-        let spread = state::mixed::element_spread(points, &states, &fully_filled);
+        let spread = state::mixed::element_spread(points, &states);
         match config.mixed_state {
             MixedState::Mean => {
-                state::mixed::average_elements(&project.model, points, &mut states, &fully_filled);
+                state::mixed::average_elements(&project.model, points, &mut states);
                 notes.push(format!(
                     "MPM-MIXED: each of the {} fully filled elements carries its volume-weighted mean state on all its MPs (Anura3D integrates such an element at one point and gives every MP the state of its first MP after the first step); the largest spread inside an element was {:.3} kPa in pwp and {:.3} kPa in total stress; use $$COMPUTATION_METHOD MPM-MP when per-MP detail matters",
                     spread.elements, spread.pwp, spread.stress

@@ -172,18 +172,8 @@ pub fn judge_folder(project: &Project) -> Result<Judged, PipelineError> {
     // the state of the element's first MP; the runner starts from that.
     let mut states = kernel.states.clone();
     let mixed = (project.method == ComputationMethod::MpmMixed).then(|| {
-        let filled = crate::state::mixed::fully_filled_elements(&project.model, &points);
-        let spread = crate::state::mixed::element_spread(&points, &states, &filled);
-        let mut first: Option<(u32, MpState)> = None;
-        for (p, s) in points.iter().zip(states.iter_mut()) {
-            if !filled[p.element as usize] {
-                continue;
-            }
-            match first {
-                Some((e, f)) if e == p.element => *s = f,
-                _ => first = Some((p.element, *s)),
-            }
-        }
+        let spread = crate::state::mixed::element_spread(&points, &states);
+        crate::state::mixed::collapse_to_first(&points, &mut states);
         spread
     });
     let mut inputs = vec![project.files.gom.clone(), mapf_path.clone()];

@@ -11,16 +11,6 @@
 
 use crate::model::{AnuraModel, MaterialPoint, MpState};
 
-/// Per element (0-based): true when Anura3D integrates it at one point at the
-/// first step of an MPM-MIXED run: every element that holds MPs.
-pub fn fully_filled_elements(model: &AnuraModel, points: &[MaterialPoint]) -> Vec<bool> {
-    let mut filled = vec![false; model.mesh.n_elements()];
-    for p in points {
-        filled[p.element as usize] = true;
-    }
-    filled
-}
-
 /// Contiguous runs of MPs per element (Anura3D numbers MPs element by element).
 fn element_runs(points: &[MaterialPoint]) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
     let mut start = 0;
@@ -52,11 +42,11 @@ pub struct Spread {
     pub stress: f64,
 }
 
-/// Spread of the states inside each fully filled element.
-pub fn element_spread(points: &[MaterialPoint], states: &[MpState], filled: &[bool]) -> Spread {
+/// Spread of the states inside each element.
+pub fn element_spread(points: &[MaterialPoint], states: &[MpState]) -> Spread {
     let mut out = Spread::default();
     for run in element_runs(points) {
-        if run.len() < 2 || !filled[points[run.start].element as usize] {
+        if run.len() < 2 {
             continue;
         }
         out.elements += 1;
@@ -71,18 +61,24 @@ pub fn element_spread(points: &[MaterialPoint], states: &[MpState], filled: &[bo
     out
 }
 
+/// What Anura3D's first MPM-MIXED step does: every MP of an element takes the
+/// state of the element's first MP.
+pub fn collapse_to_first(points: &[MaterialPoint], states: &mut [MpState]) {
+    for run in element_runs(points) {
+        let first = states[run.start];
+        for s in &mut states[run] {
+            *s = first;
+        }
+    }
+}
+
 /// Gives every MP of each fully filled element the element's volume-weighted
 /// mean pwp and total stress; the saturation follows from the mean pwp with the
 /// material's retention curve (as Anura3D computes it from the MAPF's Pwp).
-pub fn average_elements(
-    model: &AnuraModel,
-    points: &[MaterialPoint],
-    states: &mut [MpState],
-    filled: &[bool],
-) {
+pub fn average_elements(model: &AnuraModel, points: &[MaterialPoint], states: &mut [MpState]) {
     for run in element_runs(points) {
         let e = points[run.start].element as usize;
-        if run.len() < 2 || !filled[e] {
+        if run.len() < 2 {
             continue;
         }
         let volume: f64 = points[run.clone()].iter().map(|p| p.volume).sum();
