@@ -191,22 +191,25 @@ pub fn initial_state(
     let mut states = Vec::with_capacity(n);
     let mut effective = Vec::with_capacity(n);
     let mut scratch = Vec::new();
+    let mut weights: Vec<(usize, f64)> = Vec::new();
     let mut mapped = vec![0.0; values.len()];
     for p in &project.points {
         index.within(p.position, 2.0 * h * (1.0 + 1e-12), &mut scratch);
         scratch.sort_unstable_by_key(|&(j, _)| j);
-        let weights: Vec<(usize, f64)> = scratch
-            .iter()
-            .map(|&(j, _)| {
-                let r = rows[j as usize];
-                let d = (0..n_dim)
-                    .map(|k| (p.position[k] - r[k]) * (p.position[k] - r[k]))
-                    .sum::<f64>()
-                    .sqrt();
-                (j as usize, kernel_value(d / h))
-            })
-            .filter(|&(_, w)| w != 0.0)
-            .collect();
+        weights.clear();
+        weights.extend(
+            scratch
+                .iter()
+                .map(|&(j, _)| {
+                    let r = rows[j as usize];
+                    let d = (0..n_dim)
+                        .map(|k| (p.position[k] - r[k]) * (p.position[k] - r[k]))
+                        .sum::<f64>()
+                        .sqrt();
+                    (j as usize, kernel_value(d / h))
+                })
+                .filter(|&(_, w)| w != 0.0),
+        );
         let total_w: f64 = weights.iter().map(|&(_, w)| w).sum();
         rows_in_reach.push(weights.len() as u32);
         for (k, &c) in values.iter().enumerate() {
