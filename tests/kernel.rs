@@ -409,3 +409,36 @@ fn spacings_equal_brute_force_bit_for_bit() {
     assert_eq!(mapper::median_spacing(&[[1.0; 3]], 3), 0.0);
     assert_eq!(mapper::min_spacing(&[[1.0; 3]], 3), 0.0);
 }
+
+/// A regular lattice puts many nodes at exactly the same distance from a
+/// query at a lattice point or cell centre: the grid's bucket sort must break
+/// those ties by index exactly as the brute force does.
+#[test]
+fn grid_breaks_distance_ties_on_a_lattice_like_brute_force() {
+    for dim in [2usize, 3] {
+        let side = if dim == 3 { 12 } else { 40 };
+        let mut pts = Vec::new();
+        for i in 0..side {
+            for j in 0..side {
+                for k in 0..if dim == 3 { side } else { 1 } {
+                    pts.push([i as f64 * 0.5, j as f64 * 0.5, k as f64 * 0.5]);
+                }
+            }
+        }
+        for radius in [0.5, 1.0, 1.6] {
+            let grid = Grid::new(&pts, dim, radius);
+            let mut got = Vec::new();
+            for q in [
+                [2.0, 2.0, 2.0],
+                [2.25, 2.25, 2.25],
+                [2.25, 2.0, 2.25],
+                [0.0, 0.0, 0.0],
+            ] {
+                let q = if dim == 3 { q } else { [q[0], q[1], 0.0] };
+                let want = within_brute_force(&pts, dim, q, radius);
+                grid.within(q, radius, &mut got);
+                assert_eq!(got, want, "dim {dim} q {q:?} r {radius}");
+            }
+        }
+    }
+}

@@ -1,8 +1,12 @@
 //! A uniform cell grid over a fixed point cloud, the mapper's fast neighbour
-//! search: cells at least one search radius wide, so the points within the
-//! radius of a query lie in its cell and the 3^dim cells around it. Queries that
-//! share a cell share one gathered candidate list ([`Candidates`]), whose
-//! distances are computed in a tight loop over coordinate columns.
+//! search, with cells one search radius wide. A query visits the rows of
+//! cells (runs of cells along x, contiguous in the sorted columns) that the
+//! sphere of the radius can reach, each row cut to the sphere's chord, and
+//! tests every point of those rows in one branch-free loop over coordinate
+//! columns. The hits are ordered
+//! by a bucket pass and an insertion sort ([`Scratch::sort`]).
+//! [`Grid::second_nearest_within`] instead gathers the 3^dim cells around a
+//! cell once for all the points of that cell.
 //!
 //! Same contract as the k-d tree of `neighbours.rs` (which stays the reference):
 //! physical radius in, `(index, distance)` out, inclusive, sorted by (distance,
@@ -13,7 +17,10 @@
 pub struct Grid {
     dim: usize,
     origin: [f64; 3],
+    cell: f64,
     inv_cell: f64,
+    /// The search radius the grid was built for (queries may use less).
+    radius: f64,
     /// Cells per axis (1 along z in 2D).
     dims: [i64; 3],
     /// Start of each cell's points in the sorted columns (length cells + 1).
@@ -29,7 +36,10 @@ pub struct Grid {
 pub type Cell = [i64; 3];
 
 impl Grid {
-    /// Builds a grid for searches up to `radius` (> 0). `dim` is 2 (z ignored) or 3.
+    /// Builds a grid of cells one `radius` wide, for searches up to `radius`
+    /// (cells of half the radius fit the sphere closer but cost more rows per
+    /// query: slower at the mapper's 20–100 nodes in reach). `dim` is 2 (z
+    /// ignored) or 3.
     pub fn new(points: &[[f64; 3]], dim: usize, radius: f64) -> Grid {
         let n = points.len();
         let mut lo = [0.0f64; 3];
@@ -44,9 +54,13 @@ impl Grid {
                 hi[k] = hi[k].max(p[k]);
             }
         }
+        let mut radius = radius.abs();
+        if !(radius.is_finite() && radius > 0.0) {
+            radius = 0.0;
+        }
         // A little wider than the radius, so that rounding in the cell index
         // never puts a point within the radius two cells away.
-        let mut cell = radius.abs() * (1.0 + 1e-6);
+        let mut cell = radius * (1.0 + 1e-6);
         if !(cell.is_finite() && cell > 0.0) {
             cell = 1.0;
         }
@@ -68,7 +82,9 @@ impl Grid {
         let mut grid = Grid {
             dim,
             origin: lo,
+            cell,
             inv_cell: 1.0 / cell,
+            radius,
             dims,
             start: Vec::new(),
             xs: Vec::with_capacity(n),
@@ -129,13 +145,95 @@ impl Grid {
         &self.ids
     }
 
-    /// Gathers the points of `cell` and its neighbours into `out`, with their
-    /// rows of `rows` (`width` values per point, in the grid's order, see
-    /// [`Grid::order`]; empty for none).
-    pub fn gather(&self, cell: Cell, rows: &[f64], width: usize, out: &mut Candidates) {
+    /// The cells along axis `k` that points within `reach` of `q_k` can lie
+    /// in, clamped to the grid (empty when `lo > hi`). `slack` (in cells)
+    /// covers the rounding of the cell index.
+    fn span(&self, k: usize, q_k: f64, reach: f64, slack: f64) -> (i64, i64) {
+        let o = self.origin[k];
+        let lo = ((q_k - reach) - o) * self.inv_cell - slack;
+        let hi = ((q_k + reach) - o) * self.inv_cell + slack;
+        // floor() by truncation: below zero only the sign matters (the span
+        // is clamped to the grid), and `as` saturates above.
+        let lo = if lo > 0.0 { lo as i64 } else { 0 };
+        let hi = if hi >= 0.0 {
+            (hi as i64).min(self.dims[k] - 1)
+        } else {
+            -1
+        };
+        (lo, hi)
+    }
+
+    /// The distance from `q_k` to cell `c` along axis `k`, rounded down by
+    /// `slack` metres (0 inside the cell).
+    fn gap(&self, k: usize, q_k: f64, c: i64, slack: f64) -> f64 {
+        let a = self.origin[k] + c as f64 * self.cell;
+        let b = a + self.cell;
+        ((a - q_k).max(q_k - b) - slack).max(0.0)
+    }
+
+    /// All points within `radius` of `q` (inclusive) as (position in the
+    /// grid's order, distance), sorted by distance then original index.
+    /// `radius` is at most the grid's. A non-finite `q` finds nothing.
+    pub fn query(&self, q: [f64; 3], radius: f64, out: &mut Vec<(u32, f64)>, s: &mut Scratch) {
         out.clear();
-        out.dim = self.dim;
-        out.width = width;
+        s.clear();
+        let dim = self.dim;
+        if self.ids.is_empty() || q[..dim].iter().any(|v| !v.is_finite()) {
+            return;
+        }
+        debug_assert!(radius.abs() <= self.radius * (1.0 + 1e-6) || self.radius == 0.0);
+        let r2 = radius * radius;
+        let r = radius.abs();
+        // Rounding slack: relative to the coordinates' magnitude, in cells and metres.
+        let mag = (0..dim)
+            .map(|k| q[k].abs() + self.origin[k].abs())
+            .fold(r, f64::max);
+        let slack_m = 8.0 * f64::EPSILON * mag + 1e-9 * self.cell;
+        let slack_c = slack_m * self.inv_cell + 1e-9;
+        let (x0, x1) = self.span(0, q[0], r, slack_c);
+        let (y0, y1) = self.span(1, q[1], r, slack_c);
+        let (z0, z1) = if dim == 3 {
+            self.span(2, q[2], r, slack_c)
+        } else {
+            (0, 0)
+        };
+        if x0 > x1 || y0 > y1 || z0 > z1 {
+            return;
+        }
+        for z in z0..=z1 {
+            let gz = if dim == 3 {
+                self.gap(2, q[2], z, slack_m)
+            } else {
+                0.0
+            };
+            for y in y0..=y1 {
+                let gy = self.gap(1, q[1], y, slack_m);
+                let rem = r2 - gy * gy - gz * gz;
+                if rem < 0.0 {
+                    continue;
+                }
+                // The chord of the sphere along this row of cells.
+                let (a0, a1) = self.span(0, q[0], rem.sqrt() + slack_m, slack_c);
+                let (a0, a1) = (a0.max(x0), a1.min(x1));
+                if a0 > a1 {
+                    continue;
+                }
+                let a = self.start[self.linear([a0, y, z])] as usize;
+                let b = self.start[self.linear([a1, y, z]) + 1] as usize;
+                if dim == 3 {
+                    s.test3(a..b, [&self.xs, &self.ys, &self.zs], q, r2);
+                } else {
+                    s.test2(a..b, [&self.xs, &self.ys], q, r2);
+                }
+            }
+        }
+        s.sort(&self.ids, r, dim, out);
+    }
+
+    /// Gathers the points of `cell` and its neighbours into `out` (a grid of
+    /// radius-wide cells, see [`Grid::new`]).
+    fn gather(&self, cell: Cell, out: &mut Candidates) {
+        out.clear();
         let range = |k: usize| -> (i64, i64) {
             if k >= self.dim {
                 return (0, 0);
@@ -156,23 +254,17 @@ impl Grid {
                 out.xs.extend_from_slice(&self.xs[a..b]);
                 out.ys.extend_from_slice(&self.ys[a..b]);
                 out.zs.extend_from_slice(&self.zs[a..b]);
-                out.ids.extend_from_slice(&self.ids[a..b]);
-                if !rows.is_empty() {
-                    out.rows.extend_from_slice(&rows[a * width..b * width]);
-                }
             }
         }
     }
 
-    /// All points within `radius` of `q` (inclusive) as (index, distance),
-    /// sorted by distance then index; `radius` at most the grid's. A
-    /// convenience for single queries; the mapper gathers once per cell.
+    /// All points within `radius` of `q` (inclusive) as (original index,
+    /// distance), sorted by distance then index; `radius` at most the grid's.
+    /// A convenience for single queries.
     pub fn within(&self, q: [f64; 3], radius: f64, out: &mut Vec<(u32, f64)>) {
-        let mut c = Candidates::default();
-        self.gather(self.cell(q), &[], 0, &mut c);
-        c.within(q, radius, out);
+        self.query(q, radius, out, &mut Scratch::default());
         for e in out.iter_mut() {
-            e.0 = c.ids[e.0 as usize];
+            e.0 = self.ids[e.0 as usize];
         }
     }
 }
@@ -181,7 +273,8 @@ impl Grid {
     /// For every point of the grid (in the original order): the distance to
     /// its second-nearest point (its nearest other point; 0 for a duplicate)
     /// when that lies within the grid's radius, else `None`. In parallel over
-    /// cells, one gathered neighbourhood per cell.
+    /// cells, one gathered neighbourhood per cell. Needs a grid of
+    /// radius-wide cells ([`Grid::new`]).
     pub fn second_nearest_within(&self, radius: f64) -> Vec<Option<f64>> {
         use rayon::prelude::*;
         let n_cells = self.start.len() - 1;
@@ -203,7 +296,7 @@ impl Grid {
                         ((c / nx) % ny) as i64,
                         (c / (nx * ny)) as i64,
                     ];
-                    self.gather(cell, &[], 0, &mut cand);
+                    self.gather(cell, &mut cand);
                     for k in a..b {
                         let q = [self.xs[k], self.ys[k], self.zs[k]];
                         let (mut first, mut second) = (f64::INFINITY, f64::INFINITY);
@@ -242,101 +335,193 @@ impl Grid {
 
 /// The points around one cell, column-wise.
 #[derive(Default)]
-pub struct Candidates {
-    dim: usize,
+struct Candidates {
     xs: Vec<f64>,
     ys: Vec<f64>,
     zs: Vec<f64>,
-    ids: Vec<u32>,
-    /// `width` values per candidate.
-    rows: Vec<f64>,
-    width: usize,
-    d2: Vec<f64>,
-    keys: Vec<u64>,
 }
-
-/// Low bits of a sort key that carry the candidate (see [`Candidates::within`]).
-const LOW_BITS: u32 = 12;
-const LOW_MASK: u64 = (1 << LOW_BITS) - 1;
 
 impl Candidates {
     fn clear(&mut self) {
         self.xs.clear();
         self.ys.clear();
         self.zs.clear();
-        self.ids.clear();
-        self.rows.clear();
+    }
+}
+
+/// Reusable buffers of [`Grid::query`]: the hits found so far (position in
+/// the grid's order and squared distance) and the sort keys.
+#[derive(Default)]
+pub struct Scratch {
+    pos: Vec<u32>,
+    d2: Vec<f64>,
+    d: Vec<f64>,
+    bucket: Vec<u32>,
+    counts: Vec<u32>,
+    keys: Vec<u64>,
+    len: usize,
+}
+
+impl Scratch {
+    fn clear(&mut self) {
+        self.len = 0;
     }
 
-    /// The row of candidate `k` (see [`Grid::gather`]).
+    /// Room for `extra` more hits.
     #[inline]
-    pub fn row(&self, k: u32) -> &[f64] {
-        let k = k as usize;
-        &self.rows[k * self.width..(k + 1) * self.width]
+    fn reserve(&mut self, extra: usize) {
+        let need = self.len + extra;
+        if self.pos.len() < need {
+            let size = need.next_power_of_two().max(256);
+            self.pos.resize(size, 0);
+            self.d2.resize(size, 0.0);
+            self.bucket.resize(size, 0);
+        }
     }
 
-    /// The candidates within `radius` of `q` (inclusive) as (candidate,
-    /// distance), sorted by distance then the point's original index. `out` is
-    /// cleared first.
-    pub fn within(&mut self, q: [f64; 3], radius: f64, out: &mut Vec<(u32, f64)>) {
-        out.clear();
-        let r2 = radius * radius;
-        let n = self.xs.len();
-        self.d2.resize(n, 0.0);
-        // Σ (p_k − q_k)² in axis order, as kiddo and the brute force sum it.
-        if self.dim == 3 {
-            for (((d, &x), &y), &z) in self.d2.iter_mut().zip(&self.xs).zip(&self.ys).zip(&self.zs)
-            {
-                let (dx, dy, dz) = (x - q[0], y - q[1], z - q[2]);
-                *d = dx * dx + dy * dy + dz * dz;
+    /// Tests the 3D points of `run`: every point's squared distance is
+    /// written, and the slot is kept (the count advanced) only for a hit, so
+    /// the loop has no branch to mispredict.
+    #[inline]
+    fn test3(
+        &mut self,
+        run: std::ops::Range<usize>,
+        [xs, ys, zs]: [&[f64]; 3],
+        q: [f64; 3],
+        r2: f64,
+    ) {
+        let (a, b) = (run.start, run.end);
+        self.reserve(b - a);
+        let mut n = self.len;
+        let (pos, d2s) = (&mut self.pos[..], &mut self.d2[..]);
+        for (((j, &x), &y), &z) in (a..b).zip(&xs[a..b]).zip(&ys[a..b]).zip(&zs[a..b]) {
+            // Σ (p_k − q_k)² in axis order, as kiddo and the brute force sum it.
+            let (dx, dy, dz) = (x - q[0], y - q[1], z - q[2]);
+            let d2 = dx * dx + dy * dy + dz * dz;
+            pos[n] = j as u32;
+            d2s[n] = d2;
+            n += (d2 <= r2) as usize;
+        }
+        self.len = n;
+    }
+
+    /// [`Scratch::test3`] in 2D.
+    #[inline]
+    fn test2(&mut self, run: std::ops::Range<usize>, [xs, ys]: [&[f64]; 2], q: [f64; 3], r2: f64) {
+        let (a, b) = (run.start, run.end);
+        self.reserve(b - a);
+        let mut n = self.len;
+        let (pos, d2s) = (&mut self.pos[..], &mut self.d2[..]);
+        for ((j, &x), &y) in (a..b).zip(&xs[a..b]).zip(&ys[a..b]) {
+            let (dx, dy) = (x - q[0], y - q[1]);
+            let d2 = dx * dx + dy * dy;
+            pos[n] = j as u32;
+            d2s[n] = d2;
+            n += (d2 <= r2) as usize;
+        }
+        self.len = n;
+    }
+
+    /// Writes the hits to `out` as (position, distance), sorted by
+    /// (distance, original index) (`ids`: original index per position; `r`:
+    /// the search radius).
+    ///
+    /// A bucket pass first: the bucket is the fraction of the search ball
+    /// (disc in 2D) inside the hit's distance, a monotone function of it, so
+    /// hits of a uniform cloud spread about one per bucket and the insertion
+    /// sort that follows only orders hits within a bucket. A crowded bucket
+    /// (duplicates, clusters) falls back to a comparison sort.
+    fn sort(&mut self, ids: &[u32], r: f64, dim: usize, out: &mut Vec<(u32, f64)>) {
+        let n = self.len;
+        self.d.clear();
+        self.d.extend(self.d2[..n].iter().map(|v| v.sqrt()));
+        let (d, d2, pos) = (&self.d[..n], &self.d2[..n], &self.pos[..n]);
+        if n > 1 << LOW_BITS {
+            out.extend((0..n).map(|k| (pos[k], d[k])));
+            out.sort_unstable_by_key(|&(p, d)| (d.to_bits(), ids[p as usize]));
+            return;
+        }
+        // One u64 key per hit: the distance's bits with the lowest LOW_BITS
+        // replaced by the hit (the bits of a non-negative distance order as
+        // the distance does); hits whose truncated keys tie are put in exact
+        // (distance, index) order at the end.
+        let key = |k: usize| d[k].to_bits() & !LOW_MASK | k as u64;
+        self.keys.clear();
+        self.keys.resize(n, 0);
+        self.counts.clear();
+        self.counts.resize(2 * n + 1, 0);
+        let (keys, counts, bucket) = (
+            &mut self.keys[..],
+            &mut self.counts[..],
+            &mut self.bucket[..n],
+        );
+        let volume = if dim == 3 { r * r * r } else { r * r };
+        let scale = (2 * n) as f64 / volume;
+        let mut crowded = !(scale.is_finite() && n > 1);
+        if !crowded {
+            let last = 2 * n - 1;
+            for k in 0..n {
+                let f = if dim == 3 { d2[k] * d[k] } else { d2[k] };
+                let b = ((f * scale) as usize).min(last);
+                bucket[k] = b as u32;
+                counts[b] += 1;
             }
-        } else {
-            for ((d, &x), &y) in self.d2.iter_mut().zip(&self.xs).zip(&self.ys) {
-                let (dx, dy) = (x - q[0], y - q[1]);
-                *d = dx * dx + dy * dy;
+            // Exclusive prefix sums: the first slot of each bucket.
+            let mut acc = 0;
+            for c in counts.iter_mut() {
+                crowded |= *c > MAX_BUCKET;
+                let v = *c;
+                *c = acc;
+                acc += v;
             }
         }
-        if n <= 1 << LOW_BITS {
-            // One u64 key per hit: the distance's bits with the lowest
-            // LOW_BITS replaced by the candidate (the bits of a non-negative
-            // distance order as the distance does). Hits whose truncated
-            // distances tie are then ordered exactly by (distance, index).
-            self.keys.clear();
-            for (k, &d2) in self.d2.iter().enumerate() {
-                if d2 <= r2 {
-                    let d = d2.sqrt().to_bits();
-                    self.keys.push(d & !LOW_MASK | k as u64);
-                }
+        if crowded {
+            for (k, slot) in keys.iter_mut().enumerate() {
+                *slot = key(k);
             }
-            self.keys.sort_unstable();
-            out.extend(self.keys.iter().map(|&key| {
-                let k = (key & LOW_MASK) as u32;
-                (k, self.d2[k as usize].sqrt())
-            }));
-            let mut start = 0;
-            while start < out.len() {
-                let trunc = self.keys[start] & !LOW_MASK;
-                let mut end = start + 1;
-                while end < out.len() && self.keys[end] & !LOW_MASK == trunc {
-                    end += 1;
-                }
-                if end - start > 1 {
-                    let ids = &self.ids;
-                    out[start..end].sort_unstable_by_key(|&(k, d)| (d.to_bits(), ids[k as usize]));
-                }
-                start = end;
-            }
+            keys.sort_unstable();
         } else {
-            for (k, &d2) in self.d2.iter().enumerate() {
-                if d2 <= r2 {
-                    out.push((k as u32, d2.sqrt()));
-                }
+            for (k, &b) in bucket.iter().enumerate() {
+                let slot = &mut counts[b as usize];
+                keys[*slot as usize] = key(k);
+                *slot += 1;
             }
-            let ids = &self.ids;
-            out.sort_unstable_by_key(|&(k, d)| (d.to_bits(), ids[k as usize]));
+            // Insertion sort: the bucket order leaves inversions only within buckets.
+            for i in 1..n {
+                let x = keys[i];
+                let mut j = i;
+                while j > 0 && keys[j - 1] > x {
+                    keys[j] = keys[j - 1];
+                    j -= 1;
+                }
+                keys[j] = x;
+            }
+        }
+        out.extend(keys.iter().map(|&key| {
+            let k = (key & LOW_MASK) as usize;
+            (pos[k], d[k])
+        }));
+        let mut start = 0;
+        while start < n {
+            let trunc = keys[start] & !LOW_MASK;
+            let mut end = start + 1;
+            while end < n && keys[end] & !LOW_MASK == trunc {
+                end += 1;
+            }
+            if end - start > 1 {
+                out[start..end].sort_unstable_by_key(|&(p, d)| (d.to_bits(), ids[p as usize]));
+            }
+            start = end;
         }
     }
 }
+
+/// Low bits of a sort key that carry the hit (see [`Scratch::sort`]).
+const LOW_BITS: u32 = 12;
+const LOW_MASK: u64 = (1 << LOW_BITS) - 1;
+
+/// The most hits one bucket of [`Scratch::sort`] takes before it sorts by comparison.
+const MAX_BUCKET: u32 = 16;
 
 /// Interleaves the bits of a cell's coordinates (21 bits each) into a Z-order key.
 pub fn morton(c: Cell) -> u64 {

@@ -16,7 +16,7 @@
 
 use rayon::prelude::*;
 
-use super::grid::{self, Candidates, Cell, Grid};
+use super::grid::{self, Grid, Scratch};
 use super::neighbours::NeighbourIndex;
 use super::{Kernel, KernelKind};
 
@@ -181,15 +181,21 @@ fn build_indices(nodes: &NodeCloud<'_>, search: Search, radius: f64) -> Vec<Inde
     }
 }
 
-/// Maps one point into `out` (n_fields values) from its neighbours `found`
-/// (sorted by distance, then node index; `row` gives a neighbour's values);
-/// returns (neighbours, ratio, status).
+/// One point to map: its position, its neighbours (sorted by distance, then
+/// node index) and a buffer for their weights.
+struct Query<'a> {
+    p: [f64; 3],
+    found: &'a [(u32, f64)],
+    ws: &'a mut Vec<f64>,
+}
+
+/// Maps one point into `out` (n_fields values) from its neighbours (`row`
+/// gives a neighbour's values); returns (neighbours, ratio, status).
 fn map_one<'r>(
     nodes: &NodeCloud<'_>,
     idx: &Indexed,
     settings: &MapSettings,
-    p: [f64; 3],
-    found: &[(u32, f64)],
+    Query { p, found, ws }: Query<'_>,
     row: impl Fn(u32) -> &'r [f64],
     out: &mut [f64],
 ) -> (u32, f64, PointStatus) {
@@ -198,8 +204,8 @@ fn map_one<'r>(
     let mut sum_w = 0.0;
     let mut count = 0;
     let nf = nodes.n_fields;
-    for &(local, d) in found {
-        let w = settings.kernel.shape(d / settings.h);
+    settings.kernel.shapes(found, settings.h, ws);
+    for (&(local, _), &w) in found.iter().zip(ws.iter()) {
         if w <= 0.0 {
             continue;
         }
@@ -305,8 +311,8 @@ fn run(
     };
     let work = |idx: &[u32]| {
         let mut found = Vec::with_capacity(128);
-        let mut candidates = Candidates::default();
-        let mut gathered: Option<(u32, Cell)> = None;
+        let mut scratch = Scratch::default();
+        let mut ws = Vec::with_capacity(128);
         let mut values = vec![0.0; idx.len() * nf];
         let mut meta = Vec::with_capacity(idx.len());
         for (k, &i) in idx.iter().enumerate() {
@@ -316,14 +322,15 @@ fn run(
             let out = &mut values[k * nf..(k + 1) * nf];
             let m = match &ix.grid {
                 Some(grid) => {
-                    let cell = grid.cell(points[i]);
-                    if gathered != Some((g, cell)) {
-                        grid.gather(cell, &ix.grid_values, nf, &mut candidates);
-                        gathered = Some((g, cell));
-                    }
-                    candidates.within(points[i], support, &mut found);
-                    let c = &candidates;
-                    map_one(nodes, ix, settings, points[i], &found, |k| c.row(k), out)
+                    grid.query(points[i], support, &mut found, &mut scratch);
+                    let rows = &ix.grid_values;
+                    let row = |pos: u32| &rows[pos as usize * nf..(pos as usize + 1) * nf];
+                    let query = Query {
+                        p: points[i],
+                        found: &found,
+                        ws: &mut ws,
+                    };
+                    map_one(nodes, ix, settings, query, row, out)
                 }
                 None => {
                     ix.tree(nodes).within(points[i], support, &mut found);
@@ -331,7 +338,12 @@ fn run(
                         let node = ix.members[local as usize] as usize;
                         &nodes.values[node * nf..(node + 1) * nf]
                     };
-                    map_one(nodes, ix, settings, points[i], &found, row, out)
+                    let query = Query {
+                        p: points[i],
+                        found: &found,
+                        ws: &mut ws,
+                    };
+                    map_one(nodes, ix, settings, query, row, out)
                 }
             };
             meta.push(m);
