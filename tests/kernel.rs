@@ -442,3 +442,35 @@ fn grid_breaks_distance_ties_on_a_lattice_like_brute_force() {
         }
     }
 }
+
+/// The grid's nearest point (the mapper's `--outside nearest` fallback) is the
+/// brute-force nearest, the lowest index among equally near ones, for queries
+/// inside, at the edge of and far outside the cloud.
+#[test]
+fn grid_nearest_equals_brute_force() {
+    let mut rng = ChaCha8Rng::seed_from_u64(23);
+    for dim in [2usize, 3] {
+        let pts = cloud_with_duplicates(&mut rng, dim, 3000);
+        for radius in [0.05, 0.7, 4.0] {
+            let grid = Grid::new(&pts, dim, radius);
+            for k in 0..400 {
+                let span = if k % 4 == 0 { 1e4 } else { 8.0 };
+                let q = random_point(&mut rng, dim, -span..span);
+                let want = pts
+                    .iter()
+                    .enumerate()
+                    .map(|(i, p)| {
+                        let d2: f64 = (0..dim).map(|a| (p[a] - q[a]) * (p[a] - q[a])).sum();
+                        (d2, i as u32)
+                    })
+                    .min_by(|a, b| a.partial_cmp(b).unwrap())
+                    .map(|(d2, i)| (i, d2.sqrt()));
+                let got = grid
+                    .nearest(q)
+                    .map(|(pos, d)| (grid.order()[pos as usize], d));
+                assert_eq!(got, want, "dim {dim} r {radius} q {q:?}");
+            }
+            assert_eq!(grid.nearest([f64::NAN, 0.0, 0.0]), None);
+        }
+    }
+}

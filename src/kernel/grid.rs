@@ -270,6 +270,95 @@ impl Grid {
 }
 
 impl Grid {
+    /// The nearest point to `q` as (position in the grid's order, see
+    /// [`Grid::order`], distance), the lowest original index among equally
+    /// near ones; `None` for an empty grid or a
+    /// non-finite `q`. Searches rings of cells outward from `q`'s cell until
+    /// no closer point can remain, so a query far outside the cloud costs only
+    /// the rings it crosses.
+    pub fn nearest(&self, q: [f64; 3]) -> Option<(u32, f64)> {
+        let dim = self.dim;
+        if self.ids.is_empty() || q[..dim].iter().any(|v| !v.is_finite()) {
+            return None;
+        }
+        let mut c = [0i64; 3];
+        let mut r0 = 0i64;
+        for k in 0..dim {
+            let f = ((q[k] - self.origin[k]) * self.inv_cell).floor();
+            c[k] = f.clamp(-1e15, 1e15) as i64;
+            // Rings closer than the grid are empty.
+            r0 = r0.max(-c[k]).max(c[k] - (self.dims[k] - 1));
+        }
+        let mut best: Option<(f64, u32, usize)> = None;
+        let mut r = r0;
+        loop {
+            if let Some((d2, _, _)) = best {
+                let gap = (r - 1).max(0) as f64 * self.cell * (1.0 - 1e-9);
+                if gap * gap > d2 {
+                    break;
+                }
+            }
+            let span = |k: usize| -> (i64, i64) {
+                if k >= dim {
+                    (0, 0)
+                } else {
+                    ((c[k] - r).max(0), (c[k] + r).min(self.dims[k] - 1))
+                }
+            };
+            let (y0, y1) = span(1);
+            let (z0, z1) = span(2);
+            let (x0, x1) = span(0);
+            for z in z0..=z1 {
+                for y in y0..=y1 {
+                    let shell = (dim == 3 && (z - c[2]).abs() == r) || (y - c[1]).abs() == r;
+                    // A row on the ring's shell is in it whole; another row
+                    // only at its two ends, where those lie in the grid.
+                    let runs: [(i64, i64); 2] = if shell {
+                        [(x0, x1), (1, 0)]
+                    } else {
+                        let end = |x: i64| {
+                            if (0..self.dims[0]).contains(&x) {
+                                (x, x)
+                            } else {
+                                (1, 0)
+                            }
+                        };
+                        [end(c[0] - r), end(c[0] + r)]
+                    };
+                    for (a0, a1) in runs {
+                        if a0 > a1 {
+                            continue;
+                        }
+                        let a = self.start[self.linear([a0, y, z])] as usize;
+                        let b = self.start[self.linear([a1, y, z]) + 1] as usize;
+                        for j in a..b {
+                            let dx = self.xs[j] - q[0];
+                            let dy = self.ys[j] - q[1];
+                            let d2 = if dim == 3 {
+                                let dz = self.zs[j] - q[2];
+                                dx * dx + dy * dy + dz * dz
+                            } else {
+                                dx * dx + dy * dy
+                            };
+                            let id = self.ids[j];
+                            if best.is_none_or(|(bd, bi, _)| (d2, id) < (bd, bi)) {
+                                best = Some((d2, id, j));
+                            }
+                        }
+                    }
+                }
+            }
+            let covers = (0..dim).all(|k| c[k] - r <= 0 && c[k] + r >= self.dims[k] - 1);
+            if covers {
+                break;
+            }
+            r += 1;
+        }
+        best.map(|(d2, _, pos)| (pos as u32, d2.sqrt()))
+    }
+}
+
+impl Grid {
     /// For every point of the grid (in the original order): the distance to
     /// its second-nearest point (its nearest other point; 0 for a duplicate)
     /// when that lies within the grid's radius, else `None`. In parallel over

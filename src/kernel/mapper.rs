@@ -113,7 +113,7 @@ pub enum Search {
 struct Indexed {
     group: u32,
     members: Vec<u32>,
-    /// Built by [`Search::KdTree`], or on demand for nearest-node fallbacks.
+    /// Built by [`Search::KdTree`] (the grid answers its own nearest-node fallbacks).
     tree: std::sync::OnceLock<NeighbourIndex>,
     grid: Option<Grid>,
     /// The node values in the grid's order (n_fields per node), so that the
@@ -203,7 +203,6 @@ fn map_one<'r>(
     out.iter_mut().for_each(|v| *v = 0.0);
     let mut sum_w = 0.0;
     let mut count = 0;
-    let nf = nodes.n_fields;
     settings.kernel.shapes(found, settings.h, ws);
     for (&(local, _), &w) in found.iter().zip(ws.iter()) {
         if w <= 0.0 {
@@ -221,17 +220,23 @@ fn map_one<'r>(
         return (count, ratio, PointStatus::Mapped);
     }
     match settings.outside {
-        OutsidePolicy::Nearest => match idx.tree(nodes).nearest(p) {
-            Some((local, _)) => {
-                let node = idx.members[local as usize] as usize;
-                out.copy_from_slice(&nodes.values[node * nf..(node + 1) * nf]);
-                (count, ratio, PointStatus::Nearest)
+        OutsidePolicy::Nearest => {
+            // The nearest node of the group, indexed as `found` is (see `row`).
+            let near = match &idx.grid {
+                Some(grid) => grid.nearest(p),
+                None => idx.tree(nodes).nearest(p),
+            };
+            match near {
+                Some((k, _)) => {
+                    out.copy_from_slice(row(k));
+                    (count, ratio, PointStatus::Nearest)
+                }
+                None => {
+                    out.iter_mut().for_each(|v| *v = f64::NAN);
+                    (count, ratio, PointStatus::Skipped)
+                }
             }
-            None => {
-                out.iter_mut().for_each(|v| *v = f64::NAN);
-                (count, ratio, PointStatus::Skipped)
-            }
-        },
+        }
         OutsidePolicy::Error | OutsidePolicy::Skip => {
             out.iter_mut().for_each(|v| *v = f64::NAN);
             (count, ratio, PointStatus::Skipped)
@@ -239,29 +244,59 @@ fn map_one<'r>(
     }
 }
 
+/// How [`run`] is called: the search, in parallel or not, and node values
+/// the caller hands over (they replace `nodes.values` and are freed once the
+/// grid holds its own copy: one copy fewer at the peak).
+struct RunOptions {
+    search: Search,
+    parallel: bool,
+    owned_values: Option<Vec<f64>>,
+}
+
 fn run(
-    nodes: &NodeCloud<'_>,
+    given: &NodeCloud<'_>,
     points: &[[f64; 3]],
     point_group: Option<&[u32]>,
     settings: &MapSettings,
-    search: Search,
-    parallel: bool,
+    options: RunOptions,
 ) -> Result<MapResult, MapError> {
+    let RunOptions {
+        search,
+        parallel,
+        owned_values,
+    } = options;
     if !(settings.h > 0.0 && settings.h.is_finite()) {
         return Err(MapError::BadSmoothingLength(settings.h));
     }
     // Groups separate only when both sides carry them.
-    let grouped = nodes.group.is_some() && point_group.is_some();
-    let ungrouped_nodes = NodeCloud {
-        group: None,
-        ..*nodes
-    };
+    let grouped = given.group.is_some() && point_group.is_some();
     let support = settings.kernel.support() * settings.h;
-    let indices = build_indices(
-        if grouped { nodes } else { &ungrouped_nodes },
-        search,
-        support,
-    );
+    let indices = {
+        let values = owned_values.as_deref().unwrap_or(given.values);
+        let cloud = NodeCloud {
+            values,
+            group: if grouped { given.group } else { None },
+            ..*given
+        };
+        build_indices(&cloud, search, support)
+    };
+    // The grid answers every query from its own copy of the values.
+    let emptied = NodeCloud {
+        values: &[],
+        ..*given
+    };
+    let kept: Vec<f64>;
+    let nodes = match (owned_values, search) {
+        (Some(_), Search::Grid) => &emptied,
+        (Some(v), Search::KdTree) => {
+            kept = v;
+            &NodeCloud {
+                values: &kept,
+                ..*given
+            }
+        }
+        (None, _) => given,
+    };
     let lookup = |g: u32| -> Result<&Indexed, MapError> {
         if !grouped {
             return Ok(&indices[0]);
@@ -404,7 +439,7 @@ pub fn map_points(
     point_group: Option<&[u32]>,
     settings: &MapSettings,
 ) -> Result<MapResult, MapError> {
-    run(nodes, points, point_group, settings, Search::Grid, true)
+    map_points_with(nodes, points, point_group, settings, Search::Grid, true)
 }
 
 /// The serial oracle of [`map_points`].
@@ -414,7 +449,7 @@ pub fn map_points_serial(
     point_group: Option<&[u32]>,
     settings: &MapSettings,
 ) -> Result<MapResult, MapError> {
-    run(nodes, points, point_group, settings, Search::Grid, false)
+    map_points_with(nodes, points, point_group, settings, Search::Grid, false)
 }
 
 /// [`map_points`] with a chosen neighbour search, in parallel or serially.
@@ -427,7 +462,30 @@ pub fn map_points_with(
     search: Search,
     parallel: bool,
 ) -> Result<MapResult, MapError> {
-    run(nodes, points, point_group, settings, search, parallel)
+    let options = RunOptions {
+        search,
+        parallel,
+        owned_values: None,
+    };
+    run(nodes, points, point_group, settings, options)
+}
+
+/// [`map_points`] for a caller that hands over the node values (`nodes.values`
+/// is ignored): they are freed as soon as the grid holds its own copy, which
+/// lowers the peak memory of a large mapping by one copy of the values.
+pub fn map_points_taking(
+    nodes: &NodeCloud<'_>,
+    values: Vec<f64>,
+    points: &[[f64; 3]],
+    point_group: Option<&[u32]>,
+    settings: &MapSettings,
+) -> Result<MapResult, MapError> {
+    let options = RunOptions {
+        search: Search::Grid,
+        parallel: true,
+        owned_values: Some(values),
+    };
+    run(nodes, points, point_group, settings, options)
 }
 
 /// Distance from each point to its nearest other point (0 for a duplicate),

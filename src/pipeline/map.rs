@@ -108,23 +108,31 @@ impl Default for MapConfig {
 
 /// Maps the points whose group is not in `excluded`; excluded points get zero
 /// values and status `Mapped` with no neighbours (they are dry and need no pwp).
+/// `owned`: node values handed over in place of `cloud.values` (see
+/// [`mapper::map_points_taking`]).
 fn map_subset(
-    cloud: &NodeCloud<'_>,
+    (cloud, owned): (&NodeCloud<'_>, Option<Vec<f64>>),
     points: &[[f64; 3]],
     groups: Option<&[u32]>,
     settings: &MapSettings,
     excluded: &[u32],
 ) -> Result<mapper::MapResult, PipelineError> {
+    let map = |points: &[[f64; 3]], groups: Option<&[u32]>| {
+        match owned {
+            Some(values) => mapper::map_points_taking(cloud, values, points, groups, settings),
+            None => mapper::map_points(cloud, points, groups, settings),
+        }
+        .map_err(|e| input_err!("{e}"))
+    };
     let keep: Vec<usize> = (0..points.len())
         .filter(|&i| groups.is_none_or(|g| !excluded.contains(&g[i])))
         .collect();
     if keep.len() == points.len() {
-        return mapper::map_points(cloud, points, groups, settings).map_err(|e| input_err!("{e}"));
+        return map(points, groups);
     }
     let sub_points: Vec<[f64; 3]> = keep.iter().map(|&i| points[i]).collect();
     let sub_groups: Option<Vec<u32>> = groups.map(|g| keep.iter().map(|&i| g[i]).collect());
-    let sub = mapper::map_points(cloud, &sub_points, sub_groups.as_deref(), settings)
-        .map_err(|e| input_err!("{e}"))?;
+    let sub = map(&sub_points, sub_groups.as_deref())?;
     let nf = cloud.n_fields;
     let mut full = mapper::MapResult {
         values: vec![0.0; points.len() * nf],
@@ -332,10 +340,17 @@ pub fn map(
     if !config.keep_fem_fields {
         fem.nodes.fields = Vec::new();
     }
+    // The values go to the mapper, which frees them once its grid holds a
+    // copy, unless the geostatic stress maps the cloud a second time.
+    let (owned, kept) = if stress_source == StressSource::Geostatic {
+        (None, values)
+    } else {
+        (Some(values), Vec::new())
+    };
     let cloud = NodeCloud {
         positions: &fem.nodes.positions,
         dim,
-        values: &values,
+        values: &kept,
         n_fields,
         group: node_groups.as_deref(),
         node_volume: spacing.powi(dim as i32),
@@ -378,21 +393,23 @@ pub fn map(
     }
     // A FEM that does not reach the model: name the file, both extents and a
     // unit or offset hint (#14).
-    let reached: Vec<[f64; 3]> = (0..positions.len())
-        .filter(|&i| {
-            point_groups
-                .as_ref()
-                .is_none_or(|g| !dry_without_nodes.contains(&g[i]))
-        })
-        .map(|i| positions[i])
-        .collect();
-    let reach = crate::diagnose::reach(
-        &fem.nodes.positions,
-        &project.model.mesh.nodes,
-        &reached,
-        dim,
-        kernel.support() * h,
-    );
+    let reach = {
+        // The MPs the kernel maps; a copy only when some are left out.
+        let reached: std::borrow::Cow<'_, [[f64; 3]]> = match &point_groups {
+            Some(g) if !dry_without_nodes.is_empty() => (0..positions.len())
+                .filter(|&i| !dry_without_nodes.contains(&g[i]))
+                .map(|i| positions[i])
+                .collect(),
+            _ => std::borrow::Cow::Borrowed(&positions),
+        };
+        crate::diagnose::reach(
+            &fem.nodes.positions,
+            &project.model.mesh.nodes,
+            &reached,
+            dim,
+            kernel.support() * h,
+        )
+    };
     let files = crate::diagnose::file_list(&fem.paths);
     if let Some(r) = reach.as_ref().filter(|r| r.is_poor()) {
         match config.outside {
@@ -402,7 +419,7 @@ pub fn map(
     }
     let t2 = Instant::now();
     let mut result = map_subset(
-        &cloud,
+        (&cloud, owned),
         &positions,
         point_groups.as_deref(),
         &settings,
@@ -489,7 +506,7 @@ pub fn map(
             ..settings
         };
         let sampled = map_subset(
-            &cloud,
+            (&cloud, None),
             &sample_pts,
             sample_groups.as_deref(),
             &sample_settings,
@@ -526,7 +543,7 @@ pub fn map(
         ));
     }
     // The FEM values' row-major copy is no longer needed.
-    drop(values);
+    drop(kept);
     if stress_source == StressSource::Zero {
         warnings.push("--stress zero: all total stresses are 0; the MPs start unstressed".into());
     }

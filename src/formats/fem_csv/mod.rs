@@ -71,7 +71,7 @@ pub fn read_csv(
     options: &CsvOptions,
 ) -> Result<(FemNodes, FemReadReport), FormatError> {
     let bytes = super::input::read_bytes(path)?;
-    parse_csv(path, &bytes, options)
+    table::parse_csv_chunked(path, bytes.into(), options, rows::CHUNK_BYTES)
 }
 
 /// Parses node-table bytes (see [`read_csv`]).
@@ -80,7 +80,7 @@ pub fn parse_csv(
     bytes: &[u8],
     options: &CsvOptions,
 ) -> Result<(FemNodes, FemReadReport), FormatError> {
-    table::parse_csv_chunked(path, bytes, options, rows::CHUNK_BYTES)
+    table::parse_csv_chunked(path, bytes.into(), options, rows::CHUNK_BYTES)
 }
 
 /// Gives a GeoStudio `node.csv` its coordinates from the mesh PLY: node id k is

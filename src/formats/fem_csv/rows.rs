@@ -94,7 +94,8 @@ pub(super) fn merge_rows(parts: Vec<Rows>, n_values: usize) -> Merged {
     let mut rows = Rows {
         positions: Vec::with_capacity(n),
         ids: Vec::with_capacity(n),
-        values: vec![Vec::with_capacity(n_rows); n_values],
+        // Each column with its own capacity (`vec![v; n]` clones would have none).
+        values: (0..n_values).map(|_| Vec::with_capacity(n_rows)).collect(),
         lines: Vec::with_capacity(n),
         has_value: vec![false; n_values + 2],
         first_short: vec![None; n_values + 2],

@@ -16,10 +16,11 @@ use crate::formats::error::{FormatError, ParseError};
 use crate::model::{FemNodes, Quantity};
 
 /// [`parse_csv`](super::parse_csv) with data-row chunks of about `chunk_bytes`
-/// (tests vary it).
+/// (tests vary it). Owned bytes are freed as soon as the rows are parsed,
+/// before they are joined (the file's text is the largest thing held).
 pub(super) fn parse_csv_chunked(
     path: &Path,
-    bytes: &[u8],
+    bytes: std::borrow::Cow<'_, [u8]>,
     options: &CsvOptions,
     chunk_bytes: usize,
 ) -> Result<(FemNodes, FemReadReport), FormatError> {
@@ -33,9 +34,9 @@ pub(super) fn parse_csv_chunked(
         )
         .into());
     }
-    let (bom, body) = match bytes.strip_prefix(&[0xEF, 0xBB, 0xBF]) {
+    let (bom, body) = match bytes.as_ref().strip_prefix(&[0xEF, 0xBB, 0xBF]) {
         Some(rest) => (true, rest),
-        None => (false, bytes),
+        None => (false, bytes.as_ref()),
     };
     let text = match std::str::from_utf8(body) {
         Ok(t) => std::borrow::Cow::Borrowed(t),
@@ -254,6 +255,9 @@ pub(super) fn parse_csv_chunked(
             rows
         })
         .collect();
+    drop(chunks);
+    drop(text);
+    drop(bytes);
     let merged = merge_rows(parts, value_cols.len());
     if let Some(e) = FormatError::from_list(merged.errors) {
         return Err(e);

@@ -55,7 +55,7 @@ fn headers_normalise_to_synonyms() {
 fn parse(text: &str, chunk: usize) -> Result<(FemNodes, FemReadReport), String> {
     parse_csv_chunked(
         Path::new("t.csv"),
-        text.as_bytes(),
+        text.as_bytes().into(),
         &CsvOptions::default(),
         chunk,
     )
