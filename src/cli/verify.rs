@@ -10,6 +10,7 @@ use anyhow::{Context, bail};
 use plotters::style::RGBColor;
 
 use super::Verdict as ExitVerdict;
+use super::args::{StateInputs, StateSource};
 use super::output::OutputDir;
 use super::plot::{self, Series};
 use crate::formats::cps::CpsDocument;
@@ -21,14 +22,8 @@ use crate::pipeline::{self, verify::KernelCheck};
 
 #[derive(Debug, clap::Args)]
 pub struct VerifyArgs {
-    /// A folder written by `map` (model and mps.csv are taken from it).
-    pub dir: Option<PathBuf>,
-    /// Anura3D model (GOM, CPS or folder), when not using a map folder.
-    #[arg(long)]
-    pub mpm: Option<PathBuf>,
-    /// MP state table (mps.csv written by `map`).
-    #[arg(long)]
-    pub state: Option<PathBuf>,
+    #[command(flatten)]
+    pub inputs: StateInputs,
     /// Maximum number of explicit steps.
     #[arg(long, default_value_t = 20_000)]
     pub max_steps: usize,
@@ -76,10 +71,9 @@ struct Loaded {
 }
 
 fn load(args: &VerifyArgs, default_out: &str) -> anyhow::Result<Loaded> {
-    match (&args.dir, &args.mpm, &args.state) {
-        (Some(dir), None, None) => load_folder(args, dir, default_out),
-        (None, Some(m), Some(s)) => load_state_table(args, m, s, default_out),
-        _ => bail!("give a folder written by `map`, or --mpm MODEL --state mps.csv"),
+    match args.inputs.source()? {
+        StateSource::Folder(dir) => load_folder(args, dir, default_out),
+        StateSource::Table { model, state } => load_state_table(args, model, state, default_out),
     }
 }
 
