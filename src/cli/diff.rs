@@ -369,20 +369,20 @@ fn diff_files(a: &Path, b: &Path, args: &DiffArgs) -> anyhow::Result<FileDiff> {
             }
             diff_documents(da.document(), db.document(), false, args, &mut out);
         }
-        "cps" => diff_documents(
-            CpsDocument::read(a)?.document(),
-            CpsDocument::read(b)?.document(),
-            true,
-            args,
-            &mut out,
-        ),
-        "opd" => diff_documents(
-            CpsDocument::read_opd(a)?.document(),
-            CpsDocument::read_opd(b)?.document(),
-            true,
-            args,
-            &mut out,
-        ),
+        "cps" | "opd" => {
+            let read = if kind == "cps" {
+                CpsDocument::read
+            } else {
+                CpsDocument::read_opd
+            };
+            diff_documents(
+                read(a)?.document(),
+                read(b)?.document(),
+                true,
+                args,
+                &mut out,
+            );
+        }
         "mapf" | "table" => diff_tables(a, b, args, &mut out)?,
         _ => {
             if crate::formats::input::read_bytes(a)? != crate::formats::input::read_bytes(b)? {

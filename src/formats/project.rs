@@ -607,58 +607,84 @@ mod tests {
         assert!(names.needs_gom_stage0);
     }
 
+    /// A GOM named otherwise than Anura3D looks for it: the project is found
+    /// (from the file and from the folder), the name is reported, and the
+    /// output uses the right one.
     #[test]
-    fn doubled_extension_picks_the_obvious_project() {
-        let tmp = tempfile::tempdir().unwrap();
-        let gom = write(tmp.path(), "X.GOM.GOM_stage0", GOM);
-        write(tmp.path(), "X.CPS_001", CPS_2025);
-        let p = discover(&gom).unwrap();
-        assert_eq!(p.name, "X");
-        assert!(p.cps.is_some());
-        assert!(
-            p.warnings[0].contains("will look for X.GOM_stage0"),
-            "{:?}",
-            p.warnings
-        );
-        assert_eq!(p.output_names("2025").gom, "X.GOM_stage0");
-        // The folder finds the same project.
-        assert_eq!(discover(tmp.path()).unwrap().name, "X");
-    }
-
-    #[test]
-    fn lower_case_extensions_are_read_and_reported() {
-        let tmp = tempfile::tempdir().unwrap();
-        let gom = write(tmp.path(), "L.gom", GOM);
-        write(tmp.path(), "L.cps_001", CPS_2024);
-        let p = discover(&gom).unwrap();
-        assert_eq!(p.name, "L");
-        assert!(p.cps.is_some());
-        assert!(
-            p.warnings[0].contains("Anura3D looks for L.GOM"),
-            "{:?}",
-            p.warnings
-        );
-        let names = p.output_names("2024");
-        assert_eq!(
-            (names.gom.as_str(), names.cps.as_str()),
-            ("L.GOM", "L.CPS_001")
-        );
-        assert_eq!(discover(tmp.path()).unwrap().name, "L");
-    }
-
-    #[test]
-    fn doubled_extension_with_an_older_cps_names_the_gom() {
-        let tmp = tempfile::tempdir().unwrap();
-        let gom = write(tmp.path(), "W.GOM.GOM_stage0", GOM);
-        write(tmp.path(), "W.CPS_001", CPS_2024);
-        let p = discover(&gom).unwrap();
-        assert_eq!(p.name, "W");
-        assert!(
-            p.warnings[0].contains("will look for W.GOM "),
-            "{:?}",
-            p.warnings
-        );
-        assert_eq!(p.output_names("2024").gom, "W.GOM");
+    fn misnamed_goms_are_read_and_reported() {
+        struct Case {
+            what: &'static str,
+            gom: &'static str,
+            cps: &'static str,
+            cps_text: &'static str,
+            warning: &'static str,
+            version: &'static str,
+            output_gom: &'static str,
+        }
+        let cases = [
+            Case {
+                what: "doubled extension picks the obvious project",
+                gom: "X.GOM.GOM_stage0",
+                cps: "X.CPS_001",
+                cps_text: CPS_2025,
+                warning: "will look for X.GOM_stage0",
+                version: "2025",
+                output_gom: "X.GOM_stage0",
+            },
+            Case {
+                what: "lower-case extensions",
+                gom: "L.gom",
+                cps: "L.cps_001",
+                cps_text: CPS_2024,
+                warning: "Anura3D looks for L.GOM",
+                version: "2024",
+                output_gom: "L.GOM",
+            },
+            Case {
+                what: "doubled extension with an older CPS names the GOM",
+                gom: "W.GOM.GOM_stage0",
+                cps: "W.CPS_001",
+                cps_text: CPS_2024,
+                warning: "will look for W.GOM ",
+                version: "2024",
+                output_gom: "W.GOM",
+            },
+            Case {
+                what: "a GOM named for the wrong version",
+                gom: "Y.GOM",
+                cps: "Y.CPS_001",
+                cps_text: CPS_2025,
+                warning: "will look for Y.GOM_stage0",
+                version: "2024",
+                output_gom: "Y.GOM_stage0",
+            },
+        ];
+        for c in cases {
+            let tmp = tempfile::tempdir().unwrap();
+            let gom = write(tmp.path(), c.gom, GOM);
+            write(tmp.path(), c.cps, c.cps_text);
+            let name = &c.gom[..1];
+            let p = discover(&gom).unwrap();
+            assert_eq!(p.name, name, "{}", c.what);
+            assert!(p.cps.is_some(), "{}", c.what);
+            if c.cps_text == CPS_2025 {
+                assert_eq!(p.stage, Some(0), "{}", c.what);
+            }
+            assert!(
+                p.warnings[0].contains(c.warning),
+                "{}: {:?}",
+                c.what,
+                p.warnings
+            );
+            let names = p.output_names(c.version);
+            assert_eq!(
+                (names.gom.as_str(), names.cps.as_str()),
+                (c.output_gom, format!("{name}.CPS_001").as_str()),
+                "{}",
+                c.what
+            );
+            assert_eq!(discover(tmp.path()).unwrap().name, name, "{}", c.what);
+        }
     }
 
     #[test]
@@ -670,17 +696,6 @@ mod tests {
         let p = discover(tmp.path()).unwrap();
         assert_eq!(p.gom, good);
         assert!(p.warnings.is_empty(), "{:?}", p.warnings);
-    }
-
-    #[test]
-    fn a_gom_named_for_the_wrong_version_is_reported() {
-        let tmp = tempfile::tempdir().unwrap();
-        let gom = write(tmp.path(), "Y.GOM", GOM);
-        write(tmp.path(), "Y.CPS_001", CPS_2025);
-        let p = discover(&gom).unwrap();
-        assert_eq!(p.stage, Some(0));
-        assert!(p.warnings[0].contains("will look for Y.GOM_stage0"));
-        assert_eq!(p.output_names("2024").gom, "Y.GOM_stage0");
     }
 
     #[test]
