@@ -219,14 +219,8 @@ pub fn discover(path: &Path) -> Result<ProjectFiles, FormatError> {
         let renamed = file != format!("{stem}.{ext}");
         let chosen = choose_cps(&dir, &name, gom_stage, &mut notes, &mut warnings)?;
         notes.insert(0, format!("GOM: {}", path.display()));
-        let (cps, cps_version, stage) = match &chosen {
-            Some((p, doc)) => (
-                Some(p.clone()),
-                Some(doc.version().to_string()),
-                doc.is_staged().then(|| doc.stage()),
-            ),
-            None => (None, None, gom_stage),
-        };
+        let facts = CpsFacts::of(chosen.as_ref(), gom_stage);
+        let stage = facts.stage;
         // The name Anura3D will open: decided by the CPS, else by the file's own extension.
         let expected = match (&chosen, stage) {
             (Some((_, doc)), _) if !doc.is_staged() => format!("{name}.GOM"),
@@ -247,19 +241,14 @@ pub fn discover(path: &Path) -> Result<ProjectFiles, FormatError> {
                 doc.version()
             ));
         }
-        let opd = find_opd(&dir, &name, stage, cps_version.as_deref(), &mut notes);
-        check_later_stage(&dir, &name, stage, &mut warnings);
-        return Ok(ProjectFiles {
+        return Ok(assemble(
             name,
             dir,
-            gom: path.to_path_buf(),
-            cps,
-            cps_version,
-            opd,
-            stage,
+            path.to_path_buf(),
+            facts,
             notes,
             warnings,
-        });
+        ));
     }
     if cps_step(ext).is_some() {
         let cps = CpsDocument::read(path)?;
@@ -346,26 +335,65 @@ fn discover_gid(path: &Path, dir: &Path, name: &str) -> Result<ProjectFiles, For
         }
         choose_cps(dir, name, None, &mut notes, &mut warnings)?
     };
-    let (cps, cps_version, stage) = match chosen {
-        Some((p, doc)) => {
-            let stage = doc.is_staged().then(|| doc.stage());
-            (Some(p), Some(doc.version().to_string()), stage)
-        }
-        None => (None, None, None),
-    };
-    let opd = find_opd(dir, name, stage, cps_version.as_deref(), &mut notes);
-    check_later_stage(dir, name, stage, &mut warnings);
-    Ok(ProjectFiles {
-        name: name.to_string(),
-        dir: dir.to_path_buf(),
+    let facts = CpsFacts::of(chosen.as_ref(), None);
+    Ok(assemble(
+        name.to_string(),
+        dir.to_path_buf(),
         gom,
-        cps,
-        cps_version,
-        opd,
-        stage,
+        facts,
         notes,
         warnings,
-    })
+    ))
+}
+
+/// What the chosen CPS says about the project: its path, header version and
+/// stage (without a CPS, the stage the GOM's name gives, if any).
+struct CpsFacts {
+    path: Option<PathBuf>,
+    version: Option<String>,
+    stage: Option<u32>,
+}
+
+impl CpsFacts {
+    fn of(chosen: Option<&(PathBuf, CpsDocument)>, stage_without_cps: Option<u32>) -> CpsFacts {
+        match chosen {
+            Some((p, doc)) => CpsFacts {
+                path: Some(p.clone()),
+                version: Some(doc.version().to_string()),
+                stage: doc.is_staged().then(|| doc.stage()),
+            },
+            None => CpsFacts {
+                path: None,
+                version: None,
+                stage: stage_without_cps,
+            },
+        }
+    }
+}
+
+/// The project's files once the GOM and CPS are known: finds the OPD and
+/// checks for a later stage's missing `GOM_stage0`.
+fn assemble(
+    name: String,
+    dir: PathBuf,
+    gom: PathBuf,
+    cps: CpsFacts,
+    mut notes: Vec<String>,
+    mut warnings: Vec<String>,
+) -> ProjectFiles {
+    let opd = find_opd(&dir, &name, cps.stage, cps.version.as_deref(), &mut notes);
+    check_later_stage(&dir, &name, cps.stage, &mut warnings);
+    ProjectFiles {
+        name,
+        dir,
+        gom,
+        cps: cps.path,
+        cps_version: cps.version,
+        opd,
+        stage: cps.stage,
+        notes,
+        warnings,
+    }
 }
 
 /// The OPD of a 2025 stage: beside the GOM, or (GiD) in the sibling `name.A3D/`.
