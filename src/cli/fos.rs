@@ -273,15 +273,11 @@ pub fn print_report(report: &FosReport, target: &Path, elapsed: f64) {
             m.factor, m.points_in_motion
         );
     }
-    println!(
-        "wrote      {}/ (fos.json, fos_trials.svg{}) in {elapsed:.1} s",
-        target.display(),
-        if report.mechanism.is_some() {
-            ", fos_mechanism.svg, fos_mechanism.vtu"
-        } else {
-            ""
-        }
-    );
+    let mut files = vec!["fos.json", "fos_trials.svg"];
+    if report.mechanism.is_some() {
+        files.extend(["fos_mechanism.svg", "fos_mechanism.vtu"]);
+    }
+    println!("{} in {elapsed:.1} s", super::output::wrote(target, &files));
 }
 
 /// The demo's two analyses of one mapped state: with every pore pressure set

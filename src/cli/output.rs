@@ -39,6 +39,11 @@ fn identity(_meta: &std::fs::Metadata) -> Option<(u64, u64)> {
 
 /// Refuses an output path that is an input, or a folder holding one (compared by
 /// canonical path and by file identity, symlinks followed).
+/// The `wrote      DIR/ (a, b, c)` line a command prints once its folder is written.
+pub fn wrote(target: &Path, files: &[&str]) -> String {
+    format!("wrote      {}/ ({})", target.display(), files.join(", "))
+}
+
 pub fn refuse_inputs(target: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
     // A target that does not exist yet holds nothing.
     let Ok(target_meta) = std::fs::metadata(target) else {

@@ -456,15 +456,11 @@ pub fn print_outcome(o: &VerifyOutcome, target: &Path) {
             }
         }
     }
-    println!(
-        "wrote      {}/ (verify.json, start.csv, mps_start.vtu{})",
-        target.display(),
-        if o.run.is_some() {
-            ", verify_history.svg, mps_end.vtu"
-        } else {
-            ""
-        }
-    );
+    let mut files = vec!["verify.json", "start.csv", "mps_start.vtu"];
+    if o.run.is_some() {
+        files.extend(["verify_history.svg", "mps_end.vtu"]);
+    }
+    println!("{}", super::output::wrote(target, &files));
 }
 
 /// Prints the runner's figures (no verdict).
@@ -539,10 +535,10 @@ pub fn run_run(args: RunArgs) -> anyhow::Result<()> {
         "final      max displacement {:.4} m, {} MPs yielded",
         r.max_displacement, r.plastic_points
     );
+    let snapshots = format!("{} snapshots", output.snapshots.len());
     println!(
-        "wrote      {}/ (run.json, run_history.svg, {} snapshots)",
-        target.display(),
-        output.snapshots.len()
+        "{}",
+        super::output::wrote(&target, &["run.json", "run_history.svg", &snapshots])
     );
     Ok(())
 }

@@ -559,16 +559,23 @@ mod tests {
     }
 
     const GOM: &str = "### Anura3D_2024 ###\n$$FINISH\n";
+
+    /// A GiD export folder `<name>.gid` in `dir`: the GOM as `<name>-2.dat`,
+    /// `minus_one` as `<name>-1.dat`.
+    fn gid_folder(dir: &Path, name: &str, minus_one: &str) -> PathBuf {
+        let gid = dir.join(format!("{name}.gid"));
+        std::fs::create_dir(&gid).unwrap();
+        write(&gid, &format!("{name}-2.dat"), GOM);
+        write(&gid, &format!("{name}-1.dat"), minus_one);
+        gid
+    }
     const CPS_2024: &str = "### Anura3D_2024 ###\n$$K0_PROCEDURE\n1\n$$END\n";
     const CPS_2025: &str = "### Anura3D_2025 ###\n$$STAGE\n0\n$$END\n";
 
     #[test]
     fn gid_folder_reads_minus_one_dat_as_the_cps() {
         let tmp = tempfile::tempdir().unwrap();
-        let gid = tmp.path().join("Dam.gid");
-        std::fs::create_dir(&gid).unwrap();
-        write(&gid, "Dam-2.dat", GOM);
-        write(&gid, "Dam-1.dat", CPS_2024);
+        let gid = gid_folder(tmp.path(), "Dam", CPS_2024);
         let p = discover(&gid).unwrap();
         assert_eq!(p.name, "Dam");
         assert_eq!(p.cps.as_deref(), Some(gid.join("Dam-1.dat").as_path()));
@@ -584,12 +591,9 @@ mod tests {
     #[test]
     fn gid_2025_names_are_staged_and_the_opd_is_found_in_the_a3d_folder() {
         let tmp = tempfile::tempdir().unwrap();
-        let gid = tmp.path().join("Dam.gid");
+        let gid = gid_folder(tmp.path(), "Dam", CPS_2025);
         let a3d = tmp.path().join("Dam.A3D");
-        std::fs::create_dir(&gid).unwrap();
         std::fs::create_dir(&a3d).unwrap();
-        write(&gid, "Dam-2.dat", GOM);
-        write(&gid, "Dam-1.dat", CPS_2025);
         write(&a3d, "Dam.OPD_stage0", "$$END\n");
         let p = discover(&gid.join("Dam-2.dat")).unwrap();
         assert_eq!(p.opd.as_deref(), Some(a3d.join("Dam.OPD_stage0").as_path()));
@@ -604,11 +608,8 @@ mod tests {
         // As in upstream tutorial folders: -2.dat (GOM), -3.dat and .dat (batch
         // files), and the CPS under its Anura3D name.
         let tmp = tempfile::tempdir().unwrap();
-        let gid = tmp.path().join("Oedo.gid");
-        std::fs::create_dir(&gid).unwrap();
-        write(&gid, "Oedo-2.dat", GOM);
+        let gid = gid_folder(tmp.path(), "Oedo", "\"Anura3D_2023.exe\"\nPAUSE\n");
         write(&gid, "Oedo-3.dat", "\"Anura3D_2023.exe\" \"Oedo\"\nPAUSE\n");
-        write(&gid, "Oedo-1.dat", "\"Anura3D_2023.exe\"\nPAUSE\n");
         write(&gid, "Oedo.dat", "PAUSE\n");
         let cps = write(&gid, "Oedo.CPS_001", CPS_2024);
         let p = discover(&gid).unwrap();
