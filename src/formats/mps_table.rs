@@ -3,6 +3,12 @@
 //! Columns: `id,element,material,local,x,y,z,volume`, then, for a mapped state,
 //! the pore pressure, total and effective stresses (Anura3D signs, kPa), the
 //! degree of saturation and the mapping diagnostics. Ids are 1-based.
+//!
+//! Each table has a serde row struct (`PlacementRow`, `StateRow`) that the
+//! `csv` writer serialises and the `csv` reader deserialises, by position;
+//! numbers go through [`Real`], which writes today's shortest round-trip
+//! decimals. The writer formats chunks of rows in parallel and writes them in
+//! order, so the bytes do not depend on the thread count.
 
 use std::io::Write;
 use std::path::Path;
@@ -21,21 +27,19 @@ pub fn fmt_f64(v: f64) -> String {
     format!("{v}")
 }
 
-/// Appends the shortest decimal that reads back to `v` (ryu): `0` for ±0, no
-/// trailing `.0`, an exponent where it is shorter (`1e-7`, `1.5e20`).
-pub fn push_f64(out: &mut Vec<u8>, v: f64) {
+/// The shortest decimal that reads back to `v` (ryu), formatted in `buf`: `0`
+/// for ±0, no trailing `.0`, an exponent where it is shorter (`1e-7`, `1.5e20`).
+fn shortest(v: f64, buf: &mut ryu::Buffer) -> &str {
     if v == 0.0 {
-        out.push(b'0');
-        return;
+        return "0";
     }
-    let mut buf = ryu::Buffer::new();
     let s = buf.format(v);
-    out.extend_from_slice(s.strip_suffix(".0").unwrap_or(s).as_bytes());
+    s.strip_suffix(".0").unwrap_or(s)
 }
 
-/// Appends an integer in decimal.
-pub fn push_int(out: &mut Vec<u8>, v: impl itoa::Integer) {
-    out.extend_from_slice(itoa::Buffer::new().format(v).as_bytes());
+/// Appends the shortest decimal that reads back to `v` (see `shortest`).
+pub fn push_f64(out: &mut Vec<u8>, v: f64) {
+    out.extend_from_slice(shortest(v, &mut ryu::Buffer::new()).as_bytes());
 }
 
 /// Rows per formatting chunk of [`write_rows`] and [`write_records`].
@@ -74,7 +78,7 @@ where
 }
 
 /// Writes rows `0..n`, each appended to a buffer by `row`, formatted in
-/// parallel chunks and written in order (see [`write_chunks`]). The first row
+/// parallel chunks and written in order (see `write_chunks`). The first row
 /// (in order) whose `row` fails stops the writing with that error, after the
 /// rows before it.
 pub fn write_rows<F>(w: &mut dyn Write, n: usize, row: F) -> std::io::Result<()>
@@ -94,7 +98,7 @@ where
 
 /// Writes records `0..n` as CSV rows without a header, each serialised from
 /// the row struct `row` returns, in parallel chunks written in order (see
-/// [`write_chunks`]): each chunk has its own `csv::Writer` over a buffer.
+/// `write_chunks`): each chunk has its own `csv::Writer` over a buffer.
 pub fn write_records<R, F>(w: &mut dyn Write, n: usize, row: F) -> std::io::Result<()>
 where
     R: Serialize,
@@ -131,18 +135,13 @@ pub struct Real(pub f64);
 
 impl Serialize for Real {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        if self.0 == 0.0 {
-            return s.serialize_str("0");
-        }
-        let mut buf = ryu::Buffer::new();
-        let text = buf.format(self.0);
-        s.serialize_str(text.strip_suffix(".0").unwrap_or(text))
+        s.serialize_str(shortest(self.0, &mut ryu::Buffer::new()))
     }
 }
 
 impl<'de> Deserialize<'de> for Real {
     /// Any number; the readers refuse the non-finite ones where they know the
-    /// field (see [`StateRow::first_non_finite`]).
+    /// field (see `StateRow::first_non_finite`).
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Real, D::Error> {
         f64::deserialize(d).map(Real)
     }
