@@ -359,87 +359,34 @@ fn a_zip_bomb_entry_is_refused_before_it_fills_memory() {
     assert!(text.contains("zip bomb"), "{text}");
 }
 
+/// The GOM's inconsistent counts, trailing data and overflowing numbers are
+/// cases of `common::malformed`, read through the library and the binary.
 #[test]
-fn inconsistent_counts_trailing_data_and_non_finite_values_are_positioned() {
+fn non_finite_values_and_data_after_the_end_of_a_cps_are_positioned() {
     let tmp = tempfile::tempdir().unwrap();
     let gom = std::fs::read_to_string(fixture("anura3d-mini/TwoMat.GOM")).unwrap();
     let cps = std::fs::read_to_string(fixture("anura3d-mini/TwoMat.CPS_001")).unwrap();
     let cases = [
         (
-            "one_element_less",
-            gom.replacen("4 6\n", "3 6\n", 1),
-            cps.clone(),
-            "TwoMat.GOM:21:1: $$STARTELEMCON (line 17) expects 3",
-        ),
-        (
-            "one_element_more",
-            gom.replacen("4 6\n", "5 6\n", 1),
-            cps.clone(),
-            "TwoMat.GOM:22:1: $$STARTELEMCON (line 17) expects 5",
-        ),
-        (
-            "one_node_more_line",
-            gom.replacen("2.0 1.0\n", "2.0 1.0\n3.0 1.0\n", 1),
-            cps.clone(),
-            "TwoMat.GOM:17:1: $$STARTNODES (line 10) expects 6",
-        ),
-        (
-            "zero_counts",
-            gom.replacen("4 6\n", "0 0\n", 1),
-            cps.clone(),
-            "TwoMat.GOM:9:1: 0 elements and 0 nodes",
-        ),
-        (
-            "negative_count",
-            gom.replacen("4 6\n", "-4 6\n", 1),
-            cps.clone(),
-            "TwoMat.GOM:9:1: expected a count",
-        ),
-        (
-            "fixity_count",
-            gom.replacen(
-                "$$START_FIXITY_LINE_SOLID\n5\n",
-                "$$START_FIXITY_LINE_SOLID\n4\n",
-                1,
-            ),
-            cps.clone(),
-            "TwoMat.GOM:28:1: $$START_FIXITY_LINE_SOLID (line 22) expects 4 fixity lines, found more",
-        ),
-        (
-            "after_finish",
-            format!("{gom}stray line\n"),
-            cps.clone(),
-            "TwoMat.GOM:91:1: data after `$$FINISH`",
-        ),
-        (
-            "overflowing_coordinate",
-            gom.replacen("2.0 1.0\n", "1e400 1.0\n", 1),
-            cps.clone(),
-            "TwoMat.GOM:16:1: expected a coordinate, found `1e400`",
-        ),
-        (
             "cps_nan",
-            gom.clone(),
             cps.replacen("9.81\n", "NaN\n", 1),
             "TwoMat.CPS_001:9:1: $$GRAVITY_ACCELERATION: `NaN` is not a finite number",
         ),
         (
             "cps_inf_damping",
-            gom.clone(),
             cps.replacen("1 0.75\n", "1 -Infinity\n", 1),
             "TwoMat.CPS_001:21:3:",
         ),
         (
             "cps_after_end",
-            gom.clone(),
             format!("{cps}junk\n"),
             "TwoMat.CPS_001:34:1: data after `$$END`",
         ),
     ];
-    for (name, g, c, expected) in cases {
+    for (name, c, expected) in cases {
         let dir = tmp.path().join(name);
         std::fs::create_dir(&dir).unwrap();
-        std::fs::write(dir.join("TwoMat.GOM"), g).unwrap();
+        std::fs::write(dir.join("TwoMat.GOM"), &gom).unwrap();
         std::fs::write(dir.join("TwoMat.CPS_001"), c).unwrap();
         let (code, text) = run(&[&"inspect", &dir]);
         assert_eq!(code, 2, "{name}: {text}");
