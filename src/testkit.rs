@@ -112,19 +112,7 @@ pub fn column_tri3(
             [side || base, base, false]
         })
         .collect();
-    let n_elements = connectivity.len() / 3;
-    finish(
-        Mesh {
-            dimension: Dimension::PlaneStrain,
-            element_type: ElementType::Tri3,
-            nodes,
-            connectivity,
-        },
-        material,
-        fixity,
-        n_elements,
-        3,
-    )
+    finish_tri3(nodes, connectivity, material, fixity)
 }
 
 /// A 3D `tetrahedral_old` column `width` (x) × `height` (y) × `depth` (z)
@@ -143,6 +131,23 @@ pub fn column_tet(
     let fixity = generate::box_fixities(&mesh);
     let n_elements = mesh.n_elements();
     finish(mesh, material, fixity, n_elements, 4)
+}
+
+/// A plane-strain TRI3 model of one material with 3 MPs per element.
+fn finish_tri3(
+    nodes: Vec<[f64; 3]>,
+    connectivity: Vec<u32>,
+    material: Material,
+    fixity: Vec<[bool; 3]>,
+) -> AnuraModel {
+    let n_elements = connectivity.len() / 3;
+    let mesh = Mesh {
+        dimension: Dimension::PlaneStrain,
+        element_type: ElementType::Tri3,
+        nodes,
+        connectivity,
+    };
+    finish(mesh, material, fixity, n_elements, 3)
 }
 
 fn finish(
@@ -398,19 +403,7 @@ pub fn vertical_cut_tri3(
             [side || base, base, false]
         })
         .collect();
-    let n_elements = connectivity.len() / 3;
-    let mut model = finish(
-        Mesh {
-            dimension: Dimension::PlaneStrain,
-            element_type: ElementType::Tri3,
-            nodes,
-            connectivity,
-        },
-        material,
-        fixity,
-        n_elements,
-        3,
-    );
+    let mut model = finish_tri3(nodes, connectivity, material, fixity);
     for (e, &m) in element_material.iter().enumerate() {
         model.element_material[e] = m;
         model.mp_counts[e] = (if m == 0 { 0 } else { 3 }, 0);

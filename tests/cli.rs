@@ -50,24 +50,13 @@ fn inspect_writes_the_mp_table_and_refuses_to_overwrite() {
 #[test]
 fn malformed_inputs_exit_2_with_a_positioned_message() {
     let tmp = tempfile::tempdir().unwrap();
-    let base = std::fs::read_to_string(fixture("anura3d-mini/TwoMat.GOM")).unwrap();
-    let cases = [
-        (
-            "clockwise",
-            base.replacen("1 2 5\n", "1 5 2\n", 1),
-            "TwoMat.GOM:18:1: element 1: clockwise or degenerate triangle",
-        ),
-        (
-            "missing_finish",
-            base.replace("$$FINISH\n", ""),
-            "TwoMat.GOM:89:1: missing `$$FINISH`",
-        ),
-        (
-            "bad_number",
-            base.replacen("1.0 1.0\n", "1.0 x\n", 1),
-            "TwoMat.GOM:15:5: expected a coordinate, found `x`",
-        ),
-    ];
+    // Every malformed GOM the library tests read, and one the placement refuses.
+    let mut cases = malformed::gom_cases();
+    cases.push((
+        "clockwise",
+        malformed::two_mat().replacen("1 2 5\n", "1 5 2\n", 1),
+        "TwoMat.GOM:18:1: element 1: clockwise or degenerate triangle",
+    ));
     for (name, text, expected) in cases {
         let dir = tmp.path().join(name);
         std::fs::create_dir(&dir).unwrap();

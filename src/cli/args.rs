@@ -2,9 +2,9 @@
 //! library's typed options. Keeping them here (not in one command's module)
 //! keeps the commands free of imports between each other.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use anyhow::Context;
+use anyhow::{Context, bail};
 use serde::Serialize;
 
 use crate::formats::fem_csv::{self, CsvOptions, SignConvention};
@@ -109,4 +109,46 @@ pub fn project_inputs(files: &crate::formats::project::ProjectFiles) -> Vec<&std
     out.extend(files.cps.as_deref());
     out.extend(files.opd.as_deref());
     out
+}
+
+/// Where `verify`, `run` and `fos` take a mapped state from: a folder written
+/// by `map`, or a model with a state table.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct StateInputs {
+    /// A folder written by `map` (model and mps.csv are taken from it).
+    pub dir: Option<PathBuf>,
+    /// Anura3D model (GOM, CPS or folder), when not using a map folder.
+    #[arg(long)]
+    pub mpm: Option<PathBuf>,
+    /// MP state table (mps.csv written by `map`).
+    #[arg(long)]
+    pub state: Option<PathBuf>,
+}
+
+/// [`StateInputs`] checked: exactly one of the two ways.
+#[derive(Debug, Clone, Copy)]
+pub enum StateSource<'a> {
+    /// A folder written by `map`.
+    Folder(&'a Path),
+    /// `--mpm MODEL --state TABLE`.
+    Table { model: &'a Path, state: &'a Path },
+}
+
+impl StateInputs {
+    /// A folder written by `map`.
+    pub fn folder(dir: PathBuf) -> StateInputs {
+        StateInputs {
+            dir: Some(dir),
+            ..StateInputs::default()
+        }
+    }
+
+    /// The source the arguments name; an error unless exactly one way is given.
+    pub fn source(&self) -> anyhow::Result<StateSource<'_>> {
+        match (&self.dir, &self.mpm, &self.state) {
+            (Some(dir), None, None) => Ok(StateSource::Folder(dir)),
+            (None, Some(model), Some(state)) => Ok(StateSource::Table { model, state }),
+            _ => bail!("give a folder written by `map`, or --mpm MODEL --state mps.csv"),
+        }
+    }
 }

@@ -232,10 +232,10 @@ pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
             c.max_error
         );
     }
-    println!(
-        "wrote      {}/ (calibration.json, calibration.svg{})",
-        target.display(),
-        if check.is_some() { ", check.svg" } else { "" }
-    );
+    let mut files = vec!["calibration.json", "calibration.svg"];
+    if check.is_some() {
+        files.push("check.svg");
+    }
+    println!("{}", super::output::wrote(&target, &files));
     Ok(())
 }

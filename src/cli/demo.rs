@@ -10,6 +10,7 @@ use std::time::Instant;
 use anyhow::bail;
 
 use super::args::FemArgs;
+use super::args::StateInputs;
 use super::calibrate::plot_curve;
 use super::map::{self, MapArgs};
 use super::output::OutputDir;
@@ -170,9 +171,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
 
     // 4. Verify with the explicit MPM runner.
     let verify_args = VerifyArgs {
-        dir: Some(target.clone()),
-        mpm: None,
-        state: None,
+        inputs: StateInputs::folder(target.clone()),
         max_steps: 20_000,
         damping: None,
         out: Some(target.join("verify")),

@@ -178,7 +178,10 @@ fn diff_documents(
     }
 }
 
-/// A numeric table: headers and rows (non-numeric cells become NaN-free text keys).
+/// A table as text cells: headers and rows. Comma-separated files (`mps.csv`,
+/// FEM tables) are read with the `csv` reader, one `Vec<String>` per record
+/// (the columns are whatever the header names); whitespace-separated ones
+/// (MAPF) are split on blanks. Cells are trimmed and blank lines skipped.
 struct Table {
     headers: Vec<String>,
     rows: Vec<Vec<String>>,
@@ -186,21 +189,45 @@ struct Table {
 
 fn read_table(path: &Path) -> anyhow::Result<Table> {
     let text = read_text(path)?;
-    let mut lines = text.lines().filter(|l| !l.trim().is_empty());
-    let header = lines
-        .next()
-        .ok_or_else(|| anyhow::anyhow!("{}: empty table", path.display()))?;
-    let split = |l: &str| -> Vec<String> {
-        if l.contains(',') {
-            l.split(',').map(|s| s.trim().to_string()).collect()
-        } else {
-            l.split_whitespace().map(str::to_string).collect()
-        }
+    let Some(header) = text.lines().find(|l| !l.trim().is_empty()) else {
+        bail!("{}: empty table", path.display());
     };
-    Ok(Table {
-        headers: split(header),
-        rows: lines.map(split).collect(),
-    })
+    if !header.contains(',') {
+        let mut rows = text
+            .lines()
+            .map(|l| l.split_whitespace().map(str::to_string).collect::<Vec<_>>())
+            .filter(|r| !r.is_empty());
+        return Ok(Table {
+            headers: rows.next().unwrap_or_default(),
+            rows: rows.collect(),
+        });
+    }
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(false)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes());
+    let mut rows = reader.deserialize::<Vec<String>>().filter(|row| {
+        row.as_ref()
+            .map_or(true, |cells| cells.iter().any(|c| !c.is_empty()))
+    });
+    let mut next = || -> anyhow::Result<Option<Vec<String>>> {
+        rows.next().transpose().map_err(|e| {
+            let line = e.position().map_or(0, |p| p.line());
+            anyhow::anyhow!("{}:{line}:1: {e}", path.display())
+        })
+    };
+    let Some(headers) = next()? else {
+        bail!("{}: empty table", path.display());
+    };
+    let mut table = Table {
+        headers,
+        rows: Vec::new(),
+    };
+    while let Some(row) = next()? {
+        table.rows.push(row);
+    }
+    Ok(table)
 }
 
 fn diff_tables(a: &Path, b: &Path, args: &DiffArgs, out: &mut FileDiff) -> anyhow::Result<()> {
@@ -342,20 +369,20 @@ fn diff_files(a: &Path, b: &Path, args: &DiffArgs) -> anyhow::Result<FileDiff> {
             }
             diff_documents(da.document(), db.document(), false, args, &mut out);
         }
-        "cps" => diff_documents(
-            CpsDocument::read(a)?.document(),
-            CpsDocument::read(b)?.document(),
-            true,
-            args,
-            &mut out,
-        ),
-        "opd" => diff_documents(
-            CpsDocument::read_opd(a)?.document(),
-            CpsDocument::read_opd(b)?.document(),
-            true,
-            args,
-            &mut out,
-        ),
+        "cps" | "opd" => {
+            let read = if kind == "cps" {
+                CpsDocument::read
+            } else {
+                CpsDocument::read_opd
+            };
+            diff_documents(
+                read(a)?.document(),
+                read(b)?.document(),
+                true,
+                args,
+                &mut out,
+            );
+        }
         "mapf" | "table" => diff_tables(a, b, args, &mut out)?,
         _ => {
             if crate::formats::input::read_bytes(a)? != crate::formats::input::read_bytes(b)? {

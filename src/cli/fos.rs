@@ -9,9 +9,9 @@
 
 use std::path::{Path, PathBuf};
 
-use anyhow::bail;
 use plotters::style::RGBColor;
 
+use super::args::{StateInputs, StateSource};
 use super::output::OutputDir;
 use super::plot::{self, Series};
 use crate::formats::cps::CpsDocument;
@@ -21,14 +21,8 @@ use crate::mpm::fos::{FosOutcome, FosReport, FosSettings, strength_reduction};
 
 #[derive(Debug, clap::Args)]
 pub struct FosArgs {
-    /// A folder written by `map` (model and mps.csv are taken from it).
-    pub dir: Option<PathBuf>,
-    /// Anura3D model (GOM, CPS or folder), when not using a map folder.
-    #[arg(long)]
-    pub mpm: Option<PathBuf>,
-    /// MP state table (mps.csv written by `map`).
-    #[arg(long)]
-    pub state: Option<PathBuf>,
+    #[command(flatten)]
+    pub inputs: StateInputs,
     /// Local damping α of the trial runs (default: the CPS
     /// `$$HOMOGENEOUS_LOCAL_DAMPING`, else 0.75).
     #[arg(long)]
@@ -54,9 +48,7 @@ impl FosArgs {
     /// options, default tolerance and window.
     pub fn from_verify(args: &super::verify::VerifyArgs) -> FosArgs {
         FosArgs {
-            dir: args.dir.clone(),
-            mpm: args.mpm.clone(),
-            state: args.state.clone(),
+            inputs: args.inputs.clone(),
             damping: args.damping,
             tolerance: 0.01,
             window: None,
@@ -79,10 +71,9 @@ struct Loaded {
 
 /// Reads the model and the MP states and checks that they belong together.
 fn load(args: &FosArgs) -> anyhow::Result<Loaded> {
-    let (model_path, state_path) = match (&args.dir, &args.mpm, &args.state) {
-        (Some(dir), None, None) => (dir.clone(), dir.join("mps.csv")),
-        (None, Some(m), Some(s)) => (m.clone(), s.clone()),
-        _ => bail!("give a folder written by `map`, or --mpm MODEL --state mps.csv"),
+    let (model_path, state_path) = match args.inputs.source()? {
+        StateSource::Folder(dir) => (dir.to_path_buf(), dir.join("mps.csv")),
+        StateSource::Table { model, state } => (model.to_path_buf(), state.to_path_buf()),
     };
     let project = super::inspect::load_project(&model_path)?;
     let (points, states) = mps_table::read_states_for(&state_path, &project.points)?;
@@ -282,15 +273,11 @@ pub fn print_report(report: &FosReport, target: &Path, elapsed: f64) {
             m.factor, m.points_in_motion
         );
     }
-    println!(
-        "wrote      {}/ (fos.json, fos_trials.svg{}) in {elapsed:.1} s",
-        target.display(),
-        if report.mechanism.is_some() {
-            ", fos_mechanism.svg, fos_mechanism.vtu"
-        } else {
-            ""
-        }
-    );
+    let mut files = vec!["fos.json", "fos_trials.svg"];
+    if report.mechanism.is_some() {
+        files.extend(["fos_mechanism.svg", "fos_mechanism.vtu"]);
+    }
+    println!("{} in {elapsed:.1} s", super::output::wrote(target, &files));
 }
 
 /// The demo's two analyses of one mapped state: with every pore pressure set

@@ -39,6 +39,11 @@ fn identity(_meta: &std::fs::Metadata) -> Option<(u64, u64)> {
 
 /// Refuses an output path that is an input, or a folder holding one (compared by
 /// canonical path and by file identity, symlinks followed).
+/// The `wrote      DIR/ (a, b, c)` line a command prints once its folder is written.
+pub fn wrote(target: &Path, files: &[&str]) -> String {
+    format!("wrote      {}/ ({})", target.display(), files.join(", "))
+}
+
 pub fn refuse_inputs(target: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
     // A target that does not exist yet holds nothing.
     let Ok(target_meta) = std::fs::metadata(target) else {
@@ -346,21 +351,23 @@ fn rename_noreplace(from: &Path, to: &Path) -> anyhow::Result<()> {
 mod tests {
     use super::*;
 
-    #[test]
-    fn force_replaces_a_folder_completely_and_leaves_no_staging() {
+    /// A temporary folder holding `out/old.txt`: (the folder, `out`).
+    fn old_output() -> (tempfile::TempDir, PathBuf) {
         let tmp = tempfile::tempdir().unwrap();
         let target = tmp.path().join("out");
         std::fs::create_dir(&target).unwrap();
         std::fs::write(target.join("old.txt"), "old").unwrap();
-        let out = OutputDir::create(&target, true, &[]).unwrap();
-        out.write("new.txt", |w| w.write_all(b"new")).unwrap();
-        out.commit().unwrap();
+        (tmp, target)
+    }
+
+    /// `out` holds `new.txt` and not `old.txt`, and nothing is left beside it.
+    fn assert_replaced(tmp: &Path, target: &Path) {
         assert!(!target.join("old.txt").exists());
         assert_eq!(
             std::fs::read_to_string(target.join("new.txt")).unwrap(),
             "new"
         );
-        let names: Vec<_> = std::fs::read_dir(tmp.path())
+        let names: Vec<_> = std::fs::read_dir(tmp)
             .unwrap()
             .map(|e| e.unwrap().file_name())
             .collect();
@@ -368,17 +375,21 @@ mod tests {
     }
 
     #[test]
+    fn force_replaces_a_folder_completely_and_leaves_no_staging() {
+        let (tmp, target) = old_output();
+        let out = OutputDir::create(&target, true, &[]).unwrap();
+        out.write("new.txt", |w| w.write_all(b"new")).unwrap();
+        out.commit().unwrap();
+        assert_replaced(tmp.path(), &target);
+    }
+
+    #[test]
     fn two_rename_fallback_replaces_too() {
-        let tmp = tempfile::tempdir().unwrap();
-        let target = tmp.path().join("out");
-        std::fs::create_dir(&target).unwrap();
-        std::fs::write(target.join("old.txt"), "old").unwrap();
+        let (tmp, target) = old_output();
         let staging = tempfile::tempdir_in(tmp.path()).unwrap();
         std::fs::write(staging.path().join("new.txt"), "new").unwrap();
         replace_by_two_renames(staging, &target).unwrap();
-        assert!(target.join("new.txt").exists());
-        assert!(!target.join("old.txt").exists());
-        assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 1);
+        assert_replaced(tmp.path(), &target);
     }
 
     #[test]

@@ -59,8 +59,8 @@ pub fn line_chart(
             .margin(16)
             .x_label_area_size(48)
             .y_label_area_size(80);
-        if log_y {
-            // Log scale drawn as log10 of the values on a linear axis, labelled 1e±n.
+        // Log scale drawn as log10 of the values on a linear axis, labelled 1e±n.
+        let (drawn, (lo, hi)) = if log_y {
             let logged: Vec<Vec<(f64, f64)>> = series
                 .iter()
                 .map(|s| {
@@ -77,73 +77,49 @@ pub fn line_chart(
                 .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
                     (a.min(p.1), b.max(p.1))
                 });
-            let (lo, hi) = if lo.is_finite() {
+            let range = if lo.is_finite() {
                 (lo.floor(), hi.ceil().max(lo.floor() + 1.0))
             } else {
                 (-1.0, 1.0)
             };
-            let mut chart = builder.build_cartesian_2d(x0..x1, lo..hi)?;
-            chart
-                .configure_mesh()
-                .x_desc(x_label)
-                .y_desc(y_label)
-                .y_labels(((hi - lo) as usize).saturating_add(1).min(12))
-                .y_label_formatter(&|v| format!("1e{:.0}", v))
-                .label_style(("sans-serif", 15))
-                .draw()?;
-            for (s, pts) in series.iter().zip(logged) {
-                let c = s.color;
-                if s.markers {
-                    chart
-                        .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))?
-                        .label(s.label)
-                        .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.filled()));
-                } else {
-                    chart
-                        .draw_series(LineSeries::new(pts, c.stroke_width(2)))?
-                        .label(s.label)
-                        .legend(move |(x, y)| {
-                            PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
-                        });
-                }
-            }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 15))
-                .draw()?;
+            (logged, range)
         } else {
-            let mut chart = builder.build_cartesian_2d(x0..x1, y0..y1)?;
-            chart
-                .configure_mesh()
-                .x_desc(x_label)
-                .y_desc(y_label)
-                .label_style(("sans-serif", 15))
-                .draw()?;
-            for s in series {
-                let c = s.color;
-                if s.markers {
-                    chart
-                        .draw_series(s.points.iter().map(|&p| Circle::new(p, 4, c.filled())))?
-                        .label(s.label)
-                        .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.filled()));
-                } else {
-                    chart
-                        .draw_series(LineSeries::new(s.points.clone(), c.stroke_width(2)))?
-                        .label(s.label)
-                        .legend(move |(x, y)| {
-                            PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
-                        });
-                }
-            }
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.8))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 15))
-                .draw()?;
+            let points = series.iter().map(|s| s.points.clone()).collect();
+            (points, (y0, y1))
+        };
+        let mut chart = builder.build_cartesian_2d(x0..x1, lo..hi)?;
+        let log_label = |v: &f64| format!("1e{:.0}", v);
+        let mut mesh = chart.configure_mesh();
+        mesh.x_desc(x_label)
+            .y_desc(y_label)
+            .label_style(("sans-serif", 15));
+        if log_y {
+            mesh.y_labels(((hi - lo) as usize).saturating_add(1).min(12))
+                .y_label_formatter(&log_label);
         }
+        mesh.draw()?;
+        for (s, pts) in series.iter().zip(drawn) {
+            let c = s.color;
+            if s.markers {
+                chart
+                    .draw_series(pts.iter().map(|&p| Circle::new(p, 4, c.filled())))?
+                    .label(s.label)
+                    .legend(move |(x, y)| Circle::new((x + 10, y), 4, c.filled()));
+            } else {
+                chart
+                    .draw_series(LineSeries::new(pts, c.stroke_width(2)))?
+                    .label(s.label)
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], c.stroke_width(2))
+                    });
+            }
+        }
+        chart
+            .configure_series_labels()
+            .background_style(WHITE.mix(0.8))
+            .border_style(BLACK)
+            .label_font(("sans-serif", 15))
+            .draw()?;
         root.present()?;
         Ok(())
     };

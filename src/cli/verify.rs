@@ -10,6 +10,7 @@ use anyhow::{Context, bail};
 use plotters::style::RGBColor;
 
 use super::Verdict as ExitVerdict;
+use super::args::{StateInputs, StateSource};
 use super::output::OutputDir;
 use super::plot::{self, Series};
 use crate::formats::cps::CpsDocument;
@@ -21,14 +22,8 @@ use crate::pipeline::{self, verify::KernelCheck};
 
 #[derive(Debug, clap::Args)]
 pub struct VerifyArgs {
-    /// A folder written by `map` (model and mps.csv are taken from it).
-    pub dir: Option<PathBuf>,
-    /// Anura3D model (GOM, CPS or folder), when not using a map folder.
-    #[arg(long)]
-    pub mpm: Option<PathBuf>,
-    /// MP state table (mps.csv written by `map`).
-    #[arg(long)]
-    pub state: Option<PathBuf>,
+    #[command(flatten)]
+    pub inputs: StateInputs,
     /// Maximum number of explicit steps.
     #[arg(long, default_value_t = 20_000)]
     pub max_steps: usize,
@@ -76,10 +71,9 @@ struct Loaded {
 }
 
 fn load(args: &VerifyArgs, default_out: &str) -> anyhow::Result<Loaded> {
-    match (&args.dir, &args.mpm, &args.state) {
-        (Some(dir), None, None) => load_folder(args, dir, default_out),
-        (None, Some(m), Some(s)) => load_state_table(args, m, s, default_out),
-        _ => bail!("give a folder written by `map`, or --mpm MODEL --state mps.csv"),
+    match args.inputs.source()? {
+        StateSource::Folder(dir) => load_folder(args, dir, default_out),
+        StateSource::Table { model, state } => load_state_table(args, model, state, default_out),
     }
 }
 
@@ -462,15 +456,11 @@ pub fn print_outcome(o: &VerifyOutcome, target: &Path) {
             }
         }
     }
-    println!(
-        "wrote      {}/ (verify.json, start.csv, mps_start.vtu{})",
-        target.display(),
-        if o.run.is_some() {
-            ", verify_history.svg, mps_end.vtu"
-        } else {
-            ""
-        }
-    );
+    let mut files = vec!["verify.json", "start.csv", "mps_start.vtu"];
+    if o.run.is_some() {
+        files.extend(["verify_history.svg", "mps_end.vtu"]);
+    }
+    println!("{}", super::output::wrote(target, &files));
 }
 
 /// Prints the runner's figures (no verdict).
@@ -545,10 +535,10 @@ pub fn run_run(args: RunArgs) -> anyhow::Result<()> {
         "final      max displacement {:.4} m, {} MPs yielded",
         r.max_displacement, r.plastic_points
     );
+    let snapshots = format!("{} snapshots", output.snapshots.len());
     println!(
-        "wrote      {}/ (run.json, run_history.svg, {} snapshots)",
-        target.display(),
-        output.snapshots.len()
+        "{}",
+        super::output::wrote(&target, &["run.json", "run_history.svg", &snapshots])
     );
     Ok(())
 }

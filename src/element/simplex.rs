@@ -179,17 +179,24 @@ mod tests {
         ]
     }
 
-    #[test]
-    fn triangle_shape_functions_are_kronecker_at_corners() {
-        let c = tri();
-        let s = Simplex::<2, 3>::from_corners(&c).expect("valid triangle");
-        for (i, corner) in c.iter().enumerate() {
-            let n = s.values(corner);
-            for (j, v) in n.iter().enumerate() {
+    /// The simplex on `corners`, after checking N_j(x_i) = δ_ij.
+    fn kronecker_at_corners<const D: usize, const N: usize>(
+        corners: &[[f64; D]; N],
+    ) -> Simplex<D, N> {
+        let s = Simplex::<D, N>::from_corners(corners).expect("valid simplex");
+        for (i, corner) in corners.iter().enumerate() {
+            for (j, v) in s.values(corner).iter().enumerate() {
                 let expected = if i == j { 1.0 } else { 0.0 };
                 assert!((v - expected).abs() < 1e-14, "N{j}(x{i}) = {v}");
             }
         }
+        s
+    }
+
+    #[test]
+    fn triangle_shape_functions_are_kronecker_at_corners() {
+        let c = tri();
+        let s = kronecker_at_corners(&c);
         // Area by the cross product.
         let area = 0.5
             * ((c[1][0] - c[0][0]) * (c[2][1] - c[0][1])
@@ -200,14 +207,7 @@ mod tests {
     #[test]
     fn tetrahedron_shape_functions_are_kronecker_at_corners() {
         let c = tet();
-        let s = Simplex::<3, 4>::from_corners(&c).expect("valid tetrahedron");
-        for (i, corner) in c.iter().enumerate() {
-            let n = s.values(corner);
-            for (j, v) in n.iter().enumerate() {
-                let expected = if i == j { 1.0 } else { 0.0 };
-                assert!((v - expected).abs() < 1e-14, "N{j}(x{i}) = {v}");
-            }
-        }
+        let s = kronecker_at_corners(&c);
         assert!(s.signed_measure > 0.0);
     }
 

@@ -22,6 +22,15 @@ impl Position {
         }
     }
 
+    /// A byte offset in a binary file, which has no lines (line and column 0).
+    pub fn in_binary(byte: usize) -> Position {
+        Position {
+            line: 0,
+            column: 0,
+            byte,
+        }
+    }
+
     /// Position of `byte` in `text` (column counted in characters).
     pub fn of_byte(text: &str, byte: usize) -> Position {
         let byte = byte.min(text.len());

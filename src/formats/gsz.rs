@@ -286,6 +286,15 @@ pub fn read_step(
     options: &CsvOptions,
 ) -> Result<(FemNodes, FemReadReport, String), FormatError> {
     let project = read_project(path)?;
+    // `1 `name`, 2 `name``: the analyses to choose from, for the errors.
+    let analysis_list = || {
+        project
+            .analyses
+            .iter()
+            .map(|a| format!("{} `{}`", a.index, a.name))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
     let chosen = match analysis {
         None if project.analyses.len() == 1 => &project.analyses[0],
         None => {
@@ -294,12 +303,7 @@ pub fn read_step(
                 format!(
                     "{} analyses; choose one with --analysis: {}",
                     project.analyses.len(),
-                    project
-                        .analyses
-                        .iter()
-                        .map(|a| format!("{} `{}`", a.index, a.name))
-                        .collect::<Vec<_>>()
-                        .join(", ")
+                    analysis_list()
                 ),
             ));
         }
@@ -310,15 +314,7 @@ pub fn read_step(
             .ok_or_else(|| {
                 FormatError::file(
                     path,
-                    format!(
-                        "no analysis `{key}` (analyses: {})",
-                        project
-                            .analyses
-                            .iter()
-                            .map(|a| format!("{} `{}`", a.index, a.name))
-                            .collect::<Vec<_>>()
-                            .join(", ")
-                    ),
+                    format!("no analysis `{key}` (analyses: {})", analysis_list()),
                 )
             })?,
     };

@@ -9,6 +9,7 @@
 //! not name stays with the caller.
 
 use crate::model::Material;
+use crate::model::material::lookup;
 
 /// A problem in the option text, at a 1-based character column.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -67,26 +68,14 @@ pub fn parse(
                 ),
             ));
         }
-        let index = m
-            .parse::<u32>()
-            .ok()
-            .filter(|&i| i >= 1 && i as usize <= materials.len())
-            .or_else(|| {
-                materials
-                    .iter()
-                    .find(|x| x.name.eq_ignore_ascii_case(m))
-                    .map(|x| x.index)
-            })
+        let index = lookup::by_number(materials, m)
+            .or_else(|| lookup::by_name(materials, m))
             .ok_or_else(|| {
                 err(
                     column,
                     format!(
                         "no GOM material `{m}` (materials: {})",
-                        materials
-                            .iter()
-                            .map(|x| format!("{} {}", x.index, x.name))
-                            .collect::<Vec<_>>()
-                            .join(", ")
+                        lookup::list(materials)
                     ),
                 )
             })?;

@@ -3,12 +3,21 @@
 //! Columns: `id,element,material,local,x,y,z,volume`, then, for a mapped state,
 //! the pore pressure, total and effective stresses (Anura3D signs, kPa), the
 //! degree of saturation and the mapping diagnostics. Ids are 1-based.
+//!
+//! Each table has a serde row struct (`PlacementRow`, `StateRow`) that the
+//! `csv` writer serialises and the `csv` reader deserialises, by position;
+//! numbers go through [`Real`], which writes today's shortest round-trip
+//! decimals. The writer formats chunks of rows in parallel and writes them in
+//! order, so the bytes do not depend on the thread count.
 
 use std::io::Write;
+use std::path::Path;
 
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
-use crate::model::MaterialPoint;
+use super::error::{FormatError, ParseError};
+use crate::model::{MaterialPoint, MpState};
 
 /// Formats a float so that it reads back to the same value (shortest round trip).
 pub fn fmt_f64(v: f64) -> String {
@@ -18,33 +27,32 @@ pub fn fmt_f64(v: f64) -> String {
     format!("{v}")
 }
 
-/// Appends the shortest decimal that reads back to `v` (ryu): `0` for ±0, no
-/// trailing `.0`, an exponent where it is shorter (`1e-7`, `1.5e20`).
-pub fn push_f64(out: &mut Vec<u8>, v: f64) {
+/// The shortest decimal that reads back to `v` (ryu), formatted in `buf`: `0`
+/// for ±0, no trailing `.0`, an exponent where it is shorter (`1e-7`, `1.5e20`).
+fn shortest(v: f64, buf: &mut ryu::Buffer) -> &str {
     if v == 0.0 {
-        out.push(b'0');
-        return;
+        return "0";
     }
-    let mut buf = ryu::Buffer::new();
     let s = buf.format(v);
-    out.extend_from_slice(s.strip_suffix(".0").unwrap_or(s).as_bytes());
+    s.strip_suffix(".0").unwrap_or(s)
 }
 
-/// Appends an integer in decimal.
-pub fn push_int(out: &mut Vec<u8>, v: impl itoa::Integer) {
-    out.extend_from_slice(itoa::Buffer::new().format(v).as_bytes());
+/// Appends the shortest decimal that reads back to `v` (see `shortest`).
+pub fn push_f64(out: &mut Vec<u8>, v: f64) {
+    out.extend_from_slice(shortest(v, &mut ryu::Buffer::new()).as_bytes());
 }
 
-/// Rows per formatting chunk of [`write_rows`].
+/// Rows per formatting chunk of [`write_rows`] and [`write_records`].
 const ROWS_PER_CHUNK: usize = 4096;
 
-/// Writes rows `0..n`, each appended to a buffer by `row`, formatted in
-/// parallel chunks and written in order, so the bytes do not depend on the
-/// thread count. The first row (in order) whose `row` fails stops the writing
-/// with that error, after the rows before it.
-pub fn write_rows<F>(w: &mut dyn Write, n: usize, row: F) -> std::io::Result<()>
+/// Writes rows `0..n` in parallel chunks: `chunk` formats the rows of one
+/// range into a buffer (with the error that stopped it, if any), and the
+/// buffers are written in order, so the bytes do not depend on the thread
+/// count. The first failing chunk (in order) stops the writing with its error,
+/// after the rows before it.
+fn write_chunks<F>(w: &mut dyn Write, n: usize, chunk: F) -> std::io::Result<()>
 where
-    F: Fn(usize, &mut Vec<u8>) -> std::io::Result<()> + Sync,
+    F: Fn(std::ops::Range<usize>) -> (Vec<u8>, Option<std::io::Error>) + Sync,
 {
     // Batches bound the memory held by formatted text.
     let batch = ROWS_PER_CHUNK * 4 * rayon::current_num_threads().max(1);
@@ -56,16 +64,7 @@ where
         let chunks: Vec<(Vec<u8>, Option<std::io::Error>)> = (start..end)
             .into_par_iter()
             .step_by(ROWS_PER_CHUNK)
-            .map(|first| {
-                let last = (first + ROWS_PER_CHUNK).min(end);
-                let mut buf = Vec::with_capacity((last - first) * 160);
-                for i in first..last {
-                    if let Err(e) = row(i, &mut buf) {
-                        return (buf, Some(e));
-                    }
-                }
-                (buf, None)
-            })
+            .map(|first| chunk(first..(first + ROWS_PER_CHUNK).min(end)))
             .collect();
         for (buf, error) in chunks {
             w.write_all(&buf)?;
@@ -78,32 +77,124 @@ where
     Ok(())
 }
 
-/// Writes the placement table: one row per MP.
-pub fn write_points(w: &mut dyn Write, points: &[MaterialPoint]) -> std::io::Result<()> {
-    writeln!(w, "id,element,material,local,x,y,z,volume")?;
-    write_rows(w, points.len(), |i, out| {
-        let p = &points[i];
-        push_placement(out, p);
-        out.push(b'\n');
-        Ok(())
+/// Writes rows `0..n`, each appended to a buffer by `row`, formatted in
+/// parallel chunks and written in order (see `write_chunks`). The first row
+/// (in order) whose `row` fails stops the writing with that error, after the
+/// rows before it.
+pub fn write_rows<F>(w: &mut dyn Write, n: usize, row: F) -> std::io::Result<()>
+where
+    F: Fn(usize, &mut Vec<u8>) -> std::io::Result<()> + Sync,
+{
+    write_chunks(w, n, |rows| {
+        let mut buf = Vec::with_capacity(rows.len() * 160);
+        for i in rows {
+            if let Err(e) = row(i, &mut buf) {
+                return (buf, Some(e));
+            }
+        }
+        (buf, None)
     })
 }
 
-/// `id,element,material,local,x,y,z,volume` of one MP.
-fn push_placement(out: &mut Vec<u8>, p: &MaterialPoint) {
-    push_int(out, p.id);
-    out.push(b',');
-    push_int(out, p.element + 1);
-    out.push(b',');
-    push_int(out, p.material);
-    out.push(b',');
-    push_int(out, p.local);
-    for v in p.position {
-        out.push(b',');
-        push_f64(out, v);
+/// Writes records `0..n` as CSV rows without a header, each serialised from
+/// the row struct `row` returns, in parallel chunks written in order (see
+/// `write_chunks`): each chunk has its own `csv::Writer` over a buffer.
+pub fn write_records<R, F>(w: &mut dyn Write, n: usize, row: F) -> std::io::Result<()>
+where
+    R: Serialize,
+    F: Fn(usize) -> R + Sync,
+{
+    write_chunks(w, n, |rows| {
+        let mut writer = csv_writer(Vec::with_capacity(rows.len() * 160));
+        for i in rows {
+            if let Err(e) = writer.serialize(row(i)) {
+                return (writer.into_inner().unwrap_or_default(), Some(e.into()));
+            }
+        }
+        match writer.into_inner() {
+            Ok(buf) => (buf, None),
+            Err(e) => (Vec::new(), Some(e.into_error())),
+        }
+    })
+}
+
+/// The writer of both tables: no header (the tables write theirs), no quoting
+/// (no field holds a comma, quote or line break), `\n` line endings.
+fn csv_writer<W: Write>(out: W) -> csv::Writer<W> {
+    csv::WriterBuilder::new()
+        .has_headers(false)
+        .quote_style(csv::QuoteStyle::Never)
+        .terminator(csv::Terminator::Any(b'\n'))
+        .from_writer(out)
+}
+
+/// A number in a table: written as the shortest decimal that reads back to it
+/// ([`push_f64`]), read back as a finite number.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Real(pub f64);
+
+impl Serialize for Real {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(shortest(self.0, &mut ryu::Buffer::new()))
     }
-    out.push(b',');
-    push_f64(out, p.volume);
+}
+
+impl<'de> Deserialize<'de> for Real {
+    /// Any number; the readers refuse the non-finite ones where they know the
+    /// field (see `StateRow::first_non_finite`).
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Real, D::Error> {
+        f64::deserialize(d).map(Real)
+    }
+}
+
+/// One row of the placement table (`inspect --mps`): the MP's ids (element
+/// 1-based), position and volume. The first columns of a [`StateRow`] too.
+#[derive(Debug, Serialize, Deserialize)]
+struct PlacementRow {
+    id: u32,
+    element: u32,
+    material: u32,
+    local: u32,
+    x: Real,
+    y: Real,
+    z: Real,
+    volume: Real,
+}
+
+impl PlacementRow {
+    fn of(p: &MaterialPoint) -> PlacementRow {
+        let [x, y, z] = p.position.map(Real);
+        PlacementRow {
+            id: p.id,
+            element: p.element + 1,
+            material: p.material,
+            local: p.local,
+            x,
+            y,
+            z,
+            volume: Real(p.volume),
+        }
+    }
+
+    fn into_point(self) -> MaterialPoint {
+        MaterialPoint {
+            id: self.id,
+            element: self.element.saturating_sub(1),
+            material: self.material,
+            local: self.local,
+            position: [self.x.0, self.y.0, self.z.0],
+            volume: self.volume.0,
+        }
+    }
+}
+
+/// Header of the placement table.
+pub const PLACEMENT_HEADER: &str = "id,element,material,local,x,y,z,volume";
+
+/// Writes the placement table: one row per MP.
+pub fn write_points(w: &mut dyn Write, points: &[MaterialPoint]) -> std::io::Result<()> {
+    writeln!(w, "{PLACEMENT_HEADER}")?;
+    write_records(w, points.len(), |i| PlacementRow::of(&points[i]))
 }
 
 /// Mapping diagnostics of one MP.
@@ -118,42 +209,117 @@ pub struct MpDiagnostics {
 /// Header of the mapped-state table.
 pub const STATE_HEADER: &str = "id,element,material,local,x,y,z,volume,pwp,sxx,syy,szz,sxy,syz,sxz,esxx,esyy,eszz,esxy,esyz,esxz,saturation,neighbours,shepard,status";
 
+/// One row of the mapped-state table (`mps.csv`), written by [`write_states`]
+/// and read by [`read_states`]: the placement, pwp, total and effective stress
+/// (Anura3D signs, kPa), saturation and the mapping diagnostics. The reader
+/// needs the columns up to `saturation`; the diagnostics may be missing. The
+/// placement is a nested row: `csv` reads and writes it in line, by position.
+#[derive(Debug, Serialize, Deserialize)]
+struct StateRow<'a> {
+    placement: PlacementRow,
+    pwp: Real,
+    sxx: Real,
+    syy: Real,
+    szz: Real,
+    sxy: Real,
+    syz: Real,
+    sxz: Real,
+    esxx: Real,
+    esyy: Real,
+    eszz: Real,
+    esxy: Real,
+    esyz: Real,
+    esxz: Real,
+    saturation: Real,
+    #[serde(default)]
+    neighbours: u32,
+    #[serde(default)]
+    shepard: Real,
+    #[serde(default, borrow)]
+    status: &'a str,
+}
+
+/// Fields a state row needs: every column up to `saturation`.
+const STATE_FIELDS_NEEDED: usize = 22;
+
+impl StateRow<'_> {
+    fn of(p: &MaterialPoint, s: &MpState, d: &MpDiagnostics) -> StateRow<'static> {
+        let [sxx, syy, szz, sxy, syz, sxz] = s.total.map(Real);
+        let [esxx, esyy, eszz, esxy, esyz, esxz] = s.effective().map(Real);
+        StateRow {
+            placement: PlacementRow::of(p),
+            pwp: Real(s.pwp),
+            sxx,
+            syy,
+            szz,
+            sxy,
+            syz,
+            sxz,
+            esxx,
+            esyy,
+            eszz,
+            esxy,
+            esyz,
+            esxz,
+            saturation: Real(s.saturation),
+            neighbours: d.neighbours,
+            shepard: Real(d.shepard),
+            status: d.status,
+        }
+    }
+
+    /// 0-based field of the first number that is not finite, among the
+    /// columns the reader takes (`x` to `saturation`).
+    fn first_non_finite(&self) -> Option<usize> {
+        let p = &self.placement;
+        [p.x, p.y, p.z, p.volume, self.pwp]
+            .iter()
+            .chain(&self.total())
+            .chain(&self.effective())
+            .chain([&self.saturation])
+            .position(|v| !v.0.is_finite())
+            .map(|k| k + 4)
+    }
+
+    fn total(&self) -> [Real; 6] {
+        [self.sxx, self.syy, self.szz, self.sxy, self.syz, self.sxz]
+    }
+
+    fn effective(&self) -> [Real; 6] {
+        [
+            self.esxx, self.esyy, self.eszz, self.esxy, self.esyz, self.esxz,
+        ]
+    }
+
+    /// The MP and its state (the effective stresses and diagnostics are
+    /// derived data and not read back).
+    fn into_model(self) -> (MaterialPoint, MpState) {
+        let state = MpState {
+            pwp: self.pwp.0,
+            total: self.total().map(|v| v.0),
+            saturation: self.saturation.0,
+        };
+        (self.placement.into_point(), state)
+    }
+}
+
 /// Writes the mapped-state table (`mps.csv`): placement, pwp, total and effective
 /// stress (Anura3D signs, kPa), saturation and diagnostics.
 pub fn write_states(
     w: &mut dyn Write,
     points: &[MaterialPoint],
-    states: &[crate::model::MpState],
+    states: &[MpState],
     diagnostics: &[MpDiagnostics],
 ) -> std::io::Result<()> {
     writeln!(w, "{STATE_HEADER}")?;
     let n = points.len().min(states.len()).min(diagnostics.len());
-    write_rows(w, n, |i, out| {
-        let (p, s, d) = (&points[i], &states[i], &diagnostics[i]);
-        push_placement(out, p);
-        for v in std::iter::once(s.pwp)
-            .chain(s.total)
-            .chain(s.effective())
-            .chain([s.saturation])
-        {
-            out.push(b',');
-            push_f64(out, v);
-        }
-        out.push(b',');
-        push_int(out, d.neighbours);
-        out.push(b',');
-        push_f64(out, d.shepard);
-        out.push(b',');
-        out.extend_from_slice(d.status.as_bytes());
-        out.push(b'\n');
-        Ok(())
+    write_records(w, n, |i| {
+        StateRow::of(&points[i], &states[i], &diagnostics[i])
     })
 }
 
 /// Reads a mapped-state table back: (points, states). Positioned errors.
-pub fn read_states(
-    path: &std::path::Path,
-) -> Result<(Vec<MaterialPoint>, Vec<crate::model::MpState>), super::error::FormatError> {
+pub fn read_states(path: &Path) -> Result<(Vec<MaterialPoint>, Vec<MpState>), FormatError> {
     read_states_with_lines(path).map(|(p, s, _)| (p, s))
 }
 
@@ -161,10 +327,9 @@ pub fn read_states(
 /// (`expected`): same count, and row by row the same id, element and position.
 /// A mismatch is an error at the row's line.
 pub fn read_states_for(
-    path: &std::path::Path,
+    path: &Path,
     expected: &[MaterialPoint],
-) -> Result<(Vec<MaterialPoint>, Vec<crate::model::MpState>), super::error::FormatError> {
-    use super::error::ParseError;
+) -> Result<(Vec<MaterialPoint>, Vec<MpState>), FormatError> {
     let (points, states, lines) = read_states_with_lines(path)?;
     if points.len() != expected.len() {
         let line = lines
@@ -200,14 +365,12 @@ pub fn read_states_for(
     Ok((points, states))
 }
 
-type StateRows = (Vec<MaterialPoint>, Vec<crate::model::MpState>, Vec<usize>);
+type StateRows = (Vec<MaterialPoint>, Vec<MpState>, Vec<usize>);
 
 /// The rows with the 1-based line of each.
-fn read_states_with_lines(path: &std::path::Path) -> Result<StateRows, super::error::FormatError> {
-    use super::error::ParseError;
+fn read_states_with_lines(path: &Path) -> Result<StateRows, FormatError> {
     let text = super::keyword_doc::read_text(path)?;
-    let mut lines = text.lines().enumerate();
-    let header = lines.next().map(|(_, l)| l.trim()).unwrap_or("");
+    let header = text.lines().next().map(str::trim).unwrap_or("");
     if !header.starts_with("id,element,material,local,x,y,z,volume,pwp,sxx") {
         return Err(ParseError::at(
             path,
@@ -217,76 +380,100 @@ fn read_states_with_lines(path: &std::path::Path) -> Result<StateRows, super::er
         )
         .into());
     }
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(text.as_bytes());
     let mut points = Vec::new();
     let mut states = Vec::new();
     let mut line_numbers = Vec::new();
-    for (i, line) in lines {
-        if line.trim().is_empty() {
+    let mut record = csv::StringRecord::new();
+    loop {
+        match reader.read_record(&mut record) {
+            Ok(true) => {}
+            Ok(false) => break,
+            Err(e) => return Err(csv_error(path, e, None).into()),
+        }
+        if record.iter().all(str::is_empty) {
             continue;
         }
-        let f: Vec<&str> = line.split(',').collect();
-        if f.len() < 22 {
+        let line = record.position().map_or(0, |p| p.line() as usize);
+        if record.len() < STATE_FIELDS_NEEDED {
             return Err(ParseError::at(
                 path,
-                i + 1,
-                line.chars().count() + 1,
-                format!("expected at least 22 fields, found {}", f.len()),
+                line,
+                // Just past the line's last character.
+                column(&record, record.len()) - 1,
+                format!(
+                    "expected at least {STATE_FIELDS_NEEDED} fields, found {}",
+                    record.len()
+                ),
             )
             .into());
         }
-        // 1-based column of field k: the characters of the fields and commas before it.
-        let column =
-            |k: usize| -> usize { f[..k].iter().map(|s| s.chars().count() + 1).sum::<usize>() + 1 };
-        let num = |k: usize| -> Result<f64, ParseError> {
-            f[k].trim()
-                .parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| {
-                    ParseError::at(
-                        path,
-                        i + 1,
-                        column(k),
-                        format!(
-                            "field {}: expected a finite number, found `{}`",
-                            k + 1,
-                            f[k]
-                        ),
-                    )
-                })
-        };
-        let int = |k: usize| -> Result<u32, ParseError> {
-            f[k].trim().parse::<u32>().map_err(|_| {
-                ParseError::at(
-                    path,
-                    i + 1,
-                    column(k),
-                    format!("field {}: expected an integer, found `{}`", k + 1, f[k]),
-                )
-            })
-        };
-        points.push(MaterialPoint {
-            id: int(0)?,
-            element: int(1)?.saturating_sub(1),
-            material: int(2)?,
-            local: int(3)?,
-            position: [num(4)?, num(5)?, num(6)?],
-            volume: num(7)?,
-        });
-        states.push(crate::model::MpState {
-            pwp: num(8)?,
-            total: [num(9)?, num(10)?, num(11)?, num(12)?, num(13)?, num(14)?],
-            saturation: num(21)?,
-        });
-        line_numbers.push(i + 1);
+        let row: StateRow = record
+            .deserialize(None)
+            .map_err(|e| csv_error(path, e, Some(&record)))?;
+        if let Some(k) = row.first_non_finite() {
+            return Err(field_error(path, line, &record, k, "expected a finite number").into());
+        }
+        let (point, state) = row.into_model();
+        points.push(point);
+        states.push(state);
+        line_numbers.push(line);
     }
     Ok((points, states, line_numbers))
+}
+
+/// A csv error as a positioned error: the record's line, and with `record`
+/// the field that failed.
+fn csv_error(path: &Path, e: csv::Error, record: Option<&csv::StringRecord>) -> ParseError {
+    let line = e.position().map_or(0, |p| p.line() as usize);
+    let csv::ErrorKind::Deserialize { err, .. } = e.kind() else {
+        return ParseError::at(path, line, 1, e.to_string());
+    };
+    let (Some(k), Some(record)) = (err.field(), record) else {
+        return ParseError::at(path, line, 1, err.to_string());
+    };
+    let expected = match err.kind() {
+        csv::DeserializeErrorKind::ParseInt(_) => "expected an integer",
+        _ => "expected a finite number",
+    };
+    field_error(path, line, record, k as usize, expected)
+}
+
+/// 1-based column of field `k` (0-based) of `record`: the characters of the
+/// fields and commas before it.
+fn column(record: &csv::StringRecord, k: usize) -> usize {
+    record
+        .iter()
+        .take(k)
+        .map(|s| s.chars().count() + 1)
+        .sum::<usize>()
+        + 1
+}
+
+/// `field N: expected …, found `…`` at field `k` (0-based) of `record`.
+fn field_error(
+    path: &Path,
+    line: usize,
+    record: &csv::StringRecord,
+    k: usize,
+    expected: &str,
+) -> ParseError {
+    let found = record.get(k).unwrap_or("");
+    ParseError::at(
+        path,
+        line,
+        column(record, k),
+        format!("field {}: {expected}, found `{found}`", k + 1),
+    )
 }
 
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::model::MpState;
     use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -366,6 +553,78 @@ pub(crate) mod tests {
         pool.install(|| write_states(&mut out, points, states, &diagnostics))
             .unwrap();
         out
+    }
+
+    #[test]
+    fn headers_name_the_row_structs_fields() {
+        let (points, states) = sample(1, 1);
+        let d = MpDiagnostics {
+            neighbours: 1,
+            shepard: 1.0,
+            status: "mapped",
+        };
+        let mut w = csv::Writer::from_writer(Vec::new());
+        w.serialize(PlacementRow::of(&points[0])).unwrap();
+        let text = String::from_utf8(w.into_inner().unwrap()).unwrap();
+        assert_eq!(text.lines().next().unwrap(), PLACEMENT_HEADER);
+        // The nested placement has no header of its own: the state header
+        // starts with the placement's and has a column per field.
+        assert!(STATE_HEADER.starts_with(PLACEMENT_HEADER));
+        let mut w = csv_writer(Vec::new());
+        w.serialize(StateRow::of(&points[0], &states[0], &d))
+            .unwrap();
+        let row = String::from_utf8(w.into_inner().unwrap()).unwrap();
+        assert_eq!(row.split(',').count(), STATE_HEADER.split(',').count());
+    }
+
+    #[test]
+    fn reader_skips_blank_lines_and_takes_short_and_long_rows() {
+        let (points, states) = sample(3, 2);
+        let mut table = states_table(&points, &states, 1);
+        let text = String::from_utf8(table.clone()).unwrap();
+        let mut lines: Vec<String> = text.lines().map(String::from).collect();
+        // Row 1 without the diagnostics, row 2 with an extra field, blank lines between.
+        lines[1] = lines[1].split(',').take(22).collect::<Vec<_>>().join(",");
+        lines[2].push_str(",extra");
+        lines.insert(2, String::new());
+        lines.insert(3, "   ".into());
+        table = lines.join("\n").into_bytes();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("mps.csv");
+        std::fs::write(&path, &table).unwrap();
+        let (p, s, l) = read_states_with_lines(&path).unwrap();
+        assert_eq!(p.len(), 3);
+        assert_eq!(s.len(), 3);
+        assert_eq!(l, vec![2, 5, 6]);
+    }
+
+    #[test]
+    fn reader_errors_name_line_column_and_field() {
+        let good = "id,element,material,local,x,y,z,volume,pwp,sxx,syy,szz,sxy,syz,sxz,esxx,esyy,eszz,esxy,esyz,esxz,saturation\n";
+        let row = "1,1,1,1,0,0,0,1,0,0,0,0,0,0,0,0,0,0,0,0,0,1";
+        let cases = [
+            (
+                "x,1,1,1,0,0,0,1,0,0,0,0,0,0,0,0,0,0,0,0,0,1",
+                "t.csv:2:1: field 1: expected an integer, found `x`",
+            ),
+            (
+                "1,1,1,1,0,0,0,1,NaN,0,0,0,0,0,0,0,0,0,0,0,0,1",
+                "t.csv:2:17: field 9: expected a finite number, found `NaN`",
+            ),
+            (
+                "1,1,1,1,0,0,0,1,0,0,0,0,0,0,0,0,0,0,0,0,0",
+                "t.csv:2:42: expected at least 22 fields, found 21",
+            ),
+        ];
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("t.csv");
+        std::fs::write(&path, format!("{good}{row}\n")).unwrap();
+        assert_eq!(read_states(&path).unwrap().0.len(), 1);
+        for (bad, expected) in cases {
+            std::fs::write(&path, format!("{good}{bad}\n")).unwrap();
+            let e = read_states(&path).unwrap_err().to_string();
+            assert!(e.ends_with(expected), "{e}\nexpected: {expected}");
+        }
     }
 
     #[test]

@@ -239,11 +239,7 @@ fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, 
     let truncated = |offset: usize, what: &str| -> FormatError {
         ParseError::new(
             path,
-            Position {
-                line: 0,
-                column: 0,
-                byte: offset,
-            },
+            Position::in_binary(offset),
             format!(
                 "truncated PLY: the data ends at byte {} inside {what}",
                 bytes.len()
@@ -258,7 +254,7 @@ fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, 
     if offset.saturating_add(need) > bytes.len() {
         return Err(ParseError::new(
             path,
-            Position { line: 0, column: 0, byte: offset },
+            Position::in_binary(offset),
             format!(
                 "truncated PLY: {} nodes need {need} bytes from byte {offset}, but only {} remain ({} whole nodes)",
                 node.count,
@@ -280,11 +276,7 @@ fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, 
         if p.iter().any(|v| !v.is_finite()) {
             return Err(ParseError::new(
                 path,
-                Position {
-                    line: 0,
-                    column: 0,
-                    byte: base,
-                },
+                Position::in_binary(base),
                 format!("node {} has a non-finite coordinate", k + 1),
             )
             .into());
@@ -328,11 +320,7 @@ fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, 
                                 {
                                     return Err(ParseError::new(
                                         path,
-                                        Position {
-                                            line: 0,
-                                            column: 0,
-                                            byte: offset,
-                                        },
+                                        Position::in_binary(offset),
                                         format!(
                                             "element {} refers to node {bad}, outside 1..={}",
                                             cells.len() + 1,

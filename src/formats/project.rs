@@ -219,14 +219,8 @@ pub fn discover(path: &Path) -> Result<ProjectFiles, FormatError> {
         let renamed = file != format!("{stem}.{ext}");
         let chosen = choose_cps(&dir, &name, gom_stage, &mut notes, &mut warnings)?;
         notes.insert(0, format!("GOM: {}", path.display()));
-        let (cps, cps_version, stage) = match &chosen {
-            Some((p, doc)) => (
-                Some(p.clone()),
-                Some(doc.version().to_string()),
-                doc.is_staged().then(|| doc.stage()),
-            ),
-            None => (None, None, gom_stage),
-        };
+        let facts = CpsFacts::of(chosen.as_ref(), gom_stage);
+        let stage = facts.stage;
         // The name Anura3D will open: decided by the CPS, else by the file's own extension.
         let expected = match (&chosen, stage) {
             (Some((_, doc)), _) if !doc.is_staged() => format!("{name}.GOM"),
@@ -247,19 +241,14 @@ pub fn discover(path: &Path) -> Result<ProjectFiles, FormatError> {
                 doc.version()
             ));
         }
-        let opd = find_opd(&dir, &name, stage, cps_version.as_deref(), &mut notes);
-        check_later_stage(&dir, &name, stage, &mut warnings);
-        return Ok(ProjectFiles {
+        return Ok(assemble(
             name,
             dir,
-            gom: path.to_path_buf(),
-            cps,
-            cps_version,
-            opd,
-            stage,
+            path.to_path_buf(),
+            facts,
             notes,
             warnings,
-        });
+        ));
     }
     if cps_step(ext).is_some() {
         let cps = CpsDocument::read(path)?;
@@ -346,26 +335,65 @@ fn discover_gid(path: &Path, dir: &Path, name: &str) -> Result<ProjectFiles, For
         }
         choose_cps(dir, name, None, &mut notes, &mut warnings)?
     };
-    let (cps, cps_version, stage) = match chosen {
-        Some((p, doc)) => {
-            let stage = doc.is_staged().then(|| doc.stage());
-            (Some(p), Some(doc.version().to_string()), stage)
-        }
-        None => (None, None, None),
-    };
-    let opd = find_opd(dir, name, stage, cps_version.as_deref(), &mut notes);
-    check_later_stage(dir, name, stage, &mut warnings);
-    Ok(ProjectFiles {
-        name: name.to_string(),
-        dir: dir.to_path_buf(),
+    let facts = CpsFacts::of(chosen.as_ref(), None);
+    Ok(assemble(
+        name.to_string(),
+        dir.to_path_buf(),
         gom,
-        cps,
-        cps_version,
-        opd,
-        stage,
+        facts,
         notes,
         warnings,
-    })
+    ))
+}
+
+/// What the chosen CPS says about the project: its path, header version and
+/// stage (without a CPS, the stage the GOM's name gives, if any).
+struct CpsFacts {
+    path: Option<PathBuf>,
+    version: Option<String>,
+    stage: Option<u32>,
+}
+
+impl CpsFacts {
+    fn of(chosen: Option<&(PathBuf, CpsDocument)>, stage_without_cps: Option<u32>) -> CpsFacts {
+        match chosen {
+            Some((p, doc)) => CpsFacts {
+                path: Some(p.clone()),
+                version: Some(doc.version().to_string()),
+                stage: doc.is_staged().then(|| doc.stage()),
+            },
+            None => CpsFacts {
+                path: None,
+                version: None,
+                stage: stage_without_cps,
+            },
+        }
+    }
+}
+
+/// The project's files once the GOM and CPS are known: finds the OPD and
+/// checks for a later stage's missing `GOM_stage0`.
+fn assemble(
+    name: String,
+    dir: PathBuf,
+    gom: PathBuf,
+    cps: CpsFacts,
+    mut notes: Vec<String>,
+    mut warnings: Vec<String>,
+) -> ProjectFiles {
+    let opd = find_opd(&dir, &name, cps.stage, cps.version.as_deref(), &mut notes);
+    check_later_stage(&dir, &name, cps.stage, &mut warnings);
+    ProjectFiles {
+        name,
+        dir,
+        gom,
+        cps: cps.path,
+        cps_version: cps.version,
+        opd,
+        stage: cps.stage,
+        notes,
+        warnings,
+    }
 }
 
 /// The OPD of a 2025 stage: beside the GOM, or (GiD) in the sibling `name.A3D/`.
@@ -531,16 +559,23 @@ mod tests {
     }
 
     const GOM: &str = "### Anura3D_2024 ###\n$$FINISH\n";
+
+    /// A GiD export folder `<name>.gid` in `dir`: the GOM as `<name>-2.dat`,
+    /// `minus_one` as `<name>-1.dat`.
+    fn gid_folder(dir: &Path, name: &str, minus_one: &str) -> PathBuf {
+        let gid = dir.join(format!("{name}.gid"));
+        std::fs::create_dir(&gid).unwrap();
+        write(&gid, &format!("{name}-2.dat"), GOM);
+        write(&gid, &format!("{name}-1.dat"), minus_one);
+        gid
+    }
     const CPS_2024: &str = "### Anura3D_2024 ###\n$$K0_PROCEDURE\n1\n$$END\n";
     const CPS_2025: &str = "### Anura3D_2025 ###\n$$STAGE\n0\n$$END\n";
 
     #[test]
     fn gid_folder_reads_minus_one_dat_as_the_cps() {
         let tmp = tempfile::tempdir().unwrap();
-        let gid = tmp.path().join("Dam.gid");
-        std::fs::create_dir(&gid).unwrap();
-        write(&gid, "Dam-2.dat", GOM);
-        write(&gid, "Dam-1.dat", CPS_2024);
+        let gid = gid_folder(tmp.path(), "Dam", CPS_2024);
         let p = discover(&gid).unwrap();
         assert_eq!(p.name, "Dam");
         assert_eq!(p.cps.as_deref(), Some(gid.join("Dam-1.dat").as_path()));
@@ -556,12 +591,9 @@ mod tests {
     #[test]
     fn gid_2025_names_are_staged_and_the_opd_is_found_in_the_a3d_folder() {
         let tmp = tempfile::tempdir().unwrap();
-        let gid = tmp.path().join("Dam.gid");
+        let gid = gid_folder(tmp.path(), "Dam", CPS_2025);
         let a3d = tmp.path().join("Dam.A3D");
-        std::fs::create_dir(&gid).unwrap();
         std::fs::create_dir(&a3d).unwrap();
-        write(&gid, "Dam-2.dat", GOM);
-        write(&gid, "Dam-1.dat", CPS_2025);
         write(&a3d, "Dam.OPD_stage0", "$$END\n");
         let p = discover(&gid.join("Dam-2.dat")).unwrap();
         assert_eq!(p.opd.as_deref(), Some(a3d.join("Dam.OPD_stage0").as_path()));
@@ -576,11 +608,8 @@ mod tests {
         // As in upstream tutorial folders: -2.dat (GOM), -3.dat and .dat (batch
         // files), and the CPS under its Anura3D name.
         let tmp = tempfile::tempdir().unwrap();
-        let gid = tmp.path().join("Oedo.gid");
-        std::fs::create_dir(&gid).unwrap();
-        write(&gid, "Oedo-2.dat", GOM);
+        let gid = gid_folder(tmp.path(), "Oedo", "\"Anura3D_2023.exe\"\nPAUSE\n");
         write(&gid, "Oedo-3.dat", "\"Anura3D_2023.exe\" \"Oedo\"\nPAUSE\n");
-        write(&gid, "Oedo-1.dat", "\"Anura3D_2023.exe\"\nPAUSE\n");
         write(&gid, "Oedo.dat", "PAUSE\n");
         let cps = write(&gid, "Oedo.CPS_001", CPS_2024);
         let p = discover(&gid).unwrap();
@@ -607,58 +636,84 @@ mod tests {
         assert!(names.needs_gom_stage0);
     }
 
+    /// A GOM named otherwise than Anura3D looks for it: the project is found
+    /// (from the file and from the folder), the name is reported, and the
+    /// output uses the right one.
     #[test]
-    fn doubled_extension_picks_the_obvious_project() {
-        let tmp = tempfile::tempdir().unwrap();
-        let gom = write(tmp.path(), "X.GOM.GOM_stage0", GOM);
-        write(tmp.path(), "X.CPS_001", CPS_2025);
-        let p = discover(&gom).unwrap();
-        assert_eq!(p.name, "X");
-        assert!(p.cps.is_some());
-        assert!(
-            p.warnings[0].contains("will look for X.GOM_stage0"),
-            "{:?}",
-            p.warnings
-        );
-        assert_eq!(p.output_names("2025").gom, "X.GOM_stage0");
-        // The folder finds the same project.
-        assert_eq!(discover(tmp.path()).unwrap().name, "X");
-    }
-
-    #[test]
-    fn lower_case_extensions_are_read_and_reported() {
-        let tmp = tempfile::tempdir().unwrap();
-        let gom = write(tmp.path(), "L.gom", GOM);
-        write(tmp.path(), "L.cps_001", CPS_2024);
-        let p = discover(&gom).unwrap();
-        assert_eq!(p.name, "L");
-        assert!(p.cps.is_some());
-        assert!(
-            p.warnings[0].contains("Anura3D looks for L.GOM"),
-            "{:?}",
-            p.warnings
-        );
-        let names = p.output_names("2024");
-        assert_eq!(
-            (names.gom.as_str(), names.cps.as_str()),
-            ("L.GOM", "L.CPS_001")
-        );
-        assert_eq!(discover(tmp.path()).unwrap().name, "L");
-    }
-
-    #[test]
-    fn doubled_extension_with_an_older_cps_names_the_gom() {
-        let tmp = tempfile::tempdir().unwrap();
-        let gom = write(tmp.path(), "W.GOM.GOM_stage0", GOM);
-        write(tmp.path(), "W.CPS_001", CPS_2024);
-        let p = discover(&gom).unwrap();
-        assert_eq!(p.name, "W");
-        assert!(
-            p.warnings[0].contains("will look for W.GOM "),
-            "{:?}",
-            p.warnings
-        );
-        assert_eq!(p.output_names("2024").gom, "W.GOM");
+    fn misnamed_goms_are_read_and_reported() {
+        struct Case {
+            what: &'static str,
+            gom: &'static str,
+            cps: &'static str,
+            cps_text: &'static str,
+            warning: &'static str,
+            version: &'static str,
+            output_gom: &'static str,
+        }
+        let cases = [
+            Case {
+                what: "doubled extension picks the obvious project",
+                gom: "X.GOM.GOM_stage0",
+                cps: "X.CPS_001",
+                cps_text: CPS_2025,
+                warning: "will look for X.GOM_stage0",
+                version: "2025",
+                output_gom: "X.GOM_stage0",
+            },
+            Case {
+                what: "lower-case extensions",
+                gom: "L.gom",
+                cps: "L.cps_001",
+                cps_text: CPS_2024,
+                warning: "Anura3D looks for L.GOM",
+                version: "2024",
+                output_gom: "L.GOM",
+            },
+            Case {
+                what: "doubled extension with an older CPS names the GOM",
+                gom: "W.GOM.GOM_stage0",
+                cps: "W.CPS_001",
+                cps_text: CPS_2024,
+                warning: "will look for W.GOM ",
+                version: "2024",
+                output_gom: "W.GOM",
+            },
+            Case {
+                what: "a GOM named for the wrong version",
+                gom: "Y.GOM",
+                cps: "Y.CPS_001",
+                cps_text: CPS_2025,
+                warning: "will look for Y.GOM_stage0",
+                version: "2024",
+                output_gom: "Y.GOM_stage0",
+            },
+        ];
+        for c in cases {
+            let tmp = tempfile::tempdir().unwrap();
+            let gom = write(tmp.path(), c.gom, GOM);
+            write(tmp.path(), c.cps, c.cps_text);
+            let name = &c.gom[..1];
+            let p = discover(&gom).unwrap();
+            assert_eq!(p.name, name, "{}", c.what);
+            assert!(p.cps.is_some(), "{}", c.what);
+            if c.cps_text == CPS_2025 {
+                assert_eq!(p.stage, Some(0), "{}", c.what);
+            }
+            assert!(
+                p.warnings[0].contains(c.warning),
+                "{}: {:?}",
+                c.what,
+                p.warnings
+            );
+            let names = p.output_names(c.version);
+            assert_eq!(
+                (names.gom.as_str(), names.cps.as_str()),
+                (c.output_gom, format!("{name}.CPS_001").as_str()),
+                "{}",
+                c.what
+            );
+            assert_eq!(discover(tmp.path()).unwrap().name, name, "{}", c.what);
+        }
     }
 
     #[test]
@@ -670,17 +725,6 @@ mod tests {
         let p = discover(tmp.path()).unwrap();
         assert_eq!(p.gom, good);
         assert!(p.warnings.is_empty(), "{:?}", p.warnings);
-    }
-
-    #[test]
-    fn a_gom_named_for_the_wrong_version_is_reported() {
-        let tmp = tempfile::tempdir().unwrap();
-        let gom = write(tmp.path(), "Y.GOM", GOM);
-        write(tmp.path(), "Y.CPS_001", CPS_2025);
-        let p = discover(&gom).unwrap();
-        assert_eq!(p.stage, Some(0));
-        assert!(p.warnings[0].contains("will look for Y.GOM_stage0"));
-        assert_eq!(p.output_names("2024").gom, "Y.GOM_stage0");
     }
 
     #[test]

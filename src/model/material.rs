@@ -82,6 +82,35 @@ pub struct Material {
     pub properties: Vec<(String, String)>,
 }
 
+/// Looking materials up by what a user types: a name or a 1-based index.
+pub mod lookup {
+    use super::Material;
+
+    /// The index of the material named `name` (ASCII case ignored).
+    pub fn by_name(materials: &[Material], name: &str) -> Option<u32> {
+        materials
+            .iter()
+            .find(|m| m.name.eq_ignore_ascii_case(name))
+            .map(|m| m.index)
+    }
+
+    /// `text` as a 1-based index of one of `materials`.
+    pub fn by_number(materials: &[Material], text: &str) -> Option<u32> {
+        text.parse::<u32>()
+            .ok()
+            .filter(|&i| i >= 1 && i as usize <= materials.len())
+    }
+
+    /// `1 sand, 2 clay`: the materials, for messages.
+    pub fn list(materials: &[Material]) -> String {
+        materials
+            .iter()
+            .map(|m| format!("{} {}", m.index, m.name))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
 impl Material {
     /// A material with only its head (index, name, type) and no properties.
     pub fn new(index: u32, name: impl Into<String>, material_type: impl Into<String>) -> Material {

@@ -10,7 +10,7 @@
 
 mod fem;
 pub mod generate;
-mod material;
+pub mod material;
 mod mesh;
 mod points;
 

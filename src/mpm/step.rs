@@ -136,6 +136,27 @@ pub(crate) struct Solver<const D: usize, const NC: usize> {
     pub min_altitude: f64,
 }
 
+/// Runs `f` on every MP that is not lost and its output slot, in parallel; a
+/// lost MP's slot is set to `lost` (it contributes nothing).
+fn per_live_mp<const D: usize, const NC: usize, T: Copy + Send + Sync>(
+    particles: &mut [Particle<D, NC>],
+    out: &mut [T],
+    lost: T,
+    f: impl Fn(&mut Particle<D, NC>, &mut T) + Sync,
+) {
+    particles
+        .par_iter_mut()
+        .zip(out.par_iter_mut())
+        .with_min_len(MIN_CHUNK)
+        .for_each(|(p, out)| {
+            if p.lost {
+                *out = lost;
+            } else {
+                f(p, out);
+            }
+        });
+}
+
 impl<const D: usize, const NC: usize> Solver<D, NC> {
     pub fn new(
         model: &AnuraModel,
@@ -277,15 +298,11 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         let radius_floor = self.radius_floor;
 
         // 1. P2G contributions, per MP in parallel.
-        self.particles
-            .par_iter_mut()
-            .zip(self.p2g.par_iter_mut())
-            .with_min_len(MIN_CHUNK)
-            .for_each(|(p, out)| {
-                if p.lost {
-                    *out = [Contribution::ZERO; NC];
-                    return;
-                }
+        per_live_mp(
+            &mut self.particles,
+            &mut self.p2g,
+            [Contribution::ZERO; NC],
+            |p, out| {
                 let element = &grid.elements[p.element as usize];
                 let n = element.shape.values(&p.position);
                 p.shape = n;
@@ -312,7 +329,8 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                         force,
                     };
                 }
-            });
+            },
+        );
 
         // Scatter serially in MP order (deterministic sums).
         self.node_mass.fill(0.0);
@@ -366,15 +384,11 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         // 3. G2P: MP velocity and position, and the momenta for the MUSL remap.
         let acceleration = &self.node_acceleration;
         let node_velocity = &self.node_velocity;
-        self.particles
-            .par_iter_mut()
-            .zip(self.remap.par_iter_mut())
-            .with_min_len(MIN_CHUNK)
-            .for_each(|(p, out)| {
-                if p.lost {
-                    *out = [[0.0; D]; NC];
-                    return;
-                }
+        per_live_mp(
+            &mut self.particles,
+            &mut self.remap,
+            [[0.0; D]; NC],
+            |p, out| {
                 let corners = &grid.elements[p.element as usize].corners;
                 let n = p.shape;
                 let mut a = [0.0; D];
@@ -398,7 +412,8 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                         out[i][d] = w * p.velocity[d];
                     }
                 }
-            });
+            },
+        );
 
         // 4. MUSL: nodal velocities from the updated MP momenta.
         self.node_momentum.fill([0.0; D]);

@@ -5,6 +5,7 @@
 
 use super::{PipelineError, Project};
 use crate::model::FemNodes;
+use crate::model::material::lookup;
 
 macro_rules! input_err {
     ($($t:tt)*) => { PipelineError::Input(format!($($t)*)) };
@@ -31,18 +32,8 @@ pub(super) fn groups(
             .iter()
             .find(|(r, _)| r == region)
             .map(|(_, i)| *i)
-            .or_else(|| {
-                materials
-                    .iter()
-                    .find(|m| m.name.eq_ignore_ascii_case(region))
-                    .map(|m| m.index)
-            })
-            .or_else(|| {
-                region
-                    .parse::<u32>()
-                    .ok()
-                    .filter(|&i| i >= 1 && i as usize <= materials.len())
-            })
+            .or_else(|| lookup::by_name(materials, region))
+            .or_else(|| lookup::by_number(materials, region))
     };
     let mut out = Vec::with_capacity(regions.len());
     let mut unknown: Vec<&str> = Vec::new();
@@ -65,11 +56,7 @@ pub(super) fn groups(
                 .map(|s| format!("`{s}`"))
                 .collect::<Vec<_>>()
                 .join(", "),
-            materials
-                .iter()
-                .map(|m| format!("{} {}", m.index, m.name))
-                .collect::<Vec<_>>()
-                .join(", ")
+            lookup::list(materials)
         ));
     }
     Ok((Some(out), "by region: each MP takes only FEM nodes of its own material (no smoothing across material boundaries)".into()))

@@ -50,6 +50,20 @@ fn describe(worst: &[(usize, [f64; 3], f64, f64)], dim: usize) -> String {
 }
 
 /// Runs both checks. `gamma_w` is the unit weight of water (kN/m³).
+/// The [`Finding::worst`] entries of the first [`WORST`] of `sorted`
+/// ((score, MP index) pairs, worst first).
+fn worst_of(
+    sorted: &[(f64, usize)],
+    positions: &[[f64; 3]],
+    states: &[MpState],
+) -> Vec<(usize, [f64; 3], f64, f64)> {
+    sorted
+        .iter()
+        .take(WORST)
+        .map(|&(_, i)| (i + 1, positions[i], states[i].pwp, states[i].total[1]))
+        .collect()
+}
+
 pub fn check(positions: &[[f64; 3]], states: &[MpState], dim: usize, gamma_w: f64) -> Vec<Finding> {
     let mut findings = Vec::new();
     let (lo, hi) = positions
@@ -84,11 +98,7 @@ pub fn check(positions: &[[f64; 3]], states: &[MpState], dim: usize, gamma_w: f6
             let (ca, cb) = (states[a.1].pwp < 0.0, states[b.1].pwp < 0.0);
             cb.cmp(&ca).then(b.0.total_cmp(&a.0)).then(a.1.cmp(&b.1))
         });
-        let worst: Vec<_> = bad
-            .iter()
-            .take(WORST)
-            .map(|&(_, i)| (i + 1, positions[i], states[i].pwp, states[i].total[1]))
-            .collect();
+        let worst = worst_of(&bad, positions, states);
         findings.push(Finding {
             check: "pwp-exceeds-vertical-stress",
             count: bad.len(),
@@ -115,11 +125,7 @@ pub fn check(positions: &[[f64; 3]], states: &[MpState], dim: usize, gamma_w: f6
             .collect();
         if !above.is_empty() {
             above.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-            let worst: Vec<_> = above
-                .iter()
-                .take(WORST)
-                .map(|&(_, i)| (i + 1, positions[i], states[i].pwp, states[i].total[1]))
-                .collect();
+            let worst = worst_of(&above, positions, states);
             findings.push(Finding {
                 check: "compressive-pwp-above-top",
                 count: above.len(),

@@ -4,6 +4,7 @@
 #![allow(dead_code)]
 
 pub mod column;
+pub mod malformed;
 pub mod random;
 
 use std::path::{Path, PathBuf};

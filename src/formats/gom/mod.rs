@@ -247,17 +247,14 @@ impl GomDocument {
             .next()
             .ok_or_else(|| self.short_block(counters, 1, 0, "line `NEl NNodes`"))?;
         let mut counts = [0u64; 2];
-        lex::uints(ctext, &mut counts).map_err(|bad| match bad {
-            Some(t) => self.doc.error_at(
+        lex::uints(ctext, &mut counts).map_err(|bad| {
+            self.numbers_error(
                 cline,
-                t.offset,
-                format!("expected a count, found `{}`", t.text),
-            ),
-            None => self.doc.error_at(
-                cline,
+                bad,
+                "a count",
                 0,
                 "expected `NEl NNodes` (number of elements, then nodes)",
-            ),
+            )
         })?;
         let (n_elements, n_nodes) = (counts[0] as usize, counts[1] as usize);
         if n_elements == 0 || n_nodes == 0 {
@@ -344,21 +341,38 @@ impl GomDocument {
         Ok((model, info))
     }
 
+    /// The error for line `i` of numbers that [`lex::reals`] or [`lex::uints`]
+    /// refused: at a bad token, `expected {what}, found `…``; with too few
+    /// numbers, `short` at byte `short_at` of the line.
+    fn numbers_error(
+        &self,
+        i: usize,
+        bad: Option<lex::BadToken<'_>>,
+        what: &str,
+        short_at: usize,
+        short: impl Into<String>,
+    ) -> ParseError {
+        match bad {
+            Some(t) => {
+                self.doc
+                    .error_at(i, t.offset, format!("expected {what}, found `{}`", t.text))
+            }
+            None => self.doc.error_at(i, short_at, short),
+        }
+    }
+
     fn read_nodes(&self, n_dim: usize, n_nodes: usize) -> Result<Vec<[f64; 3]>, ParseError> {
         let b = self.required("$$STARTNODES")?;
         self.parse_rows(b, n_nodes, "node lines ($$STARTCOUNTERS)", |k, i, line| {
             let mut xyz = [0.0f64; 3];
-            lex::reals(line, &mut xyz[..n_dim]).map_err(|bad| match bad {
-                Some(t) => self.doc.error_at(
+            lex::reals(line, &mut xyz[..n_dim]).map_err(|bad| {
+                self.numbers_error(
                     i,
-                    t.offset,
-                    format!("expected a coordinate, found `{}`", t.text),
-                ),
-                None => self.doc.error_at(
-                    i,
+                    bad,
+                    "a coordinate",
                     line.len(),
                     format!("node {} needs {n_dim} coordinates", k + 1),
-                ),
+                )
             })?;
             Ok(xyz)
         })
@@ -379,20 +393,17 @@ impl GomDocument {
             |k, i, line| {
                 let e = k + 1;
                 let mut ids = [0u64; 10];
-                lex::uints(line, &mut ids[..per]).map_err(|bad| match bad {
-                    Some(t) => self.doc.error_at(
+                lex::uints(line, &mut ids[..per]).map_err(|bad| {
+                    self.numbers_error(
                         i,
-                        t.offset,
-                        format!("expected a node id, found `{}`", t.text),
-                    ),
-                    None => self.doc.error_at(
-                        i,
+                        bad,
+                        "a node id",
                         line.len(),
                         format!(
                             "element {e} needs {per} node ids for {}",
                             element_type.gom_name()
                         ),
-                    ),
+                    )
                 })?;
                 let mut out = [0u32; 10];
                 for (slot, (k, &id)) in out.iter_mut().zip(ids[..per].iter().enumerate()) {
@@ -442,20 +453,17 @@ impl GomDocument {
         let mut seen = 0;
         let mut values = [0u64; 4];
         for (i, line) in rows.take(count[0] as usize) {
-            lex::uints(line, &mut values[..1 + n_dim]).map_err(|bad| match bad {
-                Some(t) => self.doc.error_at(
+            lex::uints(line, &mut values[..1 + n_dim]).map_err(|bad| {
+                self.numbers_error(
                     i,
-                    t.offset,
-                    format!("expected a node id or a 0/1 flag, found `{}`", t.text),
-                ),
-                None => self.doc.error_at(
-                    i,
+                    bad,
+                    "a node id or a 0/1 flag",
                     line.len(),
                     format!(
                         "expected `node {}`",
                         if n_dim == 2 { "fx fy" } else { "fx fy fz" }
                     ),
-                ),
+                )
             })?;
             let node = values[0] as usize;
             if node == 0 || node > fixity.len() {
@@ -498,13 +506,8 @@ impl GomDocument {
         let b = self.required("$$STARTELMMAT")?;
         let out = self.parse_rows(b, n_elements, "element material lines", |_, i, line| {
             let mut value = [0u64];
-            lex::uints(line, &mut value).map_err(|bad| match bad {
-                Some(t) => self.doc.error_at(
-                    i,
-                    t.offset,
-                    format!("expected a material index, found `{}`", t.text),
-                ),
-                None => self.doc.error_at(i, 0, "expected a material index"),
+            lex::uints(line, &mut value).map_err(|bad| {
+                self.numbers_error(i, bad, "a material index", 0, "expected a material index")
             })?;
             u32::try_from(value[0]).map_err(|_| {
                 self.doc
@@ -536,15 +539,14 @@ impl GomDocument {
     ) -> Result<Vec<(u32, u32)>, ParseError> {
         let out = self.parse_rows(b, n_elements, "MP count lines", |_, i, line| {
             let mut values = [0u64; 2];
-            lex::uints(line, &mut values).map_err(|bad| match bad {
-                Some(t) => self.doc.error_at(
+            lex::uints(line, &mut values).map_err(|bad| {
+                self.numbers_error(
                     i,
-                    t.offset,
-                    format!("expected an MP count, found `{}`", t.text),
-                ),
-                None => self
-                    .doc
-                    .error_at(i, line.len(), "expected `nSolid nLiquid`"),
+                    bad,
+                    "an MP count",
+                    line.len(),
+                    "expected `nSolid nLiquid`",
+                )
             })?;
             match (u32::try_from(values[0]), u32::try_from(values[1])) {
                 (Ok(s), Ok(l)) => Ok((s, l)),
@@ -577,14 +579,8 @@ impl GomDocument {
         let mut out = Vec::with_capacity(n_elements);
         let mut value = [0.0];
         for (i, line) in self.rows(b).take(n_elements) {
-            lex::reals(line, &mut value).map_err(|bad| match bad {
-                Some(t) => self.doc.error_at(
-                    i,
-                    t.offset,
-                    format!("expected a number, found `{}`", t.text),
-                ),
-                None => self.doc.error_at(i, 0, "expected a number"),
-            })?;
+            lex::reals(line, &mut value)
+                .map_err(|bad| self.numbers_error(i, bad, "a number", 0, "expected a number"))?;
             out.push(value[0]);
         }
         if out.len() < n_elements {
