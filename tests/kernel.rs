@@ -178,8 +178,15 @@ fn parallel_map_equals_serial_map_bit_for_bit() {
         .collect();
     for kernel in KERNELS {
         let settings = map_settings(kernel, 0.5, 0.0, OutsidePolicy::Nearest);
-        let serial =
-            mapper::map_points_serial(&cloud, &points, Some(&point_groups), &settings).unwrap();
+        let serial = mapper::map_points_with(
+            &cloud,
+            &points,
+            Some(&point_groups),
+            &settings,
+            Search::Grid,
+            false,
+        )
+        .unwrap();
         for threads in [1, 2, 4] {
             let parallel = in_pool(threads, || {
                 mapper::map_points(&cloud, &points, Some(&point_groups), &settings).unwrap()

@@ -2,17 +2,19 @@
 //! f(x) = Σ w(dᵢ/h)·fᵢ / Σ w(dᵢ/h) over the nodes inside the kernel support.
 //!
 //! Parallel over query points with rayon. Each point's sums run over its
-//! neighbours sorted by (distance, index), and chunks are concatenated in order,
-//! so the output is bit-identical for any thread count ([`map_points_serial`] is
-//! the oracle). Groups keep materials apart: a point only takes nodes of its own
-//! group ("no smoothing across material boundaries").
+//! neighbours sorted by (distance, index), and chunks are concatenated in
+//! order, so the output is bit-identical for any thread count
+//! ([`map_points_with`] run serially is the oracle). Groups keep materials
+//! apart: a point only takes nodes of its own group ("no smoothing across
+//! material boundaries").
 //!
-//! Neighbours come from the cell grid ([`Search::Grid`]: queries sorted by
-//! cell in Morton order, candidates and their values gathered once per cell)
-//! or from the kiddo tree ([`Search::KdTree`], the reference); both give the
-//! same sorted lists, so the results are bit-identical. Results are scattered
-//! back batch by batch to bound memory; progress is counted in
-//! `crate::progress::MAP`.
+//! Neighbours come from the cell grid ([`Search::Grid`]: queries in Morton
+//! order of their cells, each visiting the rows of cells its support reaches;
+//! the grid keeps the node values in its own order and answers the
+//! `--outside nearest` fallback too) or from the kiddo tree
+//! ([`Search::KdTree`], the reference); both give the same sorted lists, so
+//! the results are bit-identical. Results are scattered back batch by batch
+//! to bound memory; progress is counted in `crate::progress::MAP`.
 
 use rayon::prelude::*;
 
@@ -442,18 +444,8 @@ pub fn map_points(
     map_points_with(nodes, points, point_group, settings, Search::Grid, true)
 }
 
-/// The serial oracle of [`map_points`].
-pub fn map_points_serial(
-    nodes: &NodeCloud<'_>,
-    points: &[[f64; 3]],
-    point_group: Option<&[u32]>,
-    settings: &MapSettings,
-) -> Result<MapResult, MapError> {
-    map_points_with(nodes, points, point_group, settings, Search::Grid, false)
-}
-
-/// [`map_points`] with a chosen neighbour search, in parallel or serially.
-/// Every choice gives bit-identical results.
+/// [`map_points`] with a chosen neighbour search, in parallel or serially
+/// (the oracle). Every choice gives bit-identical results.
 pub fn map_points_with(
     nodes: &NodeCloud<'_>,
     points: &[[f64; 3]],
