@@ -3,8 +3,8 @@
 //! cells (runs of cells along x, contiguous in the sorted columns) that the
 //! sphere of the radius can reach, each row cut to the sphere's chord, and
 //! tests every point of those rows in one branch-free loop over coordinate
-//! columns. The hits are ordered
-//! by a bucket pass and an insertion sort ([`Scratch::sort`]).
+//! columns. The hits are ordered by a bucket pass and an insertion sort
+//! (`Scratch::sort`).
 //! [`Grid::second_nearest_within`] instead gathers the 3^dim cells around a
 //! cell once for all the points of that cell.
 //!
