@@ -307,31 +307,23 @@ pub fn read_text(path: &Path) -> Result<String, FormatError> {
 /// A final line without a line ending is kept; `\r\n` and `\n` are both endings.
 fn split_lines(text: &str) -> Vec<(usize, usize, usize)> {
     let bytes = text.as_bytes();
-    let mut lines = Vec::with_capacity(bytes.len() / 16 + 1);
+    // Counted first (memchr), so the vector is allocated once at its size.
+    let count = memchr::memchr_iter(b'\n', bytes).count() + 1;
+    let mut lines = Vec::with_capacity(count);
     let mut start = 0;
-    while start < bytes.len() {
-        match memchr_newline(&bytes[start..]) {
-            Some(rel) => {
-                let nl = start + rel;
-                let end = if nl > start && bytes[nl - 1] == b'\r' {
-                    nl - 1
-                } else {
-                    nl
-                };
-                lines.push((start, end, nl + 1));
-                start = nl + 1;
-            }
-            None => {
-                lines.push((start, bytes.len(), bytes.len()));
-                start = bytes.len();
-            }
-        }
+    for nl in memchr::memchr_iter(b'\n', bytes) {
+        let end = if nl > start && bytes[nl - 1] == b'\r' {
+            nl - 1
+        } else {
+            nl
+        };
+        lines.push((start, end, nl + 1));
+        start = nl + 1;
+    }
+    if start < bytes.len() {
+        lines.push((start, bytes.len(), bytes.len()));
     }
     lines
-}
-
-fn memchr_newline(bytes: &[u8]) -> Option<usize> {
-    bytes.iter().position(|&b| b == b'\n')
 }
 
 #[cfg(test)]

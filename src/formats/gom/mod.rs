@@ -99,7 +99,7 @@ impl GomDocument {
     /// parallel. On failure the error of the earliest bad line is returned, so the
     /// result does not depend on scheduling; a block with fewer than `n` lines is a
     /// positioned error at the line where its data ends.
-    fn parse_rows<T: Send>(
+    fn parse_rows<T: Send + Default>(
         &self,
         b: usize,
         n: usize,
@@ -107,6 +107,7 @@ impl GomDocument {
         parse: impl Fn(usize, usize, &str) -> Result<T, ParseError> + Sync,
     ) -> Result<Vec<T>, ParseError> {
         use rayon::prelude::*;
+        use std::sync::atomic::{AtomicBool, Ordering};
         let rows: Vec<usize> = self.rows(b).take(n).map(|(i, _)| i).collect();
         if rows.len() < n {
             return Err(self.short_block(b, n, rows.len(), what));
@@ -114,19 +115,29 @@ impl GomDocument {
         if let Some(e) = self.extra_rows(b, n, what) {
             return Err(e);
         }
-        let parsed: Result<Vec<T>, ParseError> = rows
-            .par_iter()
+        // Straight into a vector of the right size (a collected `Result`
+        // would grow one by appending); a failure only raises a flag.
+        let failed = AtomicBool::new(false);
+        let mut parsed = Vec::with_capacity(n);
+        rows.par_iter()
             .enumerate()
             .with_min_len(4096)
-            .map(|(k, &i)| parse(k, i, self.doc.line(i)))
-            .collect();
-        parsed.map_err(|_| {
-            // Rare path: find the first failing line serially for a stable message.
-            rows.iter()
-                .enumerate()
-                .find_map(|(k, &i)| parse(k, i, self.doc.line(i)).err())
-                .unwrap_or_else(|| self.doc.error_at(rows[0], 0, "parse error"))
-        })
+            .map(|(k, &i)| {
+                parse(k, i, self.doc.line(i)).unwrap_or_else(|_| {
+                    failed.store(true, Ordering::Relaxed);
+                    T::default()
+                })
+            })
+            .collect_into_vec(&mut parsed);
+        if !failed.into_inner() {
+            return Ok(parsed);
+        }
+        // Rare path: find the first failing line serially for a stable message.
+        Err(rows
+            .iter()
+            .enumerate()
+            .find_map(|(k, &i)| parse(k, i, self.doc.line(i)).err())
+            .unwrap_or_else(|| self.doc.error_at(rows[0], 0, "parse error")))
     }
 
     /// The first non-blank data line of a block, trimmed.
