@@ -351,7 +351,14 @@ fn grid_map_equals_kiddo_map_bit_for_bit() {
             group: Some(&groups),
             node_volume: 0.05,
         };
-        let points = cloud_with_duplicates(&mut rng, dim, 4000);
+        let mut points = cloud_with_duplicates(&mut rng, dim, 4000);
+        // Far outside the cloud: only the nearest-node fallback reaches them.
+        let z = |v: f64| if dim == 3 { v } else { 0.0 };
+        points.extend([
+            [20.0, 20.0, z(20.0)],
+            [-30.0, 0.7, z(1.0)],
+            [0.0, -12.0, z(-9.0)],
+        ]);
         let point_groups: Vec<u32> = points.iter().map(|p| 1 + (p[1] > 0.5) as u32).collect();
         for kernel in KERNELS {
             for (h, outside) in [(0.3, OutsidePolicy::Nearest), (0.05, OutsidePolicy::Skip)] {
@@ -376,6 +383,25 @@ fn grid_map_equals_kiddo_map_bit_for_bit() {
                     assert_eq!(grid.n_neighbours, reference.n_neighbours);
                     assert_eq!(bits(&grid.shepard), bits(&reference.shepard));
                     assert_eq!(grid.status, reference.status);
+                    // Handing the values over (freed once the grid holds a
+                    // copy) changes nothing, the nearest fallback included.
+                    let bare = NodeCloud {
+                        values: &[],
+                        ..cloud
+                    };
+                    let taken = mapper::map_points_taking(
+                        &bare,
+                        values.clone(),
+                        &points,
+                        groups,
+                        &settings,
+                    )
+                    .unwrap();
+                    assert_eq!(bits(&taken.values), bits(&reference.values));
+                    assert_eq!(taken.status, reference.status);
+                    if outside == OutsidePolicy::Nearest {
+                        assert!(reference.status.contains(&PointStatus::Nearest));
+                    }
                 }
             }
         }
