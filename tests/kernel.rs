@@ -507,3 +507,26 @@ fn grid_nearest_equals_brute_force() {
         }
     }
 }
+
+/// A cloud whose extent is a whole number of cells: the points on the far
+/// face stay in the last cell (1/cell rounding must not push them past it).
+#[test]
+fn grid_keeps_points_on_the_far_face() {
+    for dim in [2usize, 3] {
+        for (extent, radius) in [(10.0, 1.0), (0.3, 0.1), (7.0, 0.7), (1e5, 1e3)] {
+            let mut pts = Vec::new();
+            for i in 0..=20 {
+                let v = extent * i as f64 / 20.0;
+                pts.push([v, extent - v, if dim == 3 { v } else { 0.0 }]);
+                pts.push([extent, extent, if dim == 3 { extent } else { 0.0 }]);
+            }
+            let grid = Grid::new(&pts, dim, radius / (1.0 + 1e-6));
+            let mut got = Vec::new();
+            for q in &pts {
+                grid.within(*q, radius / (1.0 + 1e-6), &mut got);
+                let want = within_brute_force(&pts, dim, *q, radius / (1.0 + 1e-6));
+                assert_eq!(got, want, "dim {dim} extent {extent} q {q:?}");
+            }
+        }
+    }
+}

@@ -93,9 +93,16 @@ impl Grid {
             ids: Vec::with_capacity(n),
         };
         let n_cells = (dims[0] * dims[1] * dims[2]) as usize;
+        // Every point lies in the box; the clamp only catches a multiplication
+        // by 1/cell rounding a point on the far face one cell past the last.
+        let last = [dims[0] - 1, dims[1] - 1, dims[2] - 1];
         let cell_of: Vec<u32> = points
             .iter()
-            .map(|p| grid.linear(grid.cell(*p)) as u32)
+            .map(|p| {
+                let c = grid.cell(*p);
+                let c = [0, 1, 2].map(|k| c[k].clamp(0, last[k]));
+                grid.linear(c) as u32
+            })
             .collect();
         // Counting sort by cell, stable in the original index.
         let mut start = vec![0u32; n_cells + 1];
