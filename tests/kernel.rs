@@ -412,7 +412,14 @@ fn grid_map_equals_kiddo_map_bit_for_bit() {
 fn spacings_equal_brute_force_bit_for_bit() {
     let mut rng = ChaCha8Rng::seed_from_u64(23);
     for dim in [2usize, 3] {
-        let pts = cloud_with_duplicates(&mut rng, dim, 1500);
+        let mut pts = cloud_with_duplicates(&mut rng, dim, 1500);
+        // Outliers: no other point in the cells around theirs (rings of cells).
+        let z = |v: f64| if dim == 3 { v } else { 0.0 };
+        pts.extend([
+            [12.0, 0.0, z(0.0)],
+            [-11.0, 3.0, z(2.0)],
+            [0.0, 14.0, z(-1.0)],
+        ]);
         let brute: Vec<f64> = (0..pts.len())
             .map(|i| {
                 within_brute_force(&pts, dim, pts[i], 20.0)

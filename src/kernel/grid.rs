@@ -5,7 +5,7 @@
 //! tests every point of those rows in one branch-free loop over coordinate
 //! columns. The hits are ordered by a bucket pass and an insertion sort
 //! (`Scratch::sort`).
-//! [`Grid::second_nearest_within`] instead gathers the 3^dim cells around a
+//! [`Grid::nearest_others`] instead gathers the 3^dim cells around a
 //! cell once for all the points of that cell.
 //!
 //! Same contract as the k-d tree of `neighbours.rs` (which stays the reference):
@@ -284,6 +284,12 @@ impl Grid {
     /// no closer point can remain, so a query far outside the cloud costs only
     /// the rings it crosses.
     pub fn nearest(&self, q: [f64; 3]) -> Option<(u32, f64)> {
+        self.nearest_except(q, usize::MAX)
+    }
+
+    /// [`Grid::nearest`] leaving out the point at position `except` (the
+    /// nearest other point of a grid point; a duplicate of it is at 0).
+    pub fn nearest_except(&self, q: [f64; 3], except: usize) -> Option<(u32, f64)> {
         let dim = self.dim;
         if self.ids.is_empty() || q[..dim].iter().any(|v| !v.is_finite()) {
             return None;
@@ -338,7 +344,7 @@ impl Grid {
                         }
                         let a = self.start[self.linear([a0, y, z])] as usize;
                         let b = self.start[self.linear([a1, y, z]) + 1] as usize;
-                        for j in a..b {
+                        for j in (a..b).filter(|&j| j != except) {
                             let dx = self.xs[j] - q[0];
                             let dy = self.ys[j] - q[1];
                             let d2 = if dim == 3 {
@@ -367,11 +373,12 @@ impl Grid {
 
 impl Grid {
     /// For every point of the grid (in the original order): the distance to
-    /// its second-nearest point (its nearest other point; 0 for a duplicate)
-    /// when that lies within the grid's radius, else `None`. In parallel over
-    /// cells, one gathered neighbourhood per cell. Needs a grid of
-    /// radius-wide cells ([`Grid::new`]).
-    pub fn second_nearest_within(&self, radius: f64) -> Vec<Option<f64>> {
+    /// its nearest other point (0 for a duplicate). In parallel over cells,
+    /// one gathered neighbourhood per cell; a point with no other point
+    /// within the grid's radius searches rings of cells outward
+    /// ([`Grid::nearest_except`]). `None` only for a lone point. Needs a grid
+    /// of radius-wide cells ([`Grid::new`]).
+    pub fn nearest_others(&self, radius: f64) -> Vec<Option<f64>> {
         use rayon::prelude::*;
         let n_cells = self.start.len() - 1;
         let r2 = radius * radius;
@@ -413,7 +420,12 @@ impl Grid {
                                 second = d2;
                             }
                         }
-                        out.push((self.ids[k], (second <= r2).then(|| second.sqrt())));
+                        let d = if second <= r2 {
+                            Some(second.sqrt())
+                        } else {
+                            self.nearest_except(q, k).map(|(_, d)| d)
+                        };
+                        out.push((self.ids[k], d));
                     }
                 }
                 out

@@ -486,13 +486,14 @@ pub fn nearest_other_distances(positions: &[[f64; 3]], dim: usize) -> Vec<f64> {
     if positions.len() < 2 {
         return vec![0.0; positions.len()];
     }
-    // A grid with about two points per cell answers most points; the k-d tree
-    // the rest (isolated points).
+    // A grid with about two points per cell answers most points from the
+    // cells around theirs, isolated points by rings of cells; the k-d tree
+    // only a degenerate cloud.
     let (lo, hi) = bounds(positions);
     let volume: f64 = (0..dim).map(|k| (hi[k] - lo[k]).max(1e-300)).product();
     let cell = (2.0 * volume / positions.len() as f64).powf(1.0 / dim as f64);
     let mut found = if cell.is_finite() && cell > 0.0 {
-        Grid::new(positions, dim, cell).second_nearest_within(cell)
+        Grid::new(positions, dim, cell).nearest_others(cell)
     } else {
         vec![None; positions.len()]
     };
