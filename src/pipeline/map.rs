@@ -109,9 +109,10 @@ impl Default for MapConfig {
 /// Maps the points whose group is not in `excluded`; excluded points get zero
 /// values and status `Mapped` with no neighbours (they are dry and need no pwp).
 /// `owned`: node values handed over in place of `cloud.values` (see
-/// [`mapper::map_points_taking`]).
+/// [`mapper::map_points_taking`]), or `None` to map with `cloud.values`.
 fn map_subset(
-    (cloud, owned): (&NodeCloud<'_>, Option<Vec<f64>>),
+    cloud: &NodeCloud<'_>,
+    owned: Option<Vec<f64>>,
     points: &[[f64; 3]],
     groups: Option<&[u32]>,
     settings: &MapSettings,
@@ -419,7 +420,8 @@ pub fn map(
     }
     let t2 = Instant::now();
     let mut result = map_subset(
-        (&cloud, owned),
+        &cloud,
+        owned,
         &positions,
         point_groups.as_deref(),
         &settings,
@@ -506,7 +508,8 @@ pub fn map(
             ..settings
         };
         let sampled = map_subset(
-            (&cloud, None),
+            &cloud,
+            None,
             &sample_pts,
             sample_groups.as_deref(),
             &sample_settings,
