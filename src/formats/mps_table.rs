@@ -27,19 +27,27 @@ pub fn fmt_f64(v: f64) -> String {
     format!("{v}")
 }
 
-/// The shortest decimal that reads back to `v` (ryu), formatted in `buf`: `0`
-/// for ±0, no trailing `.0`, an exponent where it is shorter (`1e-7`, `1.5e20`).
-fn shortest(v: f64, buf: &mut ryu::Buffer) -> &str {
+/// The shortest decimal that reads back to `v` (`zmij`, Schubfach: the same
+/// digits as ryu at about twice its speed), formatted in `buf`: `0` for ±0, no
+/// trailing `.0`, an exponent where it is shorter (`1e-7`, `1.5e20`; zmij's
+/// `e+20` loses its `+`, as ryu wrote it).
+fn shortest(v: f64, buf: &mut zmij::Buffer) -> std::borrow::Cow<'_, str> {
     if v == 0.0 {
-        return "0";
+        return "0".into();
     }
     let s = buf.format(v);
-    s.strip_suffix(".0").unwrap_or(s)
+    let s = s.strip_suffix(".0").unwrap_or(s);
+    // Only |v| ≥ 1e16 is written with a positive exponent.
+    if v.abs() >= 1e16 {
+        s.replacen("e+", "e", 1).into()
+    } else {
+        s.into()
+    }
 }
 
 /// Appends the shortest decimal that reads back to `v` (see `shortest`).
 pub fn push_f64(out: &mut Vec<u8>, v: f64) {
-    out.extend_from_slice(shortest(v, &mut ryu::Buffer::new()).as_bytes());
+    out.extend_from_slice(shortest(v, &mut zmij::Buffer::new()).as_bytes());
 }
 
 /// Rows per formatting chunk of [`write_rows`] and [`write_records`].
@@ -135,7 +143,7 @@ pub struct Real(pub f64);
 
 impl Serialize for Real {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        s.serialize_str(shortest(self.0, &mut ryu::Buffer::new()))
+        s.serialize_str(&shortest(self.0, &mut zmij::Buffer::new()))
     }
 }
 
@@ -530,6 +538,10 @@ pub(crate) mod tests {
             (1.0, "1"),
             (-2.5, "-2.5"),
             (1e-7, "1e-7"),
+            (1e16, "1e16"),
+            (-1.5e20, "-1.5e20"),
+            (1.2345678901234567e300, "1.2345678901234567e300"),
+            (123456789012345.6, "123456789012345.6"),
         ] {
             let mut out = Vec::new();
             push_f64(&mut out, v);
