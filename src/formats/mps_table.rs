@@ -104,33 +104,52 @@ where
     })
 }
 
-/// Writes records `0..n` as CSV rows without a header, each serialised from
-/// the row struct `row` returns, in parallel chunks written in order (see
-/// `write_chunks`): each chunk has its own `csv::Writer` over a buffer.
+/// A table row with a direct writer that appends exactly what `csv` +
+/// `serde` write for it (no header, no quoting, `\n` ending); a test holds
+/// the two equal. The row struct stays the one definition of the columns
+/// (the reader deserialises it), the direct writer skips csv's buffering and
+/// per-field checks, which cost a third of the time of writing mps.csv.
+pub trait Row: Serialize {
+    /// Appends the row's fields, comma-separated, without the line ending.
+    fn push_fields(&self, out: &mut Vec<u8>);
+}
+
+/// Writes records `0..n` as CSV rows without a header, one row struct each
+/// ([`Row`]), in parallel chunks written in order (see `write_chunks`).
 pub fn write_records<R, F>(w: &mut dyn Write, n: usize, row: F) -> std::io::Result<()>
 where
-    R: Serialize,
+    R: Row,
     F: Fn(usize) -> R + Sync,
 {
-    write_chunks(w, n, |rows| {
-        let mut writer = csv_writer(Vec::with_capacity(rows.len() * 160));
-        for i in rows {
-            if let Err(e) = writer.serialize(row(i)) {
-                return (writer.into_inner().unwrap_or_default(), Some(e.into()));
-            }
-        }
-        match writer.into_inner() {
-            Ok(buf) => (buf, None),
-            Err(e) => (Vec::new(), Some(e.into_error())),
-        }
+    write_rows(w, n, |i, buf| {
+        row(i).push_fields(buf);
+        buf.push(b'\n');
+        Ok(())
     })
 }
 
-/// The writer of both tables: no header (the tables write theirs), no quoting
-/// (no field holds a comma, quote or line break), `\n` line endings.
+/// Appends the unsigned integer `v`.
+fn push_u32(out: &mut Vec<u8>, v: u32) {
+    out.extend_from_slice(itoa::Buffer::new().format(v).as_bytes());
+}
+
+/// Appends each of `values` after a comma.
+fn push_reals(out: &mut Vec<u8>, values: &[Real]) {
+    for v in values {
+        out.push(b',');
+        push_f64(out, v.0);
+    }
+}
+
+/// The writer `csv` + `serde` would use for the tables: no header, no quoting
+/// (no field holds a comma, quote or line break), `\n` line endings. The
+/// direct writers ([`Row`]) are tested against it (flexible: the test mixes
+/// rows of both tables).
+#[cfg(test)]
 fn csv_writer<W: Write>(out: W) -> csv::Writer<W> {
     csv::WriterBuilder::new()
         .has_headers(false)
+        .flexible(true)
         .quote_style(csv::QuoteStyle::Never)
         .terminator(csv::Terminator::Any(b'\n'))
         .from_writer(out)
@@ -196,6 +215,21 @@ impl PlacementRow {
     }
 }
 
+impl Row for PlacementRow {
+    fn push_fields(&self, out: &mut Vec<u8>) {
+        for (k, v) in [self.id, self.element, self.material, self.local]
+            .into_iter()
+            .enumerate()
+        {
+            if k > 0 {
+                out.push(b',');
+            }
+            push_u32(out, v);
+        }
+        push_reals(out, &[self.x, self.y, self.z, self.volume]);
+    }
+}
+
 /// Header of the placement table.
 pub const PLACEMENT_HEADER: &str = "id,element,material,local,x,y,z,volume";
 
@@ -245,6 +279,21 @@ struct StateRow<'a> {
     shepard: Real,
     #[serde(default, borrow)]
     status: &'a str,
+}
+
+impl Row for StateRow<'_> {
+    fn push_fields(&self, out: &mut Vec<u8>) {
+        self.placement.push_fields(out);
+        push_reals(out, &[self.pwp]);
+        push_reals(out, &self.total());
+        push_reals(out, &self.effective());
+        push_reals(out, &[self.saturation]);
+        out.push(b',');
+        push_u32(out, self.neighbours);
+        push_reals(out, &[self.shepard]);
+        out.push(b',');
+        out.extend_from_slice(self.status.as_bytes());
+    }
 }
 
 /// Fields a state row needs: every column up to `saturation`.
@@ -565,6 +614,33 @@ pub(crate) mod tests {
         pool.install(|| write_states(&mut out, points, states, &diagnostics))
             .unwrap();
         out
+    }
+
+    /// The direct writers append exactly what csv + serde write for the
+    /// same row structs (the reader's view of the columns).
+    #[test]
+    fn direct_rows_equal_the_csv_serde_rows() {
+        let (points, states) = sample(3000, 11);
+        let statuses = ["mapped", "nearest", "skipped"];
+        let mut direct = Vec::new();
+        let mut w = csv_writer(Vec::new());
+        for (i, (p, s)) in points.iter().zip(&states).enumerate() {
+            let d = MpDiagnostics {
+                neighbours: [0, 7, u32::MAX][i % 3],
+                shepard: [0.0, 1.0 / 3.0, 1e-300][i % 3],
+                status: statuses[i % 3],
+            };
+            let row = StateRow::of(p, s, &d);
+            row.push_fields(&mut direct);
+            direct.push(b'\n');
+            w.serialize(row).unwrap();
+            let placement = PlacementRow::of(p);
+            placement.push_fields(&mut direct);
+            direct.push(b'\n');
+            w.serialize(placement).unwrap();
+        }
+        let via_csv = w.into_inner().unwrap();
+        assert_eq!(String::from_utf8(direct).unwrap(), String::from_utf8(via_csv).unwrap());
     }
 
     #[test]

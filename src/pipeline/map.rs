@@ -189,6 +189,16 @@ pub fn map(
     mut fem: LoadedFem,
     config: &MapConfig,
 ) -> Result<Mapped, PipelineError> {
+    // The inputs' SHA-256 for the report, read and hashed beside the mapping
+    // (a serial pass over every input file, which would otherwise come last).
+    let hashing = {
+        let paths: Vec<std::path::PathBuf> = std::iter::once(&project.files.gom)
+            .chain(&project.files.cps)
+            .chain(&fem.paths)
+            .cloned()
+            .collect();
+        std::thread::spawn(move || paths.iter().map(|p| describe(p)).collect::<Result<Vec<_>, _>>())
+    };
     let mut timings = Vec::new();
     let mut warnings: Vec<String> = project.info.warnings.clone();
     for r in &fem.reports {
@@ -622,13 +632,9 @@ pub fn map(
     }
     let mapf_h = mapf::exact_point_smoothing_length(min_mp);
 
-    let mut inputs = vec![describe(&project.files.gom)?];
-    if let Some(c) = &project.files.cps {
-        inputs.push(describe(c)?);
-    }
-    for f in &fem.paths {
-        inputs.push(describe(f)?);
-    }
+    let inputs = hashing
+        .join()
+        .map_err(|_| input_err!("hashing the input files failed"))??;
     let materials = project
         .model
         .materials
