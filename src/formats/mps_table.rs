@@ -57,32 +57,47 @@ const ROWS_PER_CHUNK: usize = 4096;
 /// range into a buffer (with the error that stopped it, if any), and the
 /// buffers are written in order, so the bytes do not depend on the thread
 /// count. The first failing chunk (in order) stops the writing with its error,
-/// after the rows before it.
+/// after the rows before it. Rows go in batches, and the next batch is
+/// formatted by the pool while this thread writes the last one.
 fn write_chunks<F>(w: &mut dyn Write, n: usize, chunk: F) -> std::io::Result<()>
 where
     F: Fn(std::ops::Range<usize>) -> (Vec<u8>, Option<std::io::Error>) + Sync,
 {
-    // Batches bound the memory held by formatted text.
+    type Batch = Vec<(Vec<u8>, Option<std::io::Error>)>;
+    // Batches bound the memory held by formatted text (two at a time).
     let batch = ROWS_PER_CHUNK * 4 * rayon::current_num_threads().max(1);
-    let mut start = 0;
-    crate::progress::WRITE_TABLE.start(n as u64);
-    while start < n {
+    let format = |start: usize| -> Batch {
         let end = (start + batch).min(n);
         crate::progress::WRITE_TABLE.add((end - start) as u64);
-        let chunks: Vec<(Vec<u8>, Option<std::io::Error>)> = (start..end)
+        (start..end)
             .into_par_iter()
             .step_by(ROWS_PER_CHUNK)
             .map(|first| chunk(first..(first + ROWS_PER_CHUNK).min(end)))
-            .collect();
+            .collect()
+    };
+    let write = |w: &mut dyn Write, chunks: Batch| -> std::io::Result<()> {
         for (buf, error) in chunks {
             w.write_all(&buf)?;
             if let Some(e) = error {
                 return Err(e);
             }
         }
-        start = end;
+        Ok(())
+    };
+    crate::progress::WRITE_TABLE.start(n as u64);
+    let mut pending = format(0);
+    let mut start = batch;
+    while start < n {
+        let mut next = None;
+        let written = rayon::in_place_scope(|scope| {
+            scope.spawn(|_| next = Some(format(start)));
+            write(w, std::mem::take(&mut pending))
+        });
+        written?;
+        pending = next.unwrap_or_default();
+        start += batch;
     }
-    Ok(())
+    write(w, pending)
 }
 
 /// Writes rows `0..n`, each appended to a buffer by `row`, formatted in
