@@ -206,15 +206,29 @@ fn map_one<'r>(
     let mut sum_w = 0.0;
     let mut count = 0;
     settings.kernel.shapes(found, settings.h, ws);
+    // Up to 8 fields sum in registers (the same operations in the same
+    // order as in `out`, so the same bits).
+    let mut acc = [0.0f64; 8];
+    let nf = out.len();
     for (&(local, _), &w) in found.iter().zip(ws.iter()) {
         if w <= 0.0 {
             continue;
         }
         count += 1;
         sum_w += w;
-        for (o, v) in out.iter_mut().zip(row(local)) {
-            *o += w * v;
+        let v = row(local);
+        if nf <= 8 {
+            for (a, v) in acc[..nf].iter_mut().zip(v) {
+                *a += w * v;
+            }
+        } else {
+            for (o, v) in out.iter_mut().zip(v) {
+                *o += w * v;
+            }
         }
+    }
+    if nf <= 8 {
+        out.copy_from_slice(&acc[..nf]);
     }
     let ratio = sum_w * alpha * nodes.node_volume;
     if count > 0 && ratio >= settings.min_shepard {
@@ -515,8 +529,8 @@ pub fn median_spacing(positions: &[[f64; 3]], dim: usize) -> f64 {
         return 0.0;
     }
     let mut d = nearest_other_distances(positions, dim);
-    d.par_sort_unstable_by(f64::total_cmp);
-    d[d.len() / 2]
+    let mid = d.len() / 2;
+    *d.select_nth_unstable_by(mid, f64::total_cmp).1
 }
 
 /// The smallest distance between two points (0 with fewer than two).
