@@ -92,13 +92,10 @@ pub fn mismatch_hint(fem: &Extent, model: &Extent) -> Option<String> {
         let offset: Vec<f64> = (0..dim).map(|a| fem.centre(a) - model.centre(a)).collect();
         let scale = axes.iter().map(|&a| model.size(a)).fold(0.0_f64, f64::max);
         if offset.iter().any(|d| d.abs() > 0.05 * scale) {
+            let shown: Vec<String> = offset.iter().map(|d| format!("{d:.3}")).collect();
             return Some(format!(
                 "the FEM has the model's size but is offset by ({}) m: do the two use different coordinate origins?",
-                offset
-                    .iter()
-                    .map(|d| format!("{d:.3}"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                shown.join(", ")
             ));
         }
     }

@@ -185,19 +185,23 @@ fn mixed_elements_carry_their_mean_state() {
 /// The §1.7 two-material model with a third, undrained material block written
 /// in the newer order (`$$BULK_MODULUS_LIQUID` before `$$K0_VALUE_SOLID`).
 fn undrained_gom(k0: &str) -> String {
-    let text = std::fs::read_to_string(fixture("anura3d-mini/TwoMat.GOM")).unwrap();
-    let old = "$$MATERIAL_TYPE\ndry_material\n$$POROSITY_SOLID\n0.35\n$$DENSITY_SOLID\n2650\n$$K0_VALUE_SOLID\n0.5\n";
-    assert!(text.contains(old));
-    text.replacen(
-        old,
-        &format!("$$MATERIAL_TYPE\nsaturated_material_undrained_effective\n$$POROSITY_SOLID\n0.35\n$$DENSITY_SOLID\n2650\n$$DENSITY_LIQUID\n1000\n$$BULK_MODULUS_LIQUID\n2.2e6\n$$K0_VALUE_SOLID\n{k0}\n"),
-        1,
-    )
-    .replacen(
-        "$$POISSON_RATIO\n0.25\n",
-        "$$POISSON_RATIO\n0.25\n$$POISSON_RATIO_UNDRAINED\n0.495\n",
-        1,
-    )
+    let mut text = std::fs::read_to_string(fixture("anura3d-mini/TwoMat.GOM")).unwrap();
+    for (old, new) in [
+        (
+            "$$MATERIAL_TYPE\ndry_material\n$$POROSITY_SOLID\n0.35\n$$DENSITY_SOLID\n2650\n$$K0_VALUE_SOLID\n0.5\n",
+            format!(
+                "$$MATERIAL_TYPE\nsaturated_material_undrained_effective\n$$POROSITY_SOLID\n0.35\n$$DENSITY_SOLID\n2650\n$$DENSITY_LIQUID\n1000\n$$BULK_MODULUS_LIQUID\n2.2e6\n$$K0_VALUE_SOLID\n{k0}\n"
+            ),
+        ),
+        (
+            "$$POISSON_RATIO\n0.25\n",
+            "$$POISSON_RATIO\n0.25\n$$POISSON_RATIO_UNDRAINED\n0.495\n".to_string(),
+        ),
+    ] {
+        assert!(text.contains(old), "{old}");
+        text = text.replacen(old, &new, 1);
+    }
+    text
 }
 
 #[test]

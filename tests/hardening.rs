@@ -24,6 +24,14 @@ fn run(args: &[&dyn AsRef<std::ffi::OsStr>]) -> (i32, String) {
     (code, text)
 }
 
+/// `map --fem FEM --mpm GOM --out OUT`, then `extra`, through [`run`].
+fn map(fem: &Path, gom: &Path, out: &Path, extra: &[&str]) -> (i32, String) {
+    let mut args: Vec<&dyn AsRef<std::ffi::OsStr>> =
+        vec![&"map", &"--fem", &fem, &"--mpm", &gom, &"--out", &out];
+    args.extend(extra.iter().map(|a| a as &dyn AsRef<std::ffi::OsStr>));
+    run(&args)
+}
+
 /// `verify --mpm GOM --state STATE --out OUT`, then `extra`, through [`run`].
 fn verify_state(gom: &Path, state: &Path, out: &Path, extra: &[&str]) -> (i32, String) {
     let mut args: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![
@@ -31,6 +39,17 @@ fn verify_state(gom: &Path, state: &Path, out: &Path, extra: &[&str]) -> (i32, S
     ];
     args.extend(extra.iter().map(|a| a as &dyn AsRef<std::ffi::OsStr>));
     run(&args)
+}
+
+/// `calibrate INPUTS --out OUT --force` where OUT is the folder of an input:
+/// refused (exit 2) with a message naming that input.
+fn calibrate_refused(inputs: &[&dyn AsRef<std::ffi::OsStr>], out: &Path, input: &str) {
+    let mut args: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![&"calibrate"];
+    args.extend_from_slice(inputs);
+    args.extend([&"--out" as &dyn AsRef<std::ffi::OsStr>, &out, &"--force"]);
+    let (code, text) = run(&args);
+    assert_eq!(code, 2, "{text}");
+    assert!(text.contains(input), "{text}");
 }
 
 /// A temporary folder holding the mini two-material model with a FEM table
@@ -86,9 +105,7 @@ fn force_never_deletes_or_overwrites_an_input() {
     let before = snapshot(tmp.path());
     // map --out = the folder of the FEM table, of the model, or the model file itself.
     for out in [&fem_dir, &model_dir, &gom, &tmp.path().to_path_buf()] {
-        let (code, text) = run(&[
-            &"map", &"--fem", &fem, &"--mpm", &gom, &"--out", out, &"--force",
-        ]);
+        let (code, text) = map(&fem, &gom, out, &["--force"]);
         assert_eq!(code, 2, "{text}");
         assert!(text.contains("refusing to write"), "{text}");
         assert!(
@@ -99,9 +116,7 @@ fn force_never_deletes_or_overwrites_an_input() {
     // A symlink to the FEM folder is the FEM folder.
     let link = tmp.path().join("link");
     std::os::unix::fs::symlink(&fem_dir, &link).unwrap();
-    let (code, text) = run(&[
-        &"map", &"--fem", &fem, &"--mpm", &gom, &"--out", &link, &"--force",
-    ]);
+    let (code, text) = map(&fem, &gom, &link, &["--force"]);
     assert_eq!(code, 2, "{text}");
     std::fs::remove_file(&link).unwrap();
     // inspect --mps = the GOM, the CPS, or a hard link to the GOM.
@@ -118,18 +133,11 @@ fn force_never_deletes_or_overwrites_an_input() {
     std::fs::create_dir(&check_dir).unwrap();
     let check = check_dir.join("check.csv");
     std::fs::copy(&fem, &check).unwrap();
-    let (code, text) = run(&[
-        &"calibrate",
-        &"--fem",
-        &fem,
-        &"--check",
-        &check,
-        &"--out",
+    calibrate_refused(
+        &[&"--fem", &fem, &"--check", &check],
         &check_dir,
-        &"--force",
-    ]);
-    assert_eq!(code, 2, "{text}");
-    assert!(text.contains("check.csv"), "{text}");
+        "check.csv",
+    );
     std::fs::remove_dir_all(&check_dir).unwrap();
     assert_eq!(snapshot(tmp.path()), before, "no input changed");
     no_staging_left(tmp.path());
@@ -139,7 +147,7 @@ fn force_never_deletes_or_overwrites_an_input() {
 fn verify_out_may_not_hold_the_state_and_fem_mesh_is_an_input() {
     let (tmp, gom, fem) = mini_project();
     let mapped = tmp.path().join("mapped");
-    let (code, text) = run(&[&"map", &"--fem", &fem, &"--mpm", &gom, &"--out", &mapped]);
+    let (code, text) = map(&fem, &gom, &mapped, &[]);
     assert_eq!(code, 0, "{text}");
     let state_dir = tmp.path().join("state");
     std::fs::create_dir(&state_dir).unwrap();
@@ -157,18 +165,11 @@ fn verify_out_may_not_hold_the_state_and_fem_mesh_is_an_input() {
     let mesh = mesh_dir.join("Mesh.ply");
     std::fs::copy(rd.join("1-initial-steady-state_Mesh.ply"), &mesh).unwrap();
     let node = rd.join("1-initial-steady-state_001_node.csv");
-    let (code, text) = run(&[
-        &"calibrate",
-        &"--fem",
-        &node,
-        &"--fem-mesh",
-        &mesh,
-        &"--out",
+    calibrate_refused(
+        &[&"--fem", &node, &"--fem-mesh", &mesh],
         &mesh_dir,
-        &"--force",
-    ]);
-    assert_eq!(code, 2, "{text}");
-    assert!(text.contains("Mesh.ply"), "{text}");
+        "Mesh.ply",
+    );
     assert!(mesh.exists());
 }
 
@@ -178,9 +179,7 @@ fn force_replaces_an_output_folder_whole_and_leaves_no_staging() {
     let out = tmp.path().join("out");
     std::fs::create_dir(&out).unwrap();
     std::fs::write(out.join("stale.txt"), "old run").unwrap();
-    let (code, text) = run(&[
-        &"map", &"--fem", &fem, &"--mpm", &gom, &"--out", &out, &"--force",
-    ]);
+    let (code, text) = map(&fem, &gom, &out, &["--force"]);
     assert_eq!(code, 0, "{text}");
     assert!(
         !out.join("stale.txt").exists(),
@@ -189,18 +188,7 @@ fn force_replaces_an_output_folder_whole_and_leaves_no_staging() {
     assert!(out.join("report.json").exists());
     no_staging_left(tmp.path());
     // A failed run (bad --material-map) leaves the old output and nothing else.
-    let (code, text) = run(&[
-        &"map",
-        &"--fem",
-        &fem,
-        &"--mpm",
-        &gom,
-        &"--out",
-        &out,
-        &"--force",
-        &"--material-map",
-        &"clay=9",
-    ]);
+    let (code, text) = map(&fem, &gom, &out, &["--force", "--material-map", "clay=9"]);
     assert_eq!(code, 2, "{text}");
     assert!(out.join("report.json").exists());
     no_staging_left(tmp.path());
@@ -224,15 +212,7 @@ fn non_regular_files_are_refused_at_once() {
         specials.push(fifo.clone());
     }
     for special in &specials {
-        let (code, text) = run(&[
-            &"map",
-            &"--fem",
-            special,
-            &"--mpm",
-            &gom,
-            &"--out",
-            &tmp.path().join("o"),
-        ]);
+        let (code, text) = map(special, &gom, &tmp.path().join("o"), &[]);
         assert_eq!(code, 2, "{}: {text}", special.display());
         let (code, text) = run(&[
             &"calibrate",
@@ -395,22 +375,12 @@ fn garbage_material_map_and_bad_states_are_exit_2() {
         (",", "no region=material pair"),
         ("clay=\u{1}", "no GOM material"),
     ] {
-        let (code, text) = run(&[
-            &"map",
-            &"--fem",
-            &fem,
-            &"--mpm",
-            &gom,
-            &"--out",
-            &tmp.path().join("o"),
-            &"--material-map",
-            &spec,
-        ]);
+        let (code, text) = map(&fem, &gom, &tmp.path().join("o"), &["--material-map", spec]);
         assert_eq!(code, 2, "{spec}: {text}");
         assert!(text.contains(expected), "{spec}: {text}");
     }
     let out = tmp.path().join("mapped");
-    let (code, text) = run(&[&"map", &"--fem", &fem, &"--mpm", &gom, &"--out", &out]);
+    let (code, text) = map(&fem, &gom, &out, &[]);
     assert_eq!(code, 0, "{text}");
     let good = std::fs::read_to_string(out.join("mps.csv")).unwrap();
     let mut lines: Vec<String> = good.lines().map(String::from).collect();
@@ -471,7 +441,7 @@ fn verify_with_zero_gravity_plots_without_panicking() {
     let text = std::fs::read_to_string(&cps).unwrap();
     std::fs::write(&cps, text.replacen("9.81\n", "0\n", 1)).unwrap();
     let out = tmp.path().join("mapped");
-    let (code, text) = run(&[&"map", &"--fem", &fem, &"--mpm", &gom, &"--out", &out]);
+    let (code, text) = map(&fem, &gom, &out, &[]);
     assert_eq!(code, 0, "{text}");
     let (code, text) = run(&[&"verify", &out, &"--max-steps", &"100"]);
     assert!(matches!(code, 0..=2), "{text}");

@@ -189,116 +189,107 @@ fn bad_inputs_exit_2_and_leave_no_output() {
         + &(0..10)
             .map(|i| format!("{},{},1\n", 100.0 + i as f64, 100.0 + (i % 3) as f64))
             .collect::<String>();
-    let cases: Vec<(&str, String, Vec<&str>, &str)> = vec![
+    // Bad files, read with the default options.
+    let bad_files: Vec<(&str, String, &str)> = vec![
         (
             "missing_coordinate_column",
             good_text.replace("X (m),", "A,"),
-            vec![],
             "seep.csv:1:1: no header with X and Y",
         ),
         (
             "unknown_unit",
             good_text.replace("PWP (kPa)", "PWP (bar)"),
-            vec![],
             "seep.csv:1:13: unknown pressure unit `bar`",
         ),
         (
             "non_numeric_cell",
             with_line(5, "2,0,abc"),
-            vec![],
             "seep.csv:6:5: expected a number for pwp, found `abc`",
         ),
         (
             "nan_cell",
             with_line(5, "2,0,NaN"),
-            vec![],
             "seep.csv:6:5: expected a number for pwp, found `NaN`",
         ),
         (
             "duplicate_nodes",
             with_line(5, "0,0,98.07"),
-            vec![],
             "seep.csv:6:1: duplicate node: same coordinates as line 2",
         ),
         (
             "missing_y",
             with_line(5, "2"),
-            vec![],
             "seep.csv:6:2: missing y coordinate",
         ),
         (
             "mixed_2d_3d",
             "X,Y,Z,PWP\n0,0,0,1\n1,0,0,1\n0,1\n".into(),
-            vec![],
             "seep.csv:4:4: missing z: some rows are 3D and this one is 2D",
         ),
-        (
-            "empty_file",
-            String::new(),
-            vec![],
-            "seep.csv:1:1: empty file",
-        ),
+        ("empty_file", String::new(), "seep.csv:1:1: empty file"),
         (
             "header_only",
             "X,Y,PWP\n".into(),
-            vec![],
             "seep.csv:1:1: the table has a header but no data rows",
         ),
         (
             "every_node_outside",
             far,
-            vec![],
             "seep.csv: the FEM nodes do not reach the model: 1200 of 1200 MPs",
-        ),
-        (
-            "bad_columns_override",
-            good_text.clone(),
-            vec!["--columns", "pwp=Pressure"],
-            "seep.csv:1:1: --columns pwp=Pressure: no such header",
-        ),
-        (
-            "bad_columns_field",
-            good_text.clone(),
-            vec!["--columns", "foo=X"],
-            "--columns: `foo`: unknown field",
-        ),
-        (
-            "bad_units_override",
-            good_text.clone(),
-            vec!["--fem-units", "length=furlong"],
-            "--fem-units: unknown unit `furlong`",
-        ),
-        (
-            "bad_kernel",
-            good_text.clone(),
-            vec!["--kernel", "epanechnikov"],
-            "--kernel epanechnikov",
-        ),
-        (
-            "negative_h",
-            good_text.clone(),
-            vec!["--h=-1"],
-            "--h -1: the smoothing length must be a positive",
-        ),
-        (
-            "stress_fem_without_stress",
-            good_text.clone(),
-            vec!["--stress", "fem"],
-            "--stress fem: the FEM files have no total stress columns",
         ),
         (
             "utf16",
             String::from_utf8_lossy(&[0xFF, 0xFE, b'X', 0]).into_owned(),
-            vec![],
             "seep.csv:1:1:",
         ),
         (
             "too_few_nodes",
             "X,Y,PWP\n0,0,1\n1,0,1\n".into(),
-            vec![],
             "at least 3 FEM nodes are needed",
         ),
     ];
+    // Bad options, with the good file.
+    let bad_options: [(&str, &[&str], &str); 6] = [
+        (
+            "bad_columns_override",
+            &["--columns", "pwp=Pressure"],
+            "seep.csv:1:1: --columns pwp=Pressure: no such header",
+        ),
+        (
+            "bad_columns_field",
+            &["--columns", "foo=X"],
+            "--columns: `foo`: unknown field",
+        ),
+        (
+            "bad_units_override",
+            &["--fem-units", "length=furlong"],
+            "--fem-units: unknown unit `furlong`",
+        ),
+        (
+            "bad_kernel",
+            &["--kernel", "epanechnikov"],
+            "--kernel epanechnikov",
+        ),
+        (
+            "negative_h",
+            &["--h=-1"],
+            "--h -1: the smoothing length must be a positive",
+        ),
+        (
+            "stress_fem_without_stress",
+            &["--stress", "fem"],
+            "--stress fem: the FEM files have no total stress columns",
+        ),
+    ];
+    let cases: Vec<(&str, String, &[&str], &str)> = bad_files
+        .into_iter()
+        .map(|(name, text, expected)| (name, text, &[][..], expected))
+        .chain(
+            bad_options
+                .into_iter()
+                .map(|(name, extra, expected)| (name, good_text.clone(), extra, expected)),
+        )
+        .collect();
     assert!(cases.len() >= 15);
     for (name, text, extra, expected) in cases {
         let dir = tmp.path().join(name);
@@ -310,7 +301,7 @@ fn bad_inputs_exit_2_and_leave_no_output() {
             std::fs::write(&fem, &text).unwrap();
         }
         let out = dir.join("out");
-        let (code, stderr) = run_map(&gom, &fem, &out, &extra);
+        let (code, stderr) = run_map(&gom, &fem, &out, extra);
         assert_eq!(code, 2, "{name}: {stderr}");
         assert!(
             stderr.contains(expected),

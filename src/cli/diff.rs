@@ -37,23 +37,36 @@ pub struct DiffArgs {
     pub json: bool,
 }
 
+/// The comparison of one pair of files.
 #[derive(Debug, Serialize, Default)]
 pub struct FileDiff {
+    /// The first file.
     pub a: PathBuf,
+    /// The second file.
     pub b: PathBuf,
-    pub kind: String,
+    /// How the pair was compared, from the first file's name: `gom`, `cps`,
+    /// `opd`, `mapf`, `table` (a CSV) or `text`.
+    pub kind: &'static str,
+    /// Equal within `--rtol`/`--atol`.
     pub equal: bool,
     /// Human-readable findings, most important first.
     pub findings: Vec<String>,
+    /// Column statistics of a MAPF or CSV table (empty for other kinds).
     pub columns: Vec<ColumnStats>,
 }
 
+/// How one column of two tables differs, over the matched rows.
 #[derive(Debug, Serialize, Clone)]
 pub struct ColumnStats {
+    /// The column's header.
     pub column: String,
+    /// Largest |a − b|.
     pub max_abs: f64,
+    /// Mean |a − b|.
     pub mean_abs: f64,
+    /// Root mean square of a − b.
     pub rms: f64,
+    /// Rows whose difference is over the tolerance.
     pub over_tolerance: usize,
     /// (row or id, a, b) of the worst rows.
     pub worst: Vec<(String, f64, f64)>,
@@ -348,7 +361,7 @@ fn diff_files(a: &Path, b: &Path, args: &DiffArgs) -> anyhow::Result<FileDiff> {
     let mut out = FileDiff {
         a: a.to_path_buf(),
         b: b.to_path_buf(),
-        kind: kind.into(),
+        kind,
         ..FileDiff::default()
     };
     match kind {

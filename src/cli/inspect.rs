@@ -54,6 +54,38 @@ struct MaterialSummary {
     gamma_dry: f64,
 }
 
+impl MaterialSummary {
+    /// The summary of material `m` of `project`, its dry unit weight at gravity `g`.
+    fn of(m: &crate::model::Material, project: &LoadedProject, g: f64) -> MaterialSummary {
+        MaterialSummary {
+            index: m.index,
+            name: m.name.clone(),
+            material_type: m.material_type.clone(),
+            model: m.model.clone(),
+            elements: project
+                .model
+                .element_material
+                .iter()
+                .filter(|&&e| e == m.index)
+                .count(),
+            mps: project
+                .points
+                .iter()
+                .filter(|mp| mp.material == m.index)
+                .count(),
+            porosity: m.porosity,
+            density_solid: m.density_solid,
+            k0: m.k0,
+            young_modulus: m.young_modulus,
+            poisson_ratio: m.poisson_ratio,
+            friction_angle: m.friction_angle,
+            cohesion: m.cohesion,
+            dilatancy_angle: m.dilatancy_angle,
+            gamma_dry: m.gamma_dry(g),
+        }
+    }
+}
+
 #[derive(Serialize)]
 struct Summary<'a> {
     files: &'a ProjectFiles,
@@ -95,28 +127,7 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
         .model
         .materials
         .iter()
-        .map(|m| MaterialSummary {
-            index: m.index,
-            name: m.name.clone(),
-            material_type: m.material_type.clone(),
-            model: m.model.clone(),
-            elements: p
-                .model
-                .element_material
-                .iter()
-                .filter(|&&e| e == m.index)
-                .count(),
-            mps: p.points.iter().filter(|mp| mp.material == m.index).count(),
-            porosity: m.porosity,
-            density_solid: m.density_solid,
-            k0: m.k0,
-            young_modulus: m.young_modulus,
-            poisson_ratio: m.poisson_ratio,
-            friction_angle: m.friction_angle,
-            cohesion: m.cohesion,
-            dilatancy_angle: m.dilatancy_angle,
-            gamma_dry: m.gamma_dry(g),
-        })
+        .map(|m| MaterialSummary::of(m, &p, g))
         .collect();
     let mesh = &p.model.mesh;
     let summary = Summary {

@@ -38,15 +38,22 @@ pub struct KernelState {
     pub nan_points: Vec<u32>,
     /// Per MP: MAPF rows with a non-zero weight.
     pub rows_in_reach: Vec<u32>,
-    /// The smoothing length Anura3D uses (first row).
-    pub smoothing_length: f64,
-    pub rows: usize,
-    /// Whether Anura3D reads the MAPF at all (CPS switch on).
-    pub mapf_read: bool,
+    /// The MAPF as Anura3D read it; `None` when it does not read it (CPS
+    /// switch off).
+    pub mapf: Option<MapfRead>,
     /// MPs whose σ' used the Sr of a previous MP (kernel quirk).
     pub carried_saturation: usize,
     /// Sentences on what was applied.
     pub notes: Vec<String>,
+}
+
+/// What Anura3D takes from the MAPF besides the rows' values.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct MapfRead {
+    /// The smoothing length Anura3D uses: the first row's `SmoothLength[m]` (m).
+    pub smoothing_length: f64,
+    /// Data rows in the table.
+    pub rows: usize,
 }
 
 /// Anura3D's number of phases and whether partial saturation is on, from the
@@ -125,9 +132,7 @@ pub fn initial_state(
             effective: vec![[0.0; 6]; n],
             nan_points: Vec::new(),
             rows_in_reach: vec![0; n],
-            smoothing_length: 0.0,
-            rows: 0,
-            mapf_read: false,
+            mapf: None,
             carried_saturation: 0,
             notes,
         });
@@ -293,9 +298,10 @@ pub fn initial_state(
         effective,
         nan_points,
         rows_in_reach,
-        smoothing_length: h,
-        rows: table.rows.len(),
-        mapf_read: true,
+        mapf: Some(MapfRead {
+            smoothing_length: h,
+            rows: table.rows.len(),
+        }),
         carried_saturation: carried,
         notes,
     })

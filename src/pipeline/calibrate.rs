@@ -17,7 +17,8 @@ pub struct Outcome {
     /// Median nearest-node spacing l.
     pub spacing: f64,
     pub h_over_l: f64,
-    pub kernel: String,
+    /// The kernel's short name (`cubic`, `gaussian`, `wendland`).
+    pub kernel: &'static str,
     pub fields: Vec<String>,
     pub norm: Norm,
     pub stats: LooStats,
@@ -61,17 +62,10 @@ pub fn calibrate_h(
     seed: u64,
     norm: Norm,
 ) -> Result<Outcome, PipelineError> {
-    let n = fem.len();
-    let nf = fields.len();
-    let mut values = vec![0.0; n * nf];
-    for (k, q) in fields.iter().enumerate() {
-        for (i, v) in fem.field(*q).unwrap_or(&[]).iter().enumerate() {
-            values[i * nf + k] = *v;
-        }
-    }
+    let values = field_values(fem, fields);
     let spacing = mapper::median_spacing(&fem.positions, fem.dim);
     let (lo, hi) = (0.3 * spacing, 2.5 * spacing);
-    let objective = LooObjective::new(&fem.positions, fem.dim, &values, nf, kernel, hi)
+    let objective = LooObjective::new(&fem.positions, fem.dim, &values, fields.len(), kernel, hi)
         .map_err(|e| PipelineError::Input(format!("calibration: {e}")))?;
     let norm_kind = norm;
     let settings = AnnealSettings {
@@ -98,7 +92,7 @@ pub fn calibrate_h(
         h: calibration.h,
         spacing,
         h_over_l: calibration.h / spacing,
-        kernel: kernel.name().into(),
+        kernel: kernel.name(),
         fields: fields.iter().map(|q| q.name()).collect(),
         norm,
         stats,
@@ -106,4 +100,18 @@ pub fn calibrate_h(
         fallback,
         curve,
     })
+}
+
+/// The values of `fields` at every node, row-major: node i's value of
+/// `fields[k]` at `i * fields.len() + k` (0 where the file lacks the field).
+fn field_values(fem: &FemNodes, fields: &[Quantity]) -> Vec<f64> {
+    let n = fem.len();
+    let nf = fields.len();
+    let mut values = vec![0.0; n * nf];
+    for (k, q) in fields.iter().enumerate() {
+        for (i, v) in fem.field(*q).unwrap_or(&[]).iter().enumerate() {
+            values[i * nf + k] = *v;
+        }
+    }
+    values
 }

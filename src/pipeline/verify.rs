@@ -140,7 +140,7 @@ pub fn judge_folder(project: &Project) -> Result<Judged, PipelineError> {
                 && model_of(p).is_some_and(|m| !m.is_admissible(e, plane_strain))
         })
         .count();
-    let sigma_zz_defect = (n_dim == 2 && kernel.mapf_read).then(|| {
+    let sigma_zz_defect = (n_dim == 2 && kernel.mapf.is_some()).then(|| {
         let mut d = SigmaZzDefect {
             affected: 0,
             outside_because_of_defect: 0,
@@ -187,9 +187,9 @@ pub fn judge_folder(project: &Project) -> Result<Judged, PipelineError> {
         cps: project.files.cps.clone(),
         mapf: mapf_path,
         computation_method: project.method.cps_name(),
-        mapf_read: kernel.mapf_read,
-        mapf_rows: kernel.rows,
-        smoothing_length: kernel.smoothing_length,
+        mapf_read: kernel.mapf.is_some(),
+        mapf_rows: kernel.mapf.map_or(0, |m| m.rows),
+        smoothing_length: kernel.mapf.map_or(0.0, |m| m.smoothing_length),
         nan_points: nan.len(),
         nan_ids: nan.iter().take(MAX_IDS).copied().collect(),
         carried_saturation: kernel.carried_saturation,

@@ -10,19 +10,30 @@
 //! `X.GOM.GOM_stage0`, a `.GOM` driven by a 2025 CPS) are read, reported in
 //! [`ProjectFiles::warnings`], and written under the names Anura3D expects
 //! ([`ProjectFiles::output_names`]). Spec: `formats/gom.md` (file names).
+//!
+//! The name rules themselves (extensions, CPS steps, doubled extensions, the
+//! output names) are in `names`; this module decides which files make a project.
 
 use std::path::{Path, PathBuf};
 
 use super::cps::CpsDocument;
 use super::error::FormatError;
 
+mod names;
+
+pub use names::OutputNames;
+use names::{cps_files, cps_step, file_name, is_anura3d_ext, is_gid_gom, split_ext, undouble};
+
 /// The files of one project, and how they were found.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct ProjectFiles {
     /// Project name: the file stem Anura3D is run with.
     pub name: String,
+    /// The folder the project's files are read from (`.` for a bare file name).
     pub dir: PathBuf,
+    /// The GOM that is read (as found, possibly misnamed).
     pub gom: PathBuf,
+    /// The CPS that drives the GOM, when there is one.
     pub cps: Option<PathBuf>,
     /// Version of the CPS header (`2025`, `2024`, …), when there is a CPS.
     pub cps_version: Option<String>,
@@ -35,61 +46,6 @@ pub struct ProjectFiles {
     /// Problems with the files as named: Anura3D would not find them, or a CPS
     /// is missing. The project a3d-init writes uses the right names.
     pub warnings: Vec<String>,
-}
-
-/// File names of the ready-to-run project, as Anura3D will look for them.
-#[derive(Debug, Clone, PartialEq, serde::Serialize)]
-pub struct OutputNames {
-    pub gom: String,
-    pub cps: String,
-    /// `<project>.OPD_stage<k>` for a 2025 CPS.
-    pub opd: Option<String>,
-    /// True when the stage is above 0: a 2025 run also opens `<project>.GOM_stage0`.
-    pub needs_gom_stage0: bool,
-    /// Why these names.
-    pub reason: String,
-}
-
-impl ProjectFiles {
-    /// The names Anura3D will look for, decided by the CPS version (`gom_version`
-    /// is used for a generated CPS, which takes the model's own header).
-    pub fn output_names(&self, gom_version: &str) -> OutputNames {
-        let version = self.cps_version.as_deref().unwrap_or(gom_version);
-        let name = &self.name;
-        let cps = self
-            .cps
-            .as_deref()
-            .map(file_name)
-            .filter(|f| {
-                split_ext(f).is_some_and(|(stem, ext)| stem == name && cps_step(ext).is_some())
-            })
-            .unwrap_or_else(|| format!("{name}.CPS_001"));
-        if version == "2025" {
-            let k = self.stage.unwrap_or(0);
-            OutputNames {
-                gom: format!("{name}.GOM_stage{k}"),
-                cps,
-                opd: Some(format!("{name}.OPD_stage{k}")),
-                needs_gom_stage0: k > 0,
-                reason: format!(
-                    "CPS header 2025: Anura3D reads {name}.GOM_stage{k} and {name}.OPD_stage{k}{}",
-                    if k > 0 {
-                        format!(", and {name}.GOM_stage0 for the dimension")
-                    } else {
-                        String::new()
-                    }
-                ),
-            }
-        } else {
-            OutputNames {
-                gom: format!("{name}.GOM"),
-                cps,
-                opd: None,
-                needs_gom_stage0: false,
-                reason: format!("CPS header {version} (before 2025): Anura3D reads {name}.GOM"),
-            }
-        }
-    }
 }
 
 /// The message `map` gives when a project has no CPS and none is to be generated.
@@ -106,67 +62,6 @@ pub fn missing_cps_message(files: &ProjectFiles) -> String {
             String::new()
         },
     )
-}
-
-fn file_name(path: &Path) -> String {
-    path.file_name()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default()
-}
-
-/// Splits `name.EXT` at the last dot.
-fn split_ext(name: &str) -> Option<(&str, &str)> {
-    let dot = name.rfind('.')?;
-    Some((&name[..dot], &name[dot + 1..]))
-}
-
-/// `CPS_001` → 1.
-fn cps_step(ext: &str) -> Option<u64> {
-    ext.strip_prefix("CPS_")?.parse().ok()
-}
-
-/// True for an extension Anura3D gives its project files.
-fn is_anura3d_ext(ext: &str) -> bool {
-    ext == "GOM"
-        || ext == "MAPF"
-        || ext
-            .strip_prefix("GOM_stage")
-            .or_else(|| ext.strip_prefix("OPD_stage"))
-            .is_some_and(|k| k.parse::<u32>().is_ok())
-        || cps_step(ext).is_some()
-}
-
-fn is_gid_gom(path: &Path) -> bool {
-    file_name(path).ends_with("-2.dat")
-}
-
-/// CPS files of project `name` in `dir`, sorted by step number.
-fn cps_files(dir: &Path, name: &str) -> Vec<(u64, PathBuf)> {
-    let mut out = Vec::new();
-    if let Ok(entries) = std::fs::read_dir(dir) {
-        for entry in entries.flatten() {
-            let file = file_name(&entry.path());
-            if let Some((stem, ext)) = split_ext(&file)
-                && stem == name
-                && let Some(step) = cps_step(&ext.to_ascii_uppercase())
-            {
-                out.push((step, entry.path()));
-            }
-        }
-    }
-    out.sort();
-    out
-}
-
-/// For a stem with a doubled extension (`X.GOM` of `X.GOM.GOM_stage0`), the
-/// project Anura3D users mean: `X`, unless `X.GOM` is itself consistent (its own
-/// CPS files exist beside it).
-fn undouble(dir: &Path, stem: &str) -> Option<String> {
-    let (inner, ext) = split_ext(stem)?;
-    if inner.is_empty() || !is_anura3d_ext(ext) || !cps_files(dir, stem).is_empty() {
-        return None;
-    }
-    Some(inner.to_string())
 }
 
 /// Resolves `path` to a project.
