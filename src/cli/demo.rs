@@ -166,7 +166,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
             .iter()
             .map(|s| s.total[1])
             .fold(f64::NEG_INFINITY, f64::max),
-        mapped.mapf_h
+        mapped.report.mapf_smoothing_length
     );
 
     // 4. Verify with the explicit MPM runner.

@@ -164,7 +164,11 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
     let r = &mapped.report;
     eprintln!(
         "a3d-init map: {} FEM nodes → {} MPs ({} kernel, h = {:.4} m; {})",
-        r.fem_nodes, r.material_points, r.kernel, r.smoothing_length, r.smoothing_length_rule
+        r.fem_nodes,
+        r.material_points,
+        r.smoothing.kernel,
+        r.smoothing.smoothing_length,
+        r.smoothing.smoothing_length_rule
     );
     eprintln!(
         "  stress: {}; material separation: {}",

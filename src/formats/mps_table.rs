@@ -655,7 +655,10 @@ pub(crate) mod tests {
             w.serialize(placement).unwrap();
         }
         let via_csv = w.into_inner().unwrap();
-        assert_eq!(String::from_utf8(direct).unwrap(), String::from_utf8(via_csv).unwrap());
+        assert_eq!(
+            String::from_utf8(direct).unwrap(),
+            String::from_utf8(via_csv).unwrap()
+        );
     }
 
     #[test]

@@ -14,7 +14,7 @@ use super::Project as LoadedProject;
 use super::fem::LoadedFem;
 use super::regions::groups;
 use super::report::describe;
-pub use super::report::{InputFile, MapReport, MaterialCount};
+pub use super::report::{InputFile, MapReport, MaterialCount, Smoothing};
 use crate::formats::cps::CpsDocument;
 use crate::formats::fem_csv::SignConvention;
 use crate::formats::mapf;
@@ -174,12 +174,16 @@ fn calibrated_rule(outcome: &crate::pipeline::calibrate::Outcome, seed: u64) -> 
 
 /// Everything `map` computes before writing.
 pub struct Mapped {
+    /// The model, its files and its MPs.
     pub project: LoadedProject,
+    /// The FEM nodes (their fields dropped unless `fem.vtu` is wanted).
     pub fem: LoadedFem,
+    /// The state of each MP, in MP order.
     pub states: Vec<MpState>,
+    /// How each MP was mapped.
     pub diagnostics: Vec<MpDiagnostics>,
+    /// What report.json says, the exact-point MAPF's h among it.
     pub report: MapReport,
-    pub mapf_h: f64,
 }
 
 /// Maps the FEM fields onto the project's MPs (no output written): the state
@@ -197,7 +201,12 @@ pub fn map(
             .chain(&fem.paths)
             .cloned()
             .collect();
-        std::thread::spawn(move || paths.iter().map(|p| describe(p)).collect::<Result<Vec<_>, _>>())
+        std::thread::spawn(move || {
+            paths
+                .iter()
+                .map(|p| describe(p))
+                .collect::<Result<Vec<_>, _>>()
+        })
     };
     let mut timings = Vec::new();
     let mut warnings: Vec<String> = project.info.warnings.clone();
@@ -665,15 +674,17 @@ pub fn map(
             sign.into(),
             "MAPF Sig* columns are total stresses; Anura3D forms σ' = σ − S·p (Bishop)".into(),
         ],
-        kernel: kernel.name().into(),
-        smoothing_length: h,
-        smoothing_length_rule: rule,
-        fem_spacing: spacing,
-        gaussian_truncated_mass: match kernel {
-            KernelKind::Gaussian { cutoff } => {
-                Some(crate::kernel::Gaussian { cutoff }.truncated_mass(dim))
-            }
-            _ => None,
+        smoothing: Smoothing {
+            kernel: kernel.name().into(),
+            smoothing_length: h,
+            smoothing_length_rule: rule,
+            fem_spacing: spacing,
+            gaussian_truncated_mass: match kernel {
+                KernelKind::Gaussian { cutoff } => {
+                    Some(crate::kernel::Gaussian { cutoff }.truncated_mass(dim))
+                }
+                _ => None,
+            },
         },
         stress_source: format!("{stress_source:?}").to_lowercase(),
         computation_method: project.method,
@@ -699,6 +710,5 @@ pub fn map(
         states,
         diagnostics,
         report,
-        mapf_h,
     })
 }

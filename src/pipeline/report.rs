@@ -50,17 +50,30 @@ pub struct MaterialCount {
     pub fem_nodes: Option<usize>,
 }
 
+/// The kernel and how its smoothing length was chosen (report.json holds
+/// these fields at its top level).
+#[derive(Serialize)]
+pub struct Smoothing {
+    /// `cubic`, `gaussian` or `wendland`.
+    pub kernel: String,
+    /// h (m).
+    pub smoothing_length: f64,
+    /// How h was chosen: given, the spacing rule, or calibrated.
+    pub smoothing_length_rule: String,
+    /// Median distance from a FEM node to its nearest other node, l (m).
+    pub fem_spacing: f64,
+    /// Gaussian only: the kernel mass inside the cut-off support.
+    pub gaussian_truncated_mass: Option<f64>,
+}
+
 #[derive(Serialize)]
 pub struct MapReport {
     pub tool: String,
     pub inputs: Vec<InputFile>,
     pub fem: Vec<FemReadReport>,
     pub conventions: Vec<String>,
-    pub kernel: String,
-    pub smoothing_length: f64,
-    pub smoothing_length_rule: String,
-    pub fem_spacing: f64,
-    pub gaussian_truncated_mass: Option<f64>,
+    #[serde(flatten)]
+    pub smoothing: Smoothing,
     pub stress_source: String,
     pub computation_method: crate::model::ComputationMethod,
     /// MPM-MIXED only: `mean` or `per-mp` (see `--mixed-state`).

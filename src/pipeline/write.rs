@@ -87,7 +87,13 @@ pub fn write_project(
     }
     let mapf_name = format!("{name}.MAPF");
     out.write(&mapf_name, |w| {
-        mapf::write(w, &project.points, &mapped.states, dim, mapped.mapf_h)
+        mapf::write(
+            w,
+            &project.points,
+            &mapped.states,
+            dim,
+            mapped.report.mapf_smoothing_length,
+        )
     })?;
     written.push(mapf_name);
     out.write("mps.csv", |w| {
