@@ -60,10 +60,17 @@ pub(super) struct Rows {
 }
 
 impl Rows {
-    pub(super) fn new(schema: &Schema<'_>) -> Rows {
+    /// Empty rows with room for `capacity` rows (a chunk's line count: its
+    /// columns are then allocated once, not grown by doubling).
+    pub(super) fn new(schema: &Schema<'_>, capacity: usize) -> Rows {
         let n_tracked = schema.value_cols.len() + 2;
         Rows {
-            values: vec![Vec::new(); schema.value_cols.len()],
+            positions: Vec::with_capacity(capacity),
+            ids: Vec::with_capacity(capacity),
+            values: (0..schema.value_cols.len())
+                .map(|_| Vec::with_capacity(capacity))
+                .collect(),
+            lines: Vec::with_capacity(capacity),
             has_value: vec![false; n_tracked],
             first_short: vec![None; n_tracked],
             ..Rows::default()
@@ -163,9 +170,15 @@ pub(super) fn split_chunks(text: &str, size: usize) -> Vec<&str> {
     out
 }
 
-/// Parses the rows of one chunk whose first line is `first_line` (1-based).
-pub(super) fn parse_chunk(schema: &Schema<'_>, chunk: &str, first_line: usize) -> Rows {
-    let mut rows = Rows::new(schema);
+/// Parses the rows of one chunk whose first line is `first_line` (1-based)
+/// and which holds at most `lines` lines.
+pub(super) fn parse_chunk(
+    schema: &Schema<'_>,
+    chunk: &str,
+    first_line: usize,
+    lines: usize,
+) -> Rows {
+    let mut rows = Rows::new(schema, lines);
     let mut ranges: Vec<(usize, usize)> = Vec::with_capacity(32);
     let mut scratch: Vec<f64> = Vec::with_capacity(schema.value_cols.len());
     for (k, line) in chunk.lines().enumerate() {

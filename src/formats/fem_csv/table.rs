@@ -248,9 +248,10 @@ pub(super) fn parse_csv_chunked(
     crate::progress::READ_FEM.start(body.len() as u64);
     let parts: Vec<Rows> = chunks
         .par_iter()
-        .zip(first_line.par_iter())
-        .map(|(chunk, &l0)| {
-            let rows = parse_chunk(&schema, chunk, l0);
+        .zip(first_line.par_iter().zip(&newlines))
+        .map(|(chunk, (&l0, &n))| {
+            // A last line without its newline is one more.
+            let rows = parse_chunk(&schema, chunk, l0, n + 1);
             crate::progress::READ_FEM.add(chunk.len() as u64);
             rows
         })

@@ -133,8 +133,8 @@ fn fast_rows_equal_field_by_field_rows() {
             factors: &factors,
         };
         for line in lines {
-            let mut fast = Rows::new(&schema);
-            let mut slow = Rows::new(&schema);
+            let mut fast = Rows::new(&schema, 0);
+            let mut slow = Rows::new(&schema, 0);
             let mut ranges = Vec::new();
             let mut scratch = Vec::new();
             assert!(
