@@ -37,8 +37,7 @@ fn shortest(v: f64, buf: &mut zmij::Buffer) -> std::borrow::Cow<'_, str> {
     }
     let s = buf.format(v);
     let s = s.strip_suffix(".0").unwrap_or(s);
-    // Only |v| ≥ 1e16 is written with a positive exponent.
-    if v.abs() >= 1e16 {
+    if s.as_bytes().contains(&b'+') {
         s.replacen("e+", "e", 1).into()
     } else {
         s.into()
