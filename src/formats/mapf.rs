@@ -15,7 +15,7 @@ use std::path::Path;
 
 use super::error::{FormatError, ParseError};
 use super::lex;
-use super::mps_table::{push_f64, write_rows};
+use super::table_text::{push_f64, write_rows};
 use crate::model::{MaterialPoint, MpState};
 
 /// Column headers, in the order written.

@@ -18,4 +18,5 @@ pub mod material_map;
 pub mod mps_table;
 pub mod ply;
 pub mod project;
+pub mod table_text;
 pub mod vtu;

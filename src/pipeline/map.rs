@@ -13,7 +13,7 @@ use super::Project;
 use super::Project as LoadedProject;
 use super::fem::LoadedFem;
 use super::regions::groups;
-use super::report::describe;
+use super::report::describe_in_background;
 pub use super::report::{InputFile, MapReport, MaterialCount, Smoothing};
 use crate::formats::cps::CpsDocument;
 use crate::formats::fem_csv::SignConvention;
@@ -195,19 +195,13 @@ pub fn map(
 ) -> Result<Mapped, PipelineError> {
     // The inputs' SHA-256 for the report, read and hashed beside the mapping
     // (a serial pass over every input file, which would otherwise come last).
-    let hashing = {
-        let paths: Vec<std::path::PathBuf> = std::iter::once(&project.files.gom)
+    let hashing = describe_in_background(
+        std::iter::once(&project.files.gom)
             .chain(&project.files.cps)
             .chain(&fem.paths)
             .cloned()
-            .collect();
-        std::thread::spawn(move || {
-            paths
-                .iter()
-                .map(|p| describe(p))
-                .collect::<Result<Vec<_>, _>>()
-        })
-    };
+            .collect(),
+    );
     let mut timings = Vec::new();
     let mut warnings: Vec<String> = project.info.warnings.clone();
     for r in &fem.reports {
@@ -674,18 +668,7 @@ pub fn map(
             sign.into(),
             "MAPF Sig* columns are total stresses; Anura3D forms σ' = σ − S·p (Bishop)".into(),
         ],
-        smoothing: Smoothing {
-            kernel: kernel.name().into(),
-            smoothing_length: h,
-            smoothing_length_rule: rule,
-            fem_spacing: spacing,
-            gaussian_truncated_mass: match kernel {
-                KernelKind::Gaussian { cutoff } => {
-                    Some(crate::kernel::Gaussian { cutoff }.truncated_mass(dim))
-                }
-                _ => None,
-            },
-        },
+        smoothing: Smoothing::new(kernel, h, rule, spacing, dim),
         stress_source: format!("{stress_source:?}").to_lowercase(),
         computation_method: project.method,
         mixed_state: mixed,

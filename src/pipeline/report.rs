@@ -8,6 +8,7 @@ use serde::Serialize;
 use super::PipelineError;
 use super::map::{MixedState, Outside};
 use crate::formats::fem_csv::FemReadReport;
+use crate::kernel::{Kernel, KernelKind};
 
 #[derive(Serialize)]
 pub struct InputFile {
@@ -42,6 +43,14 @@ pub(super) fn describe(path: &Path) -> Result<InputFile, PipelineError> {
     })
 }
 
+/// [`describe`] of every path, on a thread of its own: the report's hashes
+/// are read beside the mapping instead of in a serial pass at its end.
+pub(super) fn describe_in_background(
+    paths: Vec<PathBuf>,
+) -> std::thread::JoinHandle<Result<Vec<InputFile>, PipelineError>> {
+    std::thread::spawn(move || paths.iter().map(|p| describe(p)).collect())
+}
+
 #[derive(Serialize)]
 pub struct MaterialCount {
     pub index: u32,
@@ -64,6 +73,24 @@ pub struct Smoothing {
     pub fem_spacing: f64,
     /// Gaussian only: the kernel mass inside the cut-off support.
     pub gaussian_truncated_mass: Option<f64>,
+}
+
+impl Smoothing {
+    /// The report of `kernel` with `h` chosen by `rule`, on nodes `spacing` apart.
+    pub fn new(kernel: KernelKind, h: f64, rule: String, spacing: f64, dim: usize) -> Smoothing {
+        Smoothing {
+            kernel: kernel.name().into(),
+            smoothing_length: h,
+            smoothing_length_rule: rule,
+            fem_spacing: spacing,
+            gaussian_truncated_mass: match kernel {
+                KernelKind::Gaussian { cutoff } => {
+                    Some(crate::kernel::Gaussian { cutoff }.truncated_mass(dim))
+                }
+                _ => None,
+            },
+        }
+    }
 }
 
 #[derive(Serialize)]

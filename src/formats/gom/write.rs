@@ -8,7 +8,7 @@
 
 use std::fmt::Write;
 
-use crate::formats::mps_table::fmt_f64;
+use crate::formats::table_text::fmt_f64;
 use crate::model::{AnuraModel, Material};
 
 /// Renders `model` as GOM text with header `### Anura3D_<version> ###` and LF endings.
