@@ -6,8 +6,8 @@
 //!
 //! Each table has a serde row struct (`PlacementRow`, `StateRow`) that the
 //! `csv` reader deserialises by position and whose direct writer
-//! ([`Row`](super::table_text::Row)) appends what csv + serde would write
-//! (tested); numbers go through [`Real`](super::table_text::Real), the
+//! ([`Row`]) appends what csv + serde would write
+//! (tested); numbers go through [`Real`], the
 //! shortest round-trip decimals. The chunked, ordered parallel writing lives
 //! in [`table_text`](super::table_text).
 
