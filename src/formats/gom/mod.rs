@@ -95,6 +95,16 @@ impl GomDocument {
             .filter(|(_, l)| !l.trim().is_empty())
     }
 
+    /// The 0-based lines of [`rows`](Self::rows), found in parallel (in order).
+    fn data_lines(&self, b: usize) -> Vec<usize> {
+        use rayon::prelude::*;
+        let range = self.doc.blocks()[b].data.clone();
+        range
+            .into_par_iter()
+            .filter(|&i| !self.doc.line(i).trim().is_empty())
+            .collect()
+    }
+
     /// Parses the first `n` non-blank data lines of block `b` with `parse`, in
     /// parallel. On failure the error of the earliest bad line is returned, so the
     /// result does not depend on scheduling; a block with fewer than `n` lines is a
@@ -108,13 +118,14 @@ impl GomDocument {
     ) -> Result<Vec<T>, ParseError> {
         use rayon::prelude::*;
         use std::sync::atomic::{AtomicBool, Ordering};
-        let rows: Vec<usize> = self.rows(b).take(n).map(|(i, _)| i).collect();
+        let mut rows = self.data_lines(b);
         if rows.len() < n {
             return Err(self.short_block(b, n, rows.len(), what));
         }
-        if let Some(e) = self.extra_rows(b, n, what) {
-            return Err(e);
+        if let Some(&i) = rows.get(n) {
+            return Err(self.extra_row(b, i, n, what));
         }
+        rows.truncate(n);
         // Straight into a vector of the right size (a collected `Result`
         // would grow one by appending); a failure only raises a flag.
         let failed = AtomicBool::new(false);
@@ -156,10 +167,9 @@ impl GomDocument {
 
     /// A block with more non-blank data lines than its count: an error at the
     /// first line too many.
-    fn extra_rows(&self, b: usize, n: usize, what: &str) -> Option<ParseError> {
-        let (i, _) = self.rows(b).nth(n)?;
+    fn extra_row(&self, b: usize, i: usize, n: usize, what: &str) -> ParseError {
         let block = &self.doc.blocks()[b];
-        Some(self.doc.error_at(
+        self.doc.error_at(
             i,
             0,
             format!(
@@ -167,7 +177,7 @@ impl GomDocument {
                 block.keyword,
                 block.line + 1
             ),
-        ))
+        )
     }
 
     /// Where a block's data ran out: the next keyword line (or the end of the file).
@@ -319,7 +329,7 @@ impl GomDocument {
         let element_material = self.read_element_materials(n_elements, &materials, &mut errors)?;
         let mp_counts = match self.block("$$START_NUMBER_OF_MATERIAL_POINTS") {
             Some(b) => {
-                info.mp_count_lines = self.rows(b).map(|(i, _)| i as u32 + 1).collect();
+                info.mp_count_lines = self.data_lines(b).iter().map(|&i| i as u32 + 1).collect();
                 self.read_mp_counts(b, n_elements, element_type, &mut errors)?
             }
             None => {
@@ -525,8 +535,11 @@ impl GomDocument {
                     .error_at(i, 0, format!("material index {} is out of range", value[0]))
             })
         })?;
-        for (e, (&m, (i, _))) in out.iter().zip(self.rows(b)).enumerate() {
-            if m as usize > materials.len() {
+        // Lines are looked up (a serial pass) only when an index is bad.
+        let bad = |m: u32| m as usize > materials.len();
+        let lines = out.iter().any(|&m| bad(m)).then(|| self.rows(b));
+        for (e, (&m, (i, _))) in out.iter().zip(lines.into_iter().flatten()).enumerate() {
+            if bad(m) {
                 errors.push(self.doc.error_at(
                     i,
                     0,
@@ -564,8 +577,11 @@ impl GomDocument {
                 _ => Err(self.doc.error_at(i, 0, "MP count out of range")),
             }
         })?;
-        for (e, (&(solid, _), (i, _))) in out.iter().zip(self.rows(b)).enumerate() {
-            if solid != 0 && !element_type.allowed_mp_counts().contains(&solid) {
+        // Lines are looked up (a serial pass) only when a count is refused.
+        let bad = |solid: u32| solid != 0 && !element_type.allowed_mp_counts().contains(&solid);
+        let lines = out.iter().any(|&(s, _)| bad(s)).then(|| self.rows(b));
+        for (e, (&(solid, _), (i, _))) in out.iter().zip(lines.into_iter().flatten()).enumerate() {
+            if bad(solid) {
                 errors.push(self.doc.error_at(
                     i,
                     0,
@@ -597,8 +613,8 @@ impl GomDocument {
         if out.len() < n_elements {
             return Err(self.short_block(b, n_elements, out.len(), what));
         }
-        if let Some(e) = self.extra_rows(b, n_elements, what) {
-            return Err(e);
+        if let Some((i, _)) = self.rows(b).nth(n_elements) {
+            return Err(self.extra_row(b, i, n_elements, what));
         }
         Ok(out)
     }
