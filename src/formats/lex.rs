@@ -156,6 +156,38 @@ pub fn reals<'a>(line: &'a str, out: &mut [f64]) -> Result<(), Option<BadToken<'
 
 /// Reads `n` unsigned integers from the start of `line`, like [`reals`].
 pub fn uints<'a>(line: &'a str, out: &mut [u64]) -> Result<(), Option<BadToken<'a>>> {
+    if uints_plain(line.as_bytes(), out) {
+        return Ok(());
+    }
+    uints_tokens(line, out)
+}
+
+/// The common case of [`uints`] in one pass: each number is 1 to 18 digits
+/// ended by a separator or the line's end. False (with `out` partly written)
+/// for anything else, which [`uints_tokens`] then reads or refuses.
+fn uints_plain(b: &[u8], out: &mut [u64]) -> bool {
+    let separator = |c: u8| matches!(c, b' ' | b'\t' | b',');
+    let mut i = 0;
+    for slot in out.iter_mut() {
+        while i < b.len() && separator(b[i]) {
+            i += 1;
+        }
+        let start = i;
+        let mut value = 0u64;
+        while i < b.len() && b[i].is_ascii_digit() {
+            value = value * 10 + u64::from(b[i] - b'0');
+            i += 1;
+        }
+        if i == start || i - start > 18 || (i < b.len() && !separator(b[i])) {
+            return false;
+        }
+        *slot = value;
+    }
+    true
+}
+
+/// [`uints`] token by token, with the offending token on failure.
+fn uints_tokens<'a>(line: &'a str, out: &mut [u64]) -> Result<(), Option<BadToken<'a>>> {
     let mut it = FastTokens { line, pos: 0 };
     for slot in out.iter_mut() {
         let (offset, text) = it.next().ok_or(None)?;
@@ -183,6 +215,48 @@ pub fn header_version(line: &str) -> Option<&str> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The one-pass reader gives what the token reader gives, wherever it
+    /// accepts a line; on the rest `uints` answers as the token reader.
+    #[test]
+    fn plain_uints_agree_with_the_token_reader() {
+        let alphabet = [
+            b'0', b'1', b'9', b'5', b' ', b'\t', b',', b'+', b'-', b'x', b'.',
+        ];
+        let mut k = 7u64;
+        let mut plain_lines = 0;
+        for _ in 0..200_000 {
+            k = k
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            let len = (k >> 58) as usize;
+            let mut line = String::new();
+            let mut r = k;
+            for _ in 0..len {
+                r = r
+                    .wrapping_mul(6364136223846793005)
+                    .wrapping_add(1442695040888963407);
+                line.push(alphabet[(r >> 33) as usize % alphabet.len()] as char);
+            }
+            let n = 1 + (k >> 50) as usize % 3;
+            let (mut a, mut b) = (vec![0u64; n], vec![0u64; n]);
+            let tokens = uints_tokens(&line, &mut b).map_err(|e| e.map(|t| (t.offset, t.text)));
+            if uints_plain(line.as_bytes(), &mut a) {
+                plain_lines += 1;
+                assert_eq!(tokens, Ok(()), "{line:?}");
+                assert_eq!(a, b, "{line:?}");
+            }
+            let whole = uints(&line, &mut a).map_err(|e| e.map(|t| (t.offset, t.text)));
+            assert_eq!(whole, tokens, "{line:?}");
+            if whole.is_ok() {
+                assert_eq!(a, b, "{line:?}");
+            }
+        }
+        assert!(plain_lines > 1000, "{plain_lines}");
+        let mut long = [0u64; 1];
+        assert!(!uints_plain(b"1234567890123456789", &mut long));
+        assert_eq!(uints(" 12,\t34", &mut [0, 0][..]).map_err(|_| ()), Ok(()));
+    }
 
     #[test]
     fn reals_accept_fortran_forms() {
