@@ -54,6 +54,9 @@ pub struct GomDocument {
     doc: KeywordDocument,
 }
 
+/// An element's MP counts: (solid, liquid).
+type MpCount = (u32, u32);
+
 impl GomDocument {
     /// Reads a GOM (`.GOM`, `.GOM_stage<k>` or a GiD `-2.dat` export).
     pub fn read(path: &Path) -> Result<GomDocument, FormatError> {
@@ -108,14 +111,15 @@ impl GomDocument {
     /// Parses the first `n` non-blank data lines of block `b` with `parse`, in
     /// parallel. On failure the error of the earliest bad line is returned, so the
     /// result does not depend on scheduling; a block with fewer than `n` lines is a
-    /// positioned error at the line where its data ends.
+    /// positioned error at the line where its data ends. Returns the values and
+    /// their 0-based lines.
     fn parse_rows<T: Send + Default>(
         &self,
         b: usize,
         n: usize,
         what: &str,
         parse: impl Fn(usize, usize, &str) -> Result<T, ParseError> + Sync,
-    ) -> Result<Vec<T>, ParseError> {
+    ) -> Result<(Vec<T>, Vec<usize>), ParseError> {
         use rayon::prelude::*;
         use std::sync::atomic::{AtomicBool, Ordering};
         let mut rows = self.data_lines(b);
@@ -141,7 +145,7 @@ impl GomDocument {
             })
             .collect_into_vec(&mut parsed);
         if !failed.into_inner() {
-            return Ok(parsed);
+            return Ok((parsed, rows));
         }
         // Rare path: find the first failing line serially for a stable message.
         Err(rows
@@ -329,8 +333,10 @@ impl GomDocument {
         let element_material = self.read_element_materials(n_elements, &materials, &mut errors)?;
         let mp_counts = match self.block("$$START_NUMBER_OF_MATERIAL_POINTS") {
             Some(b) => {
-                info.mp_count_lines = self.data_lines(b).iter().map(|&i| i as u32 + 1).collect();
-                self.read_mp_counts(b, n_elements, element_type, &mut errors)?
+                let (counts, lines) =
+                    self.read_mp_counts(b, n_elements, element_type, &mut errors)?;
+                info.mp_count_lines = lines.iter().map(|&i| i as u32 + 1).collect();
+                counts
             }
             None => {
                 info.warnings
@@ -384,19 +390,21 @@ impl GomDocument {
 
     fn read_nodes(&self, n_dim: usize, n_nodes: usize) -> Result<Vec<[f64; 3]>, ParseError> {
         let b = self.required("$$STARTNODES")?;
-        self.parse_rows(b, n_nodes, "node lines ($$STARTCOUNTERS)", |k, i, line| {
-            let mut xyz = [0.0f64; 3];
-            lex::reals(line, &mut xyz[..n_dim]).map_err(|bad| {
-                self.numbers_error(
-                    i,
-                    bad,
-                    "a coordinate",
-                    line.len(),
-                    format!("node {} needs {n_dim} coordinates", k + 1),
-                )
+        let (nodes, _) =
+            self.parse_rows(b, n_nodes, "node lines ($$STARTCOUNTERS)", |k, i, line| {
+                let mut xyz = [0.0f64; 3];
+                lex::reals(line, &mut xyz[..n_dim]).map_err(|bad| {
+                    self.numbers_error(
+                        i,
+                        bad,
+                        "a coordinate",
+                        line.len(),
+                        format!("node {} needs {n_dim} coordinates", k + 1),
+                    )
+                })?;
+                Ok(xyz)
             })?;
-            Ok(xyz)
-        })
+        Ok(nodes)
     }
 
     fn read_connectivity(
@@ -407,7 +415,7 @@ impl GomDocument {
     ) -> Result<(Vec<u32>, Vec<u32>), ParseError> {
         let b = self.required("$$STARTELEMCON")?;
         let per = element_type.nodes_per_element();
-        let rows = self.parse_rows(
+        let (rows, _) = self.parse_rows(
             b,
             n_elements,
             "element lines ($$STARTCOUNTERS)",
@@ -525,21 +533,19 @@ impl GomDocument {
         errors: &mut Vec<ParseError>,
     ) -> Result<Vec<u32>, ParseError> {
         let b = self.required("$$STARTELMMAT")?;
-        let out = self.parse_rows(b, n_elements, "element material lines", |_, i, line| {
-            let mut value = [0u64];
-            lex::uints(line, &mut value).map_err(|bad| {
-                self.numbers_error(i, bad, "a material index", 0, "expected a material index")
+        let (out, lines) =
+            self.parse_rows(b, n_elements, "element material lines", |_, i, line| {
+                let mut value = [0u64];
+                lex::uints(line, &mut value).map_err(|bad| {
+                    self.numbers_error(i, bad, "a material index", 0, "expected a material index")
+                })?;
+                u32::try_from(value[0]).map_err(|_| {
+                    self.doc
+                        .error_at(i, 0, format!("material index {} is out of range", value[0]))
+                })
             })?;
-            u32::try_from(value[0]).map_err(|_| {
-                self.doc
-                    .error_at(i, 0, format!("material index {} is out of range", value[0]))
-            })
-        })?;
-        // Lines are looked up (a serial pass) only when an index is bad.
-        let bad = |m: u32| m as usize > materials.len();
-        let lines = out.iter().any(|&m| bad(m)).then(|| self.rows(b));
-        for (e, (&m, (i, _))) in out.iter().zip(lines.into_iter().flatten()).enumerate() {
-            if bad(m) {
+        for (e, (&m, &i)) in out.iter().zip(&lines).enumerate() {
+            if m as usize > materials.len() {
                 errors.push(self.doc.error_at(
                     i,
                     0,
@@ -554,14 +560,15 @@ impl GomDocument {
         Ok(out)
     }
 
+    /// Reads the MP counts per element (and the 0-based line of each).
     fn read_mp_counts(
         &self,
         b: usize,
         n_elements: usize,
         element_type: ElementType,
         errors: &mut Vec<ParseError>,
-    ) -> Result<Vec<(u32, u32)>, ParseError> {
-        let out = self.parse_rows(b, n_elements, "MP count lines", |_, i, line| {
+    ) -> Result<(Vec<MpCount>, Vec<usize>), ParseError> {
+        let (out, lines) = self.parse_rows(b, n_elements, "MP count lines", |_, i, line| {
             let mut values = [0u64; 2];
             lex::uints(line, &mut values).map_err(|bad| {
                 self.numbers_error(
@@ -577,11 +584,8 @@ impl GomDocument {
                 _ => Err(self.doc.error_at(i, 0, "MP count out of range")),
             }
         })?;
-        // Lines are looked up (a serial pass) only when a count is refused.
-        let bad = |solid: u32| solid != 0 && !element_type.allowed_mp_counts().contains(&solid);
-        let lines = out.iter().any(|&(s, _)| bad(s)).then(|| self.rows(b));
-        for (e, (&(solid, _), (i, _))) in out.iter().zip(lines.into_iter().flatten()).enumerate() {
-            if bad(solid) {
+        for (e, (&(solid, _), &i)) in out.iter().zip(&lines).enumerate() {
+            if solid != 0 && !element_type.allowed_mp_counts().contains(&solid) {
                 errors.push(self.doc.error_at(
                     i,
                     0,
@@ -594,7 +598,7 @@ impl GomDocument {
                 ));
             }
         }
-        Ok(out)
+        Ok((out, lines))
     }
 
     fn read_per_element_reals(
