@@ -311,8 +311,18 @@ fn grid_and_kiddo_searches_equal_brute_force_bit_for_bit() {
     for dim in [2usize, 3] {
         let pts = cloud_with_duplicates(&mut rng, dim, 5000); // radius 30: more than 4096 candidates
         let index = NeighbourIndex::new(&pts, dim);
-        for radius in [0.0, 0.05, 0.7, 2.5, 30.0] {
-            let grid = Grid::new(&pts, dim, radius);
+        for (radius, per_radius) in [
+            (0.0, 1),
+            (0.05, 1),
+            (0.7, 1),
+            (2.5, 1),
+            (30.0, 1),
+            (0.7, 2),
+            (2.5, 2),
+            (0.7, 3),
+        ] {
+            // Cells one radius wide, or a half or a third of it (the mapper's).
+            let grid = Grid::with_cells(&pts, dim, radius, per_radius);
             let (mut a, mut b) = (Vec::new(), Vec::new());
             for _ in 0..300 {
                 let q = random_point(&mut rng, dim, -7.0..7.0);
@@ -401,6 +411,65 @@ fn grid_map_equals_kiddo_map_bit_for_bit() {
                     assert_eq!(taken.status, reference.status);
                     if outside == OutsidePolicy::Nearest {
                         assert!(reference.status.contains(&PointStatus::Nearest));
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The mapper against the brute force: every node tested, the neighbours
+/// sorted by (distance, index), Eq. 1 summed in that order.
+#[test]
+fn grid_map_equals_brute_force_map_bit_for_bit() {
+    let mut rng = ChaCha8Rng::seed_from_u64(29);
+    for dim in [2usize, 3] {
+        let nodes = cloud_with_duplicates(&mut rng, dim, 3000);
+        let nf = 3;
+        let values: Vec<f64> = nodes
+            .iter()
+            .flat_map(|p| [p[0].sin() * 100.0 + p[1], p[2] * p[1] * 0.3, -7.0 * p[0]])
+            .collect();
+        let cloud = NodeCloud {
+            positions: &nodes,
+            dim,
+            values: &values,
+            n_fields: nf,
+            group: None,
+            node_volume: 0.05,
+        };
+        let points = random_points(&mut rng, dim, 2000, -6.0..6.0);
+        for kernel in KERNELS {
+            for h in [0.2, 0.45, 1.3] {
+                let settings = map_settings(kernel, h, 0.01, OutsidePolicy::Skip);
+                let got = mapper::map_points(&cloud, &points, None, &settings).unwrap();
+                let alpha = kernel.alpha(dim, h);
+                let mut ws = Vec::new();
+                for (i, &q) in points.iter().enumerate() {
+                    let found = within_brute_force(&nodes, dim, q, kernel.support() * h);
+                    kernel.shapes(&found, h, &mut ws);
+                    let (mut sum_w, mut acc, mut count) = (0.0, vec![0.0; nf], 0u32);
+                    for (&(node, _), &w) in found.iter().zip(&ws) {
+                        if w <= 0.0 {
+                            continue;
+                        }
+                        count += 1;
+                        sum_w += w;
+                        for (a, v) in acc.iter_mut().zip(&values[node as usize * nf..]) {
+                            *a += w * v;
+                        }
+                    }
+                    let ratio = sum_w * alpha * 0.05;
+                    assert_eq!(got.n_neighbours[i], count, "{kernel:?} h {h} point {i}");
+                    assert_eq!(got.shepard[i].to_bits(), ratio.to_bits());
+                    if count > 0 && ratio >= 0.01 {
+                        assert_eq!(got.status[i], PointStatus::Mapped);
+                        for (k, a) in acc.iter().enumerate() {
+                            let want = a / sum_w;
+                            assert_eq!(got.values[i * nf + k].to_bits(), want.to_bits());
+                        }
+                    } else {
+                        assert_eq!(got.status[i], PointStatus::Skipped);
                     }
                 }
             }

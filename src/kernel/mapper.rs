@@ -8,17 +8,19 @@
 //! apart: a point only takes nodes of its own group ("no smoothing across
 //! material boundaries").
 //!
-//! Neighbours come from the cell grid ([`Search::Grid`]: queries in Morton
-//! order of their cells, each visiting the rows of cells its support reaches;
-//! the grid keeps the node values in its own order and answers the
-//! `--outside nearest` fallback too) or from the kiddo tree
-//! ([`Search::KdTree`], the reference); both give the same sorted lists, so
-//! the results are bit-identical. Results are scattered back batch by batch
-//! to bound memory; progress is counted in `crate::progress::MAP`.
+//! Every group keeps its nodes in a cell grid, with the node values in the
+//! grid's order, and queries run group by group and cell by cell (a counting
+//! sort). Neighbours come from the grid ([`Search::Grid`]: the blocks of
+//! nodes a cell's support reaches, found once per cell, tested per query;
+//! the grid answers the `--outside nearest` fallback too) or from the kiddo
+//! tree ([`Search::KdTree`], the reference, its hits named by their grid
+//! positions); both give the same sorted lists, so the results are
+//! bit-identical. Results are scattered back batch by batch to bound memory;
+//! progress is counted in `crate::progress::MAP`.
 
 use rayon::prelude::*;
 
-use super::grid::{self, Grid, Scratch};
+use super::grid::{self, Grid, Hits};
 use super::neighbours::NeighbourIndex;
 use super::{Kernel, KernelKind};
 
@@ -114,59 +116,58 @@ pub enum Search {
 /// One group's nodes and their neighbour search.
 struct Indexed {
     group: u32,
-    members: Vec<u32>,
-    /// Built by [`Search::KdTree`] (the grid answers its own nearest-node fallbacks).
-    tree: std::sync::OnceLock<NeighbourIndex>,
-    grid: Option<Grid>,
-    /// The node values in the grid's order (n_fields per node), so that the
-    /// rows of a cell's candidates are gathered with them.
-    grid_values: Vec<f64>,
+    /// The group's nodes, sorted cell by cell: a point's sums run over its
+    /// neighbours in this order (see the module documentation).
+    grid: Grid,
+    /// The rows of cells the kernel support reaches around a cell.
+    stencil: grid::Stencil,
+    /// The node values in the grid's order (n_fields per node).
+    values: Vec<f64>,
+    /// [`Search::KdTree`]: the tree over the group's nodes (in their own
+    /// order) and each node's position in the grid's order.
+    tree: Option<(NeighbourIndex, Vec<u32>)>,
 }
 
-impl Indexed {
-    fn tree(&self, nodes: &NodeCloud<'_>) -> &NeighbourIndex {
-        self.tree.get_or_init(|| {
-            let positions: Vec<[f64; 3]> = self
-                .members
-                .iter()
-                .map(|&i| nodes.positions[i as usize])
-                .collect();
-            NeighbourIndex::new(&positions, nodes.dim)
-        })
-    }
-}
+/// Grid cells per kernel support: half-support cells hold about 3.7 times the
+/// support sphere's nodes in a query cell's runs (whole-support cells 6.4).
+const CELLS_PER_SUPPORT: u32 = 2;
 
 fn build_indices(nodes: &NodeCloud<'_>, search: Search, radius: f64) -> Vec<Indexed> {
-    let make = |group: u32, members: Vec<u32>| {
-        let positions: Vec<[f64; 3]> = members
-            .iter()
-            .map(|&i| nodes.positions[i as usize])
-            .collect();
-        let grid = (search == Search::Grid).then(|| Grid::new(&positions, nodes.dim, radius));
-        let nf = nodes.n_fields;
-        let grid_values = grid.as_ref().map_or_else(Vec::new, |g| {
-            let mut v = Vec::with_capacity(g.order().len() * nf);
-            for &local in g.order() {
-                let node = members[local as usize] as usize;
-                v.extend_from_slice(&nodes.values[node * nf..(node + 1) * nf]);
+    // `members`: the group's nodes, `None` for all of them (no copy).
+    let make = |group: u32, members: Option<Vec<u32>>| {
+        let node = |local: u32| members.as_ref().map_or(local, |m| m[local as usize]) as usize;
+        let copied: Vec<[f64; 3]>;
+        let positions = match &members {
+            None => nodes.positions,
+            Some(m) => {
+                copied = m.iter().map(|&i| nodes.positions[i as usize]).collect();
+                &copied
             }
-            v
-        });
-        drop(positions);
-        let ix = Indexed {
-            group,
-            members,
-            grid,
-            grid_values,
-            tree: std::sync::OnceLock::new(),
         };
-        if search == Search::KdTree {
-            ix.tree(nodes);
+        let grid = Grid::with_cells(positions, nodes.dim, radius, CELLS_PER_SUPPORT);
+        let nf = nodes.n_fields;
+        let mut values = Vec::with_capacity(grid.order().len() * nf);
+        for &local in grid.order() {
+            let at = node(local) * nf;
+            values.extend_from_slice(&nodes.values[at..at + nf]);
         }
-        ix
+        let tree = (search == Search::KdTree).then(|| {
+            let mut rank = vec![0u32; positions.len()];
+            for (pos, &local) in grid.order().iter().enumerate() {
+                rank[local as usize] = pos as u32;
+            }
+            (NeighbourIndex::new(positions, nodes.dim), rank)
+        });
+        Indexed {
+            group,
+            stencil: grid.stencil(radius),
+            grid,
+            values,
+            tree,
+        }
     };
     match nodes.group {
-        None => vec![make(u32::MAX, (0..nodes.positions.len() as u32).collect())],
+        None => vec![make(u32::MAX, None)],
         Some(groups) => {
             let mut ids: Vec<u32> = groups.to_vec();
             ids.sort_unstable();
@@ -176,31 +177,33 @@ fn build_indices(nodes: &NodeCloud<'_>, search: Search, radius: f64) -> Vec<Inde
                     let members: Vec<u32> = (0..groups.len() as u32)
                         .filter(|&i| groups[i as usize] == g)
                         .collect();
-                    make(g, members)
+                    make(g, Some(members))
                 })
                 .collect()
         }
     }
 }
 
-/// One point to map: its position, its neighbours (sorted by distance, then
-/// node index) and a buffer for their weights.
+/// One point to map: its position, its neighbours (positions in the grid's
+/// order and distances, sorted by distance then node index) and a buffer for
+/// their weights.
 struct Query<'a> {
     p: [f64; 3],
     found: &'a [(u32, f64)],
     ws: &'a mut Vec<f64>,
 }
 
-/// Maps one point into `out` (n_fields values) from its neighbours (`row`
-/// gives a neighbour's values); returns (neighbours, ratio, status).
-fn map_one<'r>(
+/// Maps one point into `out` (n_fields values) from its neighbours; returns
+/// (neighbours, ratio, status).
+fn map_one(
     nodes: &NodeCloud<'_>,
     idx: &Indexed,
     settings: &MapSettings,
     Query { p, found, ws }: Query<'_>,
-    row: impl Fn(u32) -> &'r [f64],
     out: &mut [f64],
 ) -> (u32, f64, PointStatus) {
+    let nf = out.len();
+    let row = |k: u32| &idx.values[k as usize * nf..(k as usize + 1) * nf];
     let alpha = settings.kernel.alpha(nodes.dim, settings.h);
     out.iter_mut().for_each(|v| *v = 0.0);
     let mut sum_w = 0.0;
@@ -209,14 +212,13 @@ fn map_one<'r>(
     // Up to 8 fields sum in registers (the same operations in the same
     // order as in `out`, so the same bits).
     let mut acc = [0.0f64; 8];
-    let nf = out.len();
-    for (&(local, _), &w) in found.iter().zip(ws.iter()) {
+    for (&(k, _), &w) in found.iter().zip(ws.iter()) {
         if w <= 0.0 {
             continue;
         }
         count += 1;
         sum_w += w;
-        let v = row(local);
+        let v = row(k);
         if nf <= 8 {
             for (a, v) in acc[..nf].iter_mut().zip(v) {
                 *a += w * v;
@@ -237,10 +239,10 @@ fn map_one<'r>(
     }
     match settings.outside {
         OutsidePolicy::Nearest => {
-            // The nearest node of the group, indexed as `found` is (see `row`).
-            let near = match &idx.grid {
-                Some(grid) => grid.nearest(p),
-                None => idx.tree(nodes).nearest(p),
+            // The nearest node of the group, as a position in the grid's order.
+            let near = match &idx.tree {
+                Some((tree, rank)) => tree.nearest(p).map(|(i, d)| (rank[i as usize], d)),
+                None => idx.grid.nearest(p),
             };
             match near {
                 Some((k, _)) => {
@@ -296,22 +298,11 @@ fn run(
         };
         build_indices(&cloud, search, support)
     };
-    // The grid answers every query from its own copy of the values.
-    let emptied = NodeCloud {
+    // Every group holds its own copy of the values: a handed-over copy goes now.
+    drop(owned_values);
+    let nodes = &NodeCloud {
         values: &[],
         ..*given
-    };
-    let kept: Vec<f64>;
-    let nodes = match (owned_values, search) {
-        (Some(_), Search::Grid) => &emptied,
-        (Some(v), Search::KdTree) => {
-            kept = v;
-            &NodeCloud {
-                values: &kept,
-                ..*given
-            }
-        }
-        (None, _) => given,
     };
     let lookup = |g: u32| -> Result<&Indexed, MapError> {
         if !grouped {
@@ -329,9 +320,6 @@ fn run(
     }
     let nf = nodes.n_fields;
     let chunk = 512;
-    // Queries run in Morton (Z-curve) order of the points for cache locality in
-    // the tree; results are scattered back to the input order. The order depends
-    // only on the coordinates, so the output is the same for any thread count.
     let group_of = |i: usize| -> u32 {
         if grouped {
             point_group.map_or(u32::MAX, |gs| gs[i])
@@ -339,65 +327,68 @@ fn run(
             u32::MAX
         }
     };
-    let order = match search {
-        Search::KdTree => morton_order(points, nodes.dim),
-        Search::Grid => {
-            // Cell by cell in Morton order of the cells, group by group.
-            let mut keyed: Vec<(u32, u64, u32)> = points
-                .par_iter()
-                .enumerate()
-                .map(|(i, p)| {
-                    let g = group_of(i);
-                    let ix = lookup(g).unwrap_or(&indices[0]);
-                    let key = ix
-                        .grid
-                        .as_ref()
-                        .map_or(0, |grid| grid::morton(grid.cell(*p)));
-                    (g, key, i as u32)
-                })
-                .collect();
-            keyed.par_sort_unstable();
-            keyed.into_iter().map(|(_, _, i)| i).collect()
-        }
+    // Queries run group by group, cell by cell, so that the points of a cell
+    // share its runs and neighbouring cells their nodes in cache; results are
+    // scattered back to the input order. The order depends only on the
+    // coordinates, so the output is the same for any thread count.
+    let key_of = |i: usize| -> (usize, u64) {
+        let at = if grouped {
+            let g = group_of(i);
+            indices.iter().position(|ix| ix.group == g).unwrap_or(0)
+        } else {
+            0
+        };
+        (
+            at,
+            indices[at].grid.cell_key(indices[at].grid.cell(points[i])),
+        )
     };
+    let order = query_order(points.len(), &indices, key_of);
     let work = |idx: &[u32]| {
+        let mut blocks = grid::Blocks::default();
+        let mut blocks_of: Option<(u32, grid::Cell)> = None;
+        let mut hits = Hits::default();
         let mut found = Vec::with_capacity(128);
-        let mut scratch = Scratch::default();
         let mut ws = Vec::with_capacity(128);
         let mut values = vec![0.0; idx.len() * nf];
         let mut meta = Vec::with_capacity(idx.len());
-        for (k, &i) in idx.iter().enumerate() {
-            let i = i as usize;
-            let g = group_of(i);
+        // The chunk's points gathered first: loads that do not wait on each other.
+        let gathered: Vec<([f64; 3], u32)> = idx
+            .iter()
+            .map(|&i| (points[i as usize], group_of(i as usize)))
+            .collect();
+        for (k, &(p, g)) in gathered.iter().enumerate() {
             let ix = lookup(g).unwrap_or(&indices[0]);
-            let out = &mut values[k * nf..(k + 1) * nf];
-            let m = match &ix.grid {
-                Some(grid) => {
-                    grid.query(points[i], support, &mut found, &mut scratch);
-                    let rows = &ix.grid_values;
-                    let row = |pos: u32| &rows[pos as usize * nf..(pos as usize + 1) * nf];
-                    let query = Query {
-                        p: points[i],
-                        found: &found,
-                        ws: &mut ws,
-                    };
-                    map_one(nodes, ix, settings, query, row, out)
-                }
+            match &ix.tree {
                 None => {
-                    ix.tree(nodes).within(points[i], support, &mut found);
-                    let row = |local: u32| {
-                        let node = ix.members[local as usize] as usize;
-                        &nodes.values[node * nf..(node + 1) * nf]
-                    };
-                    let query = Query {
-                        p: points[i],
-                        found: &found,
-                        ws: &mut ws,
-                    };
-                    map_one(nodes, ix, settings, query, row, out)
+                    let cell = ix.grid.cell(p);
+                    if blocks_of != Some((g, cell)) {
+                        ix.grid.blocks(&ix.stencil, cell, &mut blocks);
+                        blocks_of = Some((g, cell));
+                    }
+                    ix.grid.collect(&blocks, p, support, &mut hits);
+                    ix.grid.sorted(&mut hits, support, &mut found);
                 }
+                Some((tree, rank)) => {
+                    // The reference: the tree's hits, by their positions in the grid's order.
+                    tree.within(p, support, &mut found);
+                    for e in found.iter_mut() {
+                        e.0 = rank[e.0 as usize];
+                    }
+                }
+            }
+            let query = Query {
+                p,
+                found: &found,
+                ws: &mut ws,
             };
-            meta.push(m);
+            meta.push(map_one(
+                nodes,
+                ix,
+                settings,
+                query,
+                &mut values[k * nf..(k + 1) * nf],
+            ));
         }
         (values, meta)
     };
@@ -557,41 +548,45 @@ fn bounds(positions: &[[f64; 3]]) -> ([f64; 3], [f64; 3]) {
     (lo, hi)
 }
 
-/// Indices of `points` sorted along a Morton (Z-order) curve of their bounding box.
-fn morton_order(points: &[[f64; 3]], dim: usize) -> Vec<u32> {
-    let (lo, hi) = bounds(points);
-    let bits = if dim == 3 { 21 } else { 31 };
-    let scale: Vec<f64> = (0..3)
-        .map(|k| {
-            let span = hi[k] - lo[k];
-            if span > 0.0 {
-                ((1u64 << bits) - 1) as f64 / span
-            } else {
-                0.0
-            }
+/// The points `0..n` sorted by (group, cell key, index), `key_of` giving a
+/// point's group (a position in `indices`) and cell key (below the group
+/// grid's [`Grid::cell_keys`]): a counting sort where the keys are few enough,
+/// a comparison sort otherwise.
+fn query_order(
+    n: usize,
+    indices: &[Indexed],
+    key_of: impl Fn(usize) -> (usize, u64) + Sync,
+) -> Vec<u32> {
+    let mut offset = Vec::with_capacity(indices.len());
+    let mut total = 0u64;
+    for ix in indices {
+        offset.push(total);
+        total = total.saturating_add(ix.grid.cell_keys());
+    }
+    let keys: Vec<u64> = (0..n)
+        .into_par_iter()
+        .map(|i| {
+            let (at, key) = key_of(i);
+            offset[at] + key
         })
         .collect();
-    let spread = |mut v: u64| -> u64 {
-        // Interleave the bits of v with (dim − 1) zeros between them.
-        let mut out = 0u64;
-        for b in 0..bits {
-            out |= (v & 1) << (b * dim);
-            v >>= 1;
-        }
-        out
-    };
-    let mut keyed: Vec<(u64, u32)> = points
-        .iter()
-        .enumerate()
-        .map(|(i, p)| {
-            let mut key = 0u64;
-            for k in 0..dim {
-                let q = (((p[k] - lo[k]) * scale[k]).max(0.0) as u64).min((1u64 << bits) - 1);
-                key |= spread(q) << k;
-            }
-            (key, i as u32)
-        })
-        .collect();
-    keyed.sort_unstable();
-    keyed.into_iter().map(|(_, i)| i).collect()
+    if total > 8 * n as u64 + 4096 {
+        let mut keyed: Vec<(u64, u32)> = keys.into_iter().zip(0..n as u32).collect();
+        keyed.par_sort_unstable();
+        return keyed.into_iter().map(|(_, i)| i).collect();
+    }
+    let mut start = vec![0u32; total as usize + 1];
+    for &k in &keys {
+        start[k as usize + 1] += 1;
+    }
+    for k in 0..total as usize {
+        start[k + 1] += start[k];
+    }
+    let mut order = vec![0u32; n];
+    for (i, &k) in keys.iter().enumerate() {
+        let slot = &mut start[k as usize];
+        order[*slot as usize] = i as u32;
+        *slot += 1;
+    }
+    order
 }
