@@ -169,16 +169,19 @@ fn build_indices(nodes: &NodeCloud<'_>, search: Search, radius: f64) -> Vec<Inde
     match nodes.group {
         None => vec![make(u32::MAX, None)],
         Some(groups) => {
+            // Each group's nodes in their order, in one pass over the nodes.
             let mut ids: Vec<u32> = groups.to_vec();
             ids.sort_unstable();
             ids.dedup();
+            let mut members: Vec<Vec<u32>> = vec![Vec::new(); ids.len()];
+            for (i, g) in groups.iter().enumerate() {
+                if let Ok(at) = ids.binary_search(g) {
+                    members[at].push(i as u32);
+                }
+            }
             ids.into_iter()
-                .map(|g| {
-                    let members: Vec<u32> = (0..groups.len() as u32)
-                        .filter(|&i| groups[i as usize] == g)
-                        .collect();
-                    make(g, Some(members))
-                })
+                .zip(members)
+                .map(|(g, members)| make(g, Some(members)))
                 .collect()
         }
     }
@@ -308,10 +311,11 @@ fn run(
         if !grouped {
             return Ok(&indices[0]);
         }
+        // `indices` is sorted by group (see `build_indices`).
         indices
-            .iter()
-            .find(|ix| ix.group == g)
-            .ok_or(MapError::EmptyGroup(g))
+            .binary_search_by_key(&g, |ix| ix.group)
+            .map(|at| &indices[at])
+            .map_err(|_| MapError::EmptyGroup(g))
     };
     if let Some(groups) = point_group {
         for &g in groups {
@@ -334,7 +338,7 @@ fn run(
     let key_of = |i: usize| -> (usize, u64) {
         let at = if grouped {
             let g = group_of(i);
-            indices.iter().position(|ix| ix.group == g).unwrap_or(0)
+            indices.binary_search_by_key(&g, |ix| ix.group).unwrap_or(0)
         } else {
             0
         };
