@@ -7,6 +7,7 @@
 
 pub mod anura3d;
 pub mod calibrate;
+mod direct;
 pub mod fem;
 pub mod map;
 pub mod project;

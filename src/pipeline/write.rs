@@ -26,10 +26,14 @@ impl Folder<'_> {
         let path = self.path(name);
         let io =
             |e: std::io::Error| PipelineError::Input(format!("writing {}: {e}", path.display()));
-        let file = std::fs::File::create(&path).map_err(io)?;
-        let mut w = BufWriter::new(file);
+        // Large tables bypass the page cache (see `direct`); whole pages only.
+        let file = super::direct::DirectFile::create(&path).map_err(io)?;
+        let mut w = BufWriter::with_capacity(1 << 16, file);
         fill(&mut w).map_err(io)?;
-        w.flush().map_err(io)?;
+        w.into_inner()
+            .map_err(|e| io(e.into_error()))?
+            .finish()
+            .map_err(io)?;
         Ok(())
     }
 
