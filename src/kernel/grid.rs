@@ -115,9 +115,9 @@ impl Grid {
             slack: 8.0 * f64::EPSILON * (mag + 4.0 * cell + radius) + 1e-9 * cell,
             dims,
             start: Vec::new(),
-            xs: Vec::new(),
-            ys: Vec::new(),
-            zs: Vec::new(),
+            xs: Vec::with_capacity(n + LANES),
+            ys: Vec::with_capacity(n + LANES),
+            zs: Vec::with_capacity(n + LANES),
             ids: Vec::new(),
         };
         let n_cells = (dims[0] * dims[1] * dims[2]) as usize;
@@ -140,33 +140,22 @@ impl Grid {
         for c in 0..n_cells {
             start[c + 1] += start[c];
         }
-        // Read in the original order, written in the grid's as one record
-        // per point (one scattered write, not four), then split into columns.
         let mut fill = start.clone();
-        let mut sorted = vec![([0.0f64; 3], 0u32); n];
-        for (i, (&c, p)) in cell_of.iter().zip(points).enumerate() {
-            let slot = fill[c as usize] as usize;
+        let mut order = vec![0u32; n];
+        for (i, &c) in cell_of.iter().enumerate() {
+            order[fill[c as usize] as usize] = i as u32;
             fill[c as usize] += 1;
-            sorted[slot] = (*p, i as u32);
         }
-        drop(cell_of);
-        let mut order = Vec::with_capacity(n);
-        let (mut xs, mut ys, mut zs) = (
-            Vec::with_capacity(n + LANES),
-            Vec::with_capacity(n + LANES),
-            Vec::with_capacity(n + LANES),
-        );
-        for (p, i) in sorted {
-            xs.push(p[0]);
-            ys.push(p[1]);
-            zs.push(if dim == 3 { p[2] } else { 0.0 });
-            order.push(i);
+        for &i in &order {
+            let p = points[i as usize];
+            grid.xs.push(p[0]);
+            grid.ys.push(p[1]);
+            grid.zs.push(if dim == 3 { p[2] } else { 0.0 });
         }
         // Padding, so that the last points' block of LANES reads in bounds.
-        for col in [&mut xs, &mut ys, &mut zs] {
+        for col in [&mut grid.xs, &mut grid.ys, &mut grid.zs] {
             col.extend([f64::NAN; LANES]);
         }
-        (grid.xs, grid.ys, grid.zs) = (xs, ys, zs);
         grid.ids = order;
         grid.start = start;
         grid
@@ -255,10 +244,9 @@ impl Grid {
             if x0 > x1 {
                 continue;
             }
-            let row = ((z * self.dims[1] + y) * self.dims[0]) as usize;
             let (mut at, b) = (
-                self.start[row + x0 as usize],
-                self.start[row + x1 as usize + 1],
+                self.start[self.linear([x0, y, z])],
+                self.start[self.linear([x1, y, z]) + 1],
             );
             while at < b {
                 let valid = (b - at).min(LANES as u32);
