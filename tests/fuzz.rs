@@ -14,7 +14,7 @@
 //! `tests/hardening.rs`.
 
 mod common;
-use common::{fixture, mini_regions_csv, run_within};
+use common::{Watchdog, fixture, mini_regions_csv, run_watched};
 
 use std::io::Write;
 use std::panic::{AssertUnwindSafe, catch_unwind};
@@ -208,20 +208,47 @@ fn mutate(rng: &mut ChaCha8Rng, input: &[u8], end_marker: Option<&str>) -> Vec<u
     b
 }
 
-/// Runs `read` on `cases()` mutations of `base`; returns the failures.
+/// What one fuzz case came to.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Case {
+    /// The reader took the mutated input.
+    Read,
+    /// The reader refused it with an error.
+    Refused,
+    /// The case never reached the reader (for example, not UTF-8 text for a
+    /// reader of text): it tests nothing.
+    Skipped,
+}
+
+impl<T, E> From<Result<T, E>> for Case {
+    fn from(r: Result<T, E>) -> Case {
+        if r.is_ok() { Case::Read } else { Case::Refused }
+    }
+}
+
+/// Runs `read` on `cases()` mutations of `base`; returns the failures: every
+/// panic, and too many skipped cases (more than half: the fuzzer would then
+/// test little while passing). The tally is part of every failure message.
 fn fuzz(
     reader: &str,
     base: &[u8],
     end_marker: Option<&str>,
-    read: impl Fn(&Path, &[u8]),
+    read: impl Fn(&Path, &[u8]) -> Case,
 ) -> Vec<String> {
     let dir = tempfile::tempdir().unwrap();
     let mut failures = Vec::new();
     let mut rng = ChaCha8Rng::seed_from_u64(seed() ^ hash(reader));
+    let (mut read_n, mut refused_n, mut skipped_n) = (0usize, 0usize, 0usize);
     for case in 0..cases() {
         let bytes = mutate(&mut rng, base, end_marker);
         let path = dir.path().join(format!("case-{case}"));
         let outcome = catch_unwind(AssertUnwindSafe(|| read(&path, &bytes)));
+        match outcome {
+            Ok(Case::Read) => read_n += 1,
+            Ok(Case::Refused) => refused_n += 1,
+            Ok(Case::Skipped) => skipped_n += 1,
+            Err(_) => {}
+        }
         if outcome.is_err() {
             let keep = Path::new(env!("CARGO_TARGET_TMPDIR"))
                 .join("..")
@@ -234,6 +261,24 @@ fn fuzz(
                 seed(),
                 file.display()
             ));
+        }
+    }
+    let tally = format!(
+        "{reader}: {} cases: {read_n} read, {refused_n} refused, {skipped_n} skipped, {} panicked",
+        cases(),
+        failures.len()
+    );
+    if 2 * skipped_n > cases() {
+        failures.push(format!("{tally}: more than half the cases were skipped"));
+    }
+    if read_n == 0 || refused_n == 0 {
+        failures.push(format!(
+            "{tally}: the mutations must give both accepted and refused inputs"
+        ));
+    }
+    for f in &mut failures {
+        if !f.starts_with(&tally) {
+            *f = format!("{f} ({tally})");
         }
     }
     failures
@@ -249,16 +294,18 @@ fn check(failures: Vec<String>) {
     assert!(failures.is_empty(), "{}", failures.join("\n"));
 }
 
-fn read_gom(path: &Path, bytes: &[u8]) {
+fn read_gom(path: &Path, bytes: &[u8]) -> Case {
     let Ok(text) = String::from_utf8(bytes.to_vec()) else {
-        return;
+        return Case::Skipped;
     };
-    if let Ok(doc) = GomDocument::parse(path, text.clone()) {
-        assert_eq!(doc.to_text(), text, "an untouched document round-trips");
-        if let Ok((model, _)) = doc.model() {
-            let _ = a3d_init::place::place_material_points(&model);
-        }
-    }
+    let Ok(doc) = GomDocument::parse(path, text.clone()) else {
+        return Case::Refused;
+    };
+    assert_eq!(doc.to_text(), text, "an untouched document round-trips");
+    let Ok((model, _)) = doc.model() else {
+        return Case::Refused;
+    };
+    a3d_init::place::place_material_points(&model).into()
 }
 
 #[test]
@@ -272,12 +319,14 @@ fn fuzz_cps() {
     let base = std::fs::read(fixture("anura3d-mini/TwoMat.CPS_001")).unwrap();
     check(fuzz("cps", &base, Some("$$END"), |path, bytes| {
         let Ok(text) = String::from_utf8(bytes.to_vec()) else {
-            return;
+            return Case::Skipped;
         };
-        if let Ok(cps) = CpsDocument::parse(path, text) {
-            let _ = (cps.gravity(), cps.local_damping(), cps.stage());
-            let _ = cps.computation_method();
-        }
+        let Ok(cps) = CpsDocument::parse(path, text) else {
+            return Case::Refused;
+        };
+        let _ = (cps.gravity(), cps.local_damping(), cps.stage());
+        let _ = cps.computation_method();
+        Case::Read
     }));
 }
 
@@ -305,7 +354,7 @@ fn fuzz_mapf() {
     mapf::write(&mut base, &points, &states, 2, 0.01).unwrap();
     check(fuzz("mapf", &base, None, |path, bytes| {
         std::fs::write(path, bytes).unwrap();
-        let _ = mapf::read(path);
+        mapf::read(path).into()
     }));
 }
 
@@ -315,7 +364,7 @@ fn fuzz_mps_csv() {
     let diagnostics = vec![
         MpDiagnostics {
             neighbours: 4,
-            shepard: 1.0,
+            shepard: Some(1.0),
             status: "mapped",
         };
         points.len()
@@ -325,7 +374,7 @@ fn fuzz_mps_csv() {
     check(fuzz("mps", &base, None, |path, bytes| {
         std::fs::write(path, bytes).unwrap();
         let _ = mps_table::read_states(path);
-        let _ = mps_table::read_states_for(path, &points);
+        mps_table::read_states_for(path, &points).into()
     }));
 }
 
@@ -333,7 +382,7 @@ fn fuzz_mps_csv() {
 fn fuzz_fem_csv() {
     let base = std::fs::read(fixture("geostudio-csv/k0-slope-hydrostatic.csv")).unwrap();
     check(fuzz("csv", &base, None, |path, bytes| {
-        let _ = fem_csv::parse_csv(path, bytes, &CsvOptions::default());
+        fem_csv::parse_csv(path, bytes, &CsvOptions::default()).into()
     }));
 }
 
@@ -347,7 +396,7 @@ fn fuzz_ply() {
     check(fuzz("ply", &base, None, |path, bytes| {
         let _ = ply::parse_ply_nodes(path, bytes);
         std::fs::write(path, bytes).unwrap();
-        let _ = ply::read_ply_mesh(path);
+        ply::read_ply_mesh(path).into()
     }));
 }
 
@@ -374,9 +423,9 @@ fn fuzz_gsz() {
     let dir = fixture("geostudio-gsz-internal/rapid-drawdown");
     let csv = std::fs::read(dir.join("1-initial-steady-state_001_node.csv")).unwrap();
     let mesh = std::fs::read(dir.join("1-initial-steady-state_Mesh.ply")).unwrap();
-    let read = |path: &Path| {
+    let read = |path: &Path| -> Case {
         let _ = gsz::read_project(path);
-        let _ = gsz::read_step(path, None, &gsz::StepChoice::Last, &CsvOptions::default());
+        gsz::read_step(path, None, &gsz::StepChoice::Last, &CsvOptions::default()).into()
     };
     // The unmutated archive reads.
     let tmp = tempfile::tempdir().unwrap();
@@ -386,33 +435,33 @@ fn fuzz_gsz() {
     let mut failures = Vec::new();
     failures.extend(fuzz("gsz-csv", &csv, None, |path, bytes| {
         make_gsz(path, GSZ_XML, bytes, &mesh);
-        read(path);
+        read(path)
     }));
     failures.extend(fuzz("gsz-mesh", &mesh, None, |path, bytes| {
         make_gsz(path, GSZ_XML, &csv, bytes);
-        read(path);
+        read(path)
     }));
     failures.extend(fuzz("gsz-xml", GSZ_XML, None, |path, bytes| {
         make_gsz(path, bytes, &csv, &mesh);
-        read(path);
+        read(path)
     }));
     let archive = std::fs::read(&good).unwrap();
     failures.extend(fuzz("gsz-bytes", &archive, None, |path, bytes| {
         std::fs::write(path, bytes).unwrap();
-        read(path);
+        read(path)
     }));
     check(failures);
 }
 
-/// Runs the binary, killed after 30 s: (exit code, stderr + stdout).
+/// Runs the binary under the hang watchdog: (exit code, stderr + stdout);
+/// a hang is exit -9 with the watchdog's reason.
 fn run_bin(args: &[&std::ffi::OsStr]) -> (i32, String) {
-    run_within(args, std::time::Duration::from_secs(30))
-        .unwrap_or_else(|| (-9, format!("hung: {args:?}")))
+    run_watched(args, Watchdog::default()).unwrap_or_else(|e| (-9, e))
 }
 
 /// The whole pipeline through the real binary: `map` on a mutated GOM, CPS or
 /// FEM table of the mini project, then `verify` and `calibrate` on what it wrote.
-/// Each run ends with 0, 1 or 2 and no panic within 30 s, changes no input, and
+/// Each run ends with 0, 1 or 2 and no panic or hang, changes no input, and
 /// leaves either a complete output folder or none (and no staging folder).
 /// `A3D_FUZZ_CLI_CASES` cases (default 100).
 #[test]

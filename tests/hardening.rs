@@ -6,19 +6,16 @@
 //! Every run is killed after 30 s, so a hang fails instead of blocking CI.
 
 mod common;
-use common::{assert_contains, fixture, mini_regions_csv, run_map, run_within};
+use common::{Watchdog, assert_contains, fixture, mini_regions_csv, run_map, run_watched};
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::time::Duration;
 
-/// Runs the binary with a 30 s limit: (exit code, stderr + stdout).
+/// Runs the binary under the hang watchdog: (exit code, stderr + stdout).
 fn run(args: &[&dyn AsRef<std::ffi::OsStr>]) -> (i32, String) {
     let os: Vec<&std::ffi::OsStr> = args.iter().map(|a| a.as_ref()).collect();
-    let Some((code, text)) = run_within(&os, Duration::from_secs(30)) else {
-        panic!("a3d-init {os:?} hung (killed after 30 s)");
-    };
+    let (code, text) = run_watched(&os, Watchdog::default()).unwrap_or_else(|e| panic!("{e}"));
     assert!(!text.contains("panicked"), "{text}");
     assert!(!text.contains("internal error"), "{text}");
     (code, text)

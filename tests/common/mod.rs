@@ -127,10 +127,42 @@ pub fn assert_contains(text: &str, parts: &[&str]) {
     }
 }
 
-/// Runs the binary with stdin closed, killing it after `limit`: (exit code,
-/// stderr followed by stdout), or `None` if it had to be killed.
-pub fn run_within(args: &[&std::ffi::OsStr], limit: std::time::Duration) -> Option<(i32, String)> {
+/// CPU seconds (user + system) a process has used so far, from
+/// `/proc/<pid>/stat`; `None` where there is no such file (not Linux, or the
+/// process is gone).
+fn cpu_seconds(pid: u32) -> Option<f64> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    // Fields after the command name, which is in parentheses and may hold spaces.
+    let rest = &stat[stat.rfind(')')? + 2..];
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let ticks: f64 = fields.get(11)?.parse::<f64>().ok()? + fields.get(12)?.parse::<f64>().ok()?;
+    Some(ticks / 100.0)
+}
+
+/// A hang watchdog for the binary: it is killed when it has used no CPU time
+/// for `idle` (blocked: on a FIFO, a lock, stdin), or after `wall` in all
+/// (a runaway loop). A slow or loaded machine still advances the CPU time, so
+/// slowness alone never trips the first limit; the second is generous.
+#[derive(Clone, Copy, Debug)]
+pub struct Watchdog {
+    pub idle: std::time::Duration,
+    pub wall: std::time::Duration,
+}
+
+impl Default for Watchdog {
+    fn default() -> Self {
+        Watchdog {
+            idle: std::time::Duration::from_secs(60),
+            wall: std::time::Duration::from_secs(20 * 60),
+        }
+    }
+}
+
+/// Runs the binary with stdin closed under the [`Watchdog`]: (exit code,
+/// stderr followed by stdout), or `Err` saying why it was killed.
+pub fn run_watched(args: &[&std::ffi::OsStr], dog: Watchdog) -> Result<(i32, String), String> {
     use std::process::Stdio;
+    use std::time::{Duration, Instant};
     let mut child = bin()
         .args(args)
         .stdin(Stdio::null())
@@ -138,22 +170,51 @@ pub fn run_within(args: &[&std::ffi::OsStr], limit: std::time::Duration) -> Opti
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();
-    let start = std::time::Instant::now();
-    while child.try_wait().unwrap().is_none() {
-        if start.elapsed() > limit {
+    // Drain the pipes on threads, so a chatty child never blocks on a full pipe.
+    let mut stdout = child.stdout.take().unwrap();
+    let mut stderr = child.stderr.take().unwrap();
+    let out_reader = std::thread::spawn(move || {
+        let mut v = Vec::new();
+        let _ = std::io::Read::read_to_end(&mut stdout, &mut v);
+        v
+    });
+    let err_reader = std::thread::spawn(move || {
+        let mut v = Vec::new();
+        let _ = std::io::Read::read_to_end(&mut stderr, &mut v);
+        v
+    });
+    let start = Instant::now();
+    let (mut last_cpu, mut last_progress) = (-1.0f64, Instant::now());
+    let killed = loop {
+        if let Some(status) = child.try_wait().unwrap() {
+            break Ok(status);
+        }
+        let cpu = cpu_seconds(child.id()).unwrap_or(last_cpu);
+        if cpu > last_cpu {
+            (last_cpu, last_progress) = (cpu, Instant::now());
+        }
+        let why = if last_progress.elapsed() > dog.idle {
+            Some(format!("used no CPU time for {:?} (blocked)", dog.idle))
+        } else if start.elapsed() > dog.wall {
+            Some(format!("still running after {:?}", dog.wall))
+        } else {
+            None
+        };
+        if let Some(why) = why {
             let _ = child.kill();
             let _ = child.wait();
-            return None;
+            break Err(why);
         }
-        std::thread::sleep(std::time::Duration::from_millis(10));
-    }
-    let out = child.wait_with_output().unwrap();
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    let (out, err) = (out_reader.join().unwrap(), err_reader.join().unwrap());
+    let status = killed.map_err(|why| format!("a3d-init {args:?} hung: {why}"))?;
     let text = format!(
         "{}{}",
-        String::from_utf8_lossy(&out.stderr),
-        String::from_utf8_lossy(&out.stdout)
+        String::from_utf8_lossy(&err),
+        String::from_utf8_lossy(&out)
     );
-    Some((out.status.code().unwrap_or(-1), text))
+    Ok((status.code().unwrap_or(-1), text))
 }
 
 /// The FEM table of the mini two-material model (`fixtures/anura3d-mini`): a
