@@ -418,6 +418,11 @@ fn compare_with_kernel(kernel: &Path, out: &Path, work: &Path) {
 #[allow(clippy::print_stderr)] // the skip must be visible in the test output
 fn anura3d_kernel_holds_what_verify_says() {
     let Some(kernel) = kernel() else {
+        // CI sets A3D_INIT_REQUIRE_KERNEL: there the oracle must run.
+        assert!(
+            std::env::var_os("A3D_INIT_REQUIRE_KERNEL").is_none(),
+            "A3D_INIT_REQUIRE_KERNEL is set but there is no Anura3D kernel at target/anura3d-kernel/Anura3D.out (or $ANURA3D_KERNEL)"
+        );
         eprintln!(
             "SKIPPED anura3d_kernel_holds_what_verify_says: no Anura3D kernel (set ANURA3D_KERNEL or run .ci/run, which builds it with gfortran)"
         );
