@@ -12,9 +12,11 @@
 //! 5. [`formats`] writes the MAPF, the CPS switch, tables, VTU and reports.
 //! 6. `mpm` runs an explicit MPM check of the mapped state under gravity.
 //!
-//! [`cli`] is the only module that prints or exits. See ARCHITECTURE.md.
+//! `cli` (feature `cli`, on by default) is the only module that prints or
+//! exits; the library builds without it. See ARCHITECTURE.md.
 
 pub mod calibrate;
+#[cfg(feature = "cli")]
 pub mod cli;
 pub mod diagnose;
 pub mod element;

@@ -2,13 +2,14 @@
 //! library's typed options. Keeping them here (not in one command's module)
 //! keeps the commands free of imports between each other.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use anyhow::{Context, bail};
 use serde::Serialize;
 
 use crate::formats::fem_csv::{self, CsvOptions, SignConvention};
 use crate::pipeline::fem::{FemOptions, LoadedFem};
+use crate::pipeline::start::StateSource;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
 pub enum SignArg {
@@ -56,13 +57,6 @@ impl FemArgs {
         }
     }
 
-    /// Every file these options read (`--fem` files and `--fem-mesh`).
-    pub fn input_paths(&self) -> Vec<&std::path::Path> {
-        let mut out: Vec<&std::path::Path> = self.fem.iter().map(PathBuf::as_path).collect();
-        out.extend(self.fem_mesh.as_deref());
-        out
-    }
-
     /// The library options these arguments describe.
     pub fn options(&self) -> anyhow::Result<FemOptions> {
         let columns = match &self.columns {
@@ -103,14 +97,6 @@ impl FemArgs {
     }
 }
 
-/// Every file of an Anura3D project that a run reads (GOM, CPS, OPD).
-pub fn project_inputs(files: &crate::formats::project::ProjectFiles) -> Vec<&std::path::Path> {
-    let mut out: Vec<&std::path::Path> = vec![&files.gom];
-    out.extend(files.cps.as_deref());
-    out.extend(files.opd.as_deref());
-    out
-}
-
 /// Where `verify`, `run` and `fos` take a mapped state from: a folder written
 /// by `map`, or a model with a state table.
 #[derive(Debug, Clone, Default, clap::Args)]
@@ -125,15 +111,6 @@ pub struct StateInputs {
     pub state: Option<PathBuf>,
 }
 
-/// [`StateInputs`] checked: exactly one of the two ways.
-#[derive(Debug, Clone, Copy)]
-pub enum StateSource<'a> {
-    /// A folder written by `map`.
-    Folder(&'a Path),
-    /// `--mpm MODEL --state TABLE`.
-    Table { model: &'a Path, state: &'a Path },
-}
-
 impl StateInputs {
     /// A folder written by `map`.
     pub fn folder(dir: PathBuf) -> StateInputs {
@@ -144,10 +121,13 @@ impl StateInputs {
     }
 
     /// The source the arguments name; an error unless exactly one way is given.
-    pub fn source(&self) -> anyhow::Result<StateSource<'_>> {
+    pub fn source(&self) -> anyhow::Result<StateSource> {
         match (&self.dir, &self.mpm, &self.state) {
-            (Some(dir), None, None) => Ok(StateSource::Folder(dir)),
-            (None, Some(model), Some(state)) => Ok(StateSource::Table { model, state }),
+            (Some(dir), None, None) => Ok(StateSource::Folder(dir.clone())),
+            (None, Some(model), Some(state)) => Ok(StateSource::Table {
+                model: model.clone(),
+                state: state.clone(),
+            }),
             _ => bail!("give a folder written by `map`, or --mpm MODEL --state mps.csv"),
         }
     }

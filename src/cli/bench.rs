@@ -266,8 +266,9 @@ pub fn generated_fem_csv(n: usize, seed: u64) -> String {
 /// phases.
 fn e2e(args: &BenchArgs) -> anyhow::Result<()> {
     use super::args::FemArgs;
-    use super::map::{self, MapArgs};
-    use crate::pipeline::map::{MixedState, Outside, StressSource};
+    use crate::pipeline::map::{MapConfig, Outside, SmoothingLength};
+    use crate::pipeline::mapping::{self, MapJob};
+    use crate::pipeline::output::{OutputDir, ReadLog};
     let threads = rayon::current_num_threads();
     let tmp;
     let dir = match &args.dir {
@@ -296,28 +297,25 @@ fn e2e(args: &BenchArgs) -> anyhow::Result<()> {
     // Support 2h holding `neighbours` nodes on average in the 100 m cube.
     let support =
         (args.neighbours / (args.nodes as f64 * 4.0 / 3.0 * std::f64::consts::PI)).cbrt() * 100.0;
-    let map_args = MapArgs {
-        fem: FemArgs::files(vec![fem.clone()]),
-        mpm: gom.clone(),
-        kernel: "cubic".into(),
-        h: Some(format!("{}", support / 2.0)),
-        seed: 1,
-        outside: Outside::Nearest,
-        min_shepard: 0.02,
-        stress: StressSource::Auto,
-        material_map: None,
-        mixed_state: MixedState::Mean,
-        out: Some(dir.join("out")),
-        force: true,
-        fem_vtu: args.fem_vtu,
+    let job = MapJob {
+        model: gom.clone(),
+        fem: FemArgs::files(vec![fem.clone()]).options()?,
+        config: MapConfig {
+            kernel: KernelKind::Cubic,
+            h: SmoothingLength::Metres(support / 2.0),
+            outside: Outside::Nearest,
+            ..MapConfig::default()
+        },
         generate_cps: true,
+        fem_vtu: args.fem_vtu,
     };
+    let reads = ReadLog::start();
     let t = Instant::now();
-    let mapped = map::compute(&map_args, None)?;
+    let mapped = mapping::compute(&job)?;
     let compute_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let out = super::output::OutputDir::create(&dir.join("out"), true, &[&gom, &fem])?;
-    let written = map::write(&mapped, &out, args.fem_vtu)?;
+    let out = OutputDir::create(&dir.join("out"), true, &reads)?;
+    let written = crate::pipeline::write::write_project(&mapped, &out.staging(), args.fem_vtu)?;
     let target = out.commit()?;
     let write_s = t.elapsed().as_secs_f64();
     let report = serde_json::to_value(&mapped.report)?;

@@ -1,20 +1,16 @@
-//! `a3d-init calibrate`: the smoothing length h from the FEM data itself, by
-//! minimising the leave-one-out error (paper Eq. 4) with simulated annealing and
-//! a golden-section refinement. Also used by `map --h auto`.
+//! `a3d-init calibrate`: arguments and printing around
+//! [`pipeline::calibrate::calibrate`], the smoothing length h from the FEM data
+//! itself (leave-one-out error, paper Eq. 4, minimised by simulated annealing
+//! and a golden-section refinement), checked on a finer FEM with `--check`.
 
 use std::path::PathBuf;
 
-use plotters::style::RGBColor;
-use serde::Serialize;
-
 use super::args::FemArgs;
-use super::output::OutputDir;
-use super::plot::{self, Series};
+use super::print::wrote;
 use crate::kernel::KernelKind;
-use crate::kernel::mapper::{self, MapSettings, NodeCloud, OutsidePolicy};
-use crate::pipeline::calibrate::{Outcome, calibrate_h, select_fields};
+use crate::pipeline::{self, calibrate::CalibrateOptions};
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum NormArg {
     L1,
     L2,
@@ -58,146 +54,23 @@ pub struct CalibrateArgs {
     pub force: bool,
 }
 
-/// Writes the objective-against-h plot with the optimum marked.
-pub fn plot_curve(path: &std::path::Path, outcome: &Outcome) -> anyhow::Result<()> {
-    let unit = if outcome.fields.len() == 1 {
-        "kPa"
-    } else {
-        "normalised"
-    };
-    plot::line_chart(
-        path,
-        &format!(
-            "Leave-one-out error, {} kernel (h = {:.4} m, h/l = {:.3})",
-            outcome.kernel, outcome.h, outcome.h_over_l
-        ),
-        "smoothing length h (m)",
-        &format!("LOO objective Σ|e| ({unit})"),
-        &[
-            Series {
-                label: "objective",
-                points: outcome.curve.clone(),
-                color: RGBColor(31, 119, 180),
-                markers: false,
-            },
-            Series {
-                label: "annealer samples",
-                points: outcome.calibration.trace.clone(),
-                color: RGBColor(200, 200, 200),
-                markers: true,
-            },
-            Series {
-                label: "optimum",
-                points: vec![(outcome.h, outcome.calibration.value)],
-                color: RGBColor(214, 39, 40),
-                markers: true,
-            },
-        ],
-        false,
-    )
-}
-
-#[derive(Serialize)]
-struct Check {
-    file: PathBuf,
-    nodes: usize,
-    r2: f64,
-    mae: f64,
-    max_error: f64,
-}
-
 pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
-    let fem = args.fem.load()?;
-    let fields = select_fields(&fem.nodes, &args.field)?;
-    let kernel = KernelKind::parse(&args.kernel, fem.nodes.dim).ok_or_else(|| {
+    let kernel = KernelKind::parse(&args.kernel, 2).ok_or_else(|| {
         anyhow::anyhow!(
             "--kernel {}: expected cubic, gaussian or wendland",
             args.kernel
         )
     })?;
-    let outcome = calibrate_h(&fem.nodes, &fields, kernel, args.seed, args.norm.into())?;
-    let check = match &args.check {
-        Some(path) => {
-            let other = FemArgs {
-                fem: vec![path.clone()],
-                ..args.fem.clone()
-            }
-            .load()?;
-            let q = fields[0];
-            let observed = other
-                .nodes
-                .field(q)
-                .ok_or_else(|| anyhow::anyhow!("{}: no {} column", path.display(), q.name()))?;
-            let values = fem.nodes.field(q).unwrap_or(&[]).to_vec();
-            let cloud = NodeCloud {
-                positions: &fem.nodes.positions,
-                dim: fem.nodes.dim,
-                values: &values,
-                n_fields: 1,
-                group: None,
-                node_volume: outcome.spacing.powi(fem.nodes.dim as i32),
-            };
-            let settings = MapSettings {
-                kernel,
-                h: outcome.h,
-                min_shepard: 0.0,
-                outside: OutsidePolicy::Nearest,
-            };
-            let predicted = mapper::map_points(&cloud, &other.nodes.positions, None, &settings)
-                .map_err(|e| anyhow::anyhow!("{e}"))?;
-            let mean = observed.iter().sum::<f64>() / observed.len() as f64;
-            let (mut sse, mut sst, mut mae, mut max_error) = (0.0, 0.0, 0.0, 0.0f64);
-            for (o, p) in observed.iter().zip(&predicted.values) {
-                sse += (o - p).powi(2);
-                sst += (o - mean).powi(2);
-                mae += (o - p).abs();
-                max_error = max_error.max((o - p).abs());
-            }
-            let pairs: Vec<(f64, f64)> = observed
-                .iter()
-                .copied()
-                .zip(predicted.values.iter().copied())
-                .collect();
-            Some((
-                Check {
-                    file: path.clone(),
-                    nodes: observed.len(),
-                    r2: if sst > 0.0 { 1.0 - sse / sst } else { 1.0 },
-                    mae: mae / observed.len() as f64,
-                    max_error,
-                },
-                pairs,
-            ))
-        }
-        None => None,
+    let options = CalibrateOptions {
+        fem: args.fem.options()?,
+        field: args.field.clone(),
+        kernel,
+        seed: args.seed,
+        norm: args.norm.into(),
+        check: args.check.clone(),
     };
-    let mut inputs = args.fem.input_paths();
-    inputs.extend(args.check.as_deref());
-    let out = OutputDir::create(&args.out, args.force, &inputs)?;
-    plot_curve(&out.path("calibration.svg"), &outcome)?;
-    if let Some((_, pairs)) = &check {
-        plot::scatter_1to1(
-            &out.path("check.svg"),
-            &format!(
-                "Validation: {} predicted at the check nodes",
-                fields[0].name()
-            ),
-            "kPa",
-            pairs,
-        )?;
-    }
-    #[derive(Serialize)]
-    struct Json<'a> {
-        #[serde(flatten)]
-        outcome: &'a Outcome,
-        check: Option<&'a Check>,
-    }
-    let json = serde_json::to_string_pretty(&Json {
-        outcome: &outcome,
-        check: check.as_ref().map(|c| &c.0),
-    })?;
-    out.write("calibration.json", |w| w.write_all(json.as_bytes()))?;
-    let target = out.commit()?;
+    let (calibrated, target) = pipeline::calibrate::calibrate(&options, &args.out, args.force)?;
+    let outcome = &calibrated.outcome;
     println!(
         "h          {:.6} m ({} kernel, fields: {})",
         outcome.h,
@@ -222,7 +95,7 @@ pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
     if let Some(f) = &outcome.fallback {
         println!("note       {f}");
     }
-    if let Some((c, _)) = &check {
+    if let Some(c) = &calibrated.check {
         println!(
             "check      {} nodes of {}: R² = {:.6}, MAE = {:.6} kPa, max error = {:.6} kPa",
             c.nodes,
@@ -232,10 +105,6 @@ pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
             c.max_error
         );
     }
-    let mut files = vec!["calibration.json", "calibration.svg"];
-    if check.is_some() {
-        files.push("check.svg");
-    }
-    println!("{}", super::output::wrote(&target, &files));
+    println!("{}", wrote(&target, &calibrated.file_names()));
     Ok(())
 }

@@ -1,8 +1,10 @@
 //! `a3d-init demo`: the paper's application end to end on the shipped slope
-//! fixture (`fixtures/slope/`): inspect → calibrate h → map → verify, leaving a
-//! ready-to-run Anura3D project with plots of the mapped fields (cf. the paper's
-//! Fig. 9), the calibration curve and the verify history. The pore pressures are
-//! a documented stand-in field, not a SEEP/W result.
+//! fixture (`fixtures/slope/`), composed of library calls: inspect → calibrate
+//! h → map → verify → factors of safety, leaving a ready-to-run Anura3D
+//! project with plots of the mapped fields (cf. the paper's Fig. 9), the
+//! calibration curve and the verify history. The pore pressures are a
+//! documented stand-in field, not a SEEP/W result. Everything printed is what
+//! was run and measured.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -10,16 +12,15 @@ use std::time::Instant;
 use anyhow::bail;
 
 use super::args::FemArgs;
-use super::args::StateInputs;
-use super::calibrate::plot_curve;
-use super::map::{self, MapArgs};
-use super::output::OutputDir;
-use super::plot;
-use super::verify::{self, VerifyArgs};
+use super::print::wrote;
 use crate::kernel::KernelKind;
-use crate::model::Quantity;
-use crate::pipeline::calibrate::calibrate_h;
-use crate::pipeline::map::{MixedState, Outside, SmoothingLength, StressSource};
+use crate::model::{MpState, Quantity};
+use crate::pipeline::check::{self, VerifyOptions};
+use crate::pipeline::map::{MapConfig, SmoothingLength, StressSource};
+use crate::pipeline::mapping::{self, MapJob};
+use crate::pipeline::output::{OutputDir, ReadLog};
+use crate::pipeline::start::{Start, StateSource};
+use crate::pipeline::{Project, calibrate, fos, plot};
 
 #[derive(Debug, clap::Args)]
 pub struct DemoArgs {
@@ -44,8 +45,22 @@ fn fixture_dir() -> anyhow::Result<PathBuf> {
     bail!("fixtures/slope not found: run the demo from the a3d-init repository")
 }
 
+/// A field plot: file name, title, colour-bar label and the quantity.
+type FieldPlot<'a> = (&'a str, &'a str, &'a str, &'a dyn Fn(&MpState) -> f64);
+
+/// The (min, max) of one quantity over the states.
+fn range(states: &[MpState], f: impl Fn(&MpState) -> f64) -> (f64, f64) {
+    states
+        .iter()
+        .map(f)
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+            (a.min(v), b.max(v))
+        })
+}
+
 pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     let started = Instant::now();
+    let reads = ReadLog::start();
     let dir = fixture_dir()?;
     let fem_file = dir.join("sand-nodes.csv");
     println!("a3d-init demo: the rainfall-loaded slope of the seed paper (Lora et al. 2016)");
@@ -54,12 +69,14 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     );
 
     // 1. Inspect.
-    let project = super::inspect::load_project(&dir)?;
+    let project = Project::load(&dir)?;
     println!(
-        "1 inspect    {}: {} nodes, {} TRI3 elements, {} MPs; materials {}",
+        "1 inspect    {}: {} nodes, {} {} elements ({}), {} MPs; materials {}",
         project.files.gom.display(),
         project.model.mesh.n_nodes(),
         project.model.mesh.n_elements(),
+        project.model.mesh.element_type.gom_name(),
+        project.method.cps_name(),
         project.points.len(),
         project
             .model
@@ -71,9 +88,9 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     );
 
     // 2. Calibrate h on the FEM pore pressures.
-    let fem_args = FemArgs::files(vec![fem_file.clone()]);
-    let fem = fem_args.load()?;
-    let outcome = calibrate_h(
+    let fem_options = FemArgs::files(vec![fem_file.clone()]).options()?;
+    let fem = crate::pipeline::fem::load(&fem_options)?;
+    let outcome = calibrate::calibrate_h(
         &fem.nodes,
         &[Quantity::Pwp],
         KernelKind::Cubic,
@@ -89,96 +106,75 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     );
 
     // 3. Map with that h.
-    let map_args = MapArgs {
-        fem: fem_args,
-        mpm: dir.clone(),
-        kernel: "cubic".into(),
-        h: None,
-        seed: 1,
-        outside: Outside::Error,
-        min_shepard: 0.02,
-        stress: StressSource::Geostatic,
-        material_map: None,
-        mixed_state: MixedState::Mean,
-        out: Some(args.out.clone()),
-        force: args.force,
+    let job = MapJob {
+        model: dir.clone(),
+        fem: fem_options,
+        config: MapConfig {
+            kernel: KernelKind::Cubic,
+            h: SmoothingLength::Calibrated {
+                outcome: Box::new(outcome.clone()),
+                seed: 1,
+            },
+            stress: StressSource::Geostatic,
+            ..MapConfig::default()
+        },
         generate_cps: false,
         fem_vtu: false,
     };
-    let mapped = map::compute(
-        &map_args,
-        Some(SmoothingLength::Calibrated {
-            outcome: Box::new(outcome.clone()),
-            seed: 1,
-        }),
-    )?;
-    let mut inputs = super::args::project_inputs(&mapped.project.files);
-    inputs.push(&fem_file);
-    let out = OutputDir::create(&args.out, args.force, &inputs)?;
-    map::write(&mapped, &out, false)?;
-    plot_curve(&out.path("calibration.svg"), &outcome)?;
+    let mapped = mapping::compute(&job)?;
+    let out = OutputDir::create(&args.out, args.force, &reads)?;
+    let mut written = crate::pipeline::write::write_project(&mapped, &out.staging(), false)?;
+    calibrate::plot_curve(&out.path("calibration.svg"), &outcome)?;
     let pts = &mapped.project.points;
-    let field = |f: &dyn Fn(&crate::model::MpState) -> f64| -> Vec<(f64, f64, f64)> {
+    let field = |f: &dyn Fn(&MpState) -> f64| -> Vec<(f64, f64, f64)> {
         pts.iter()
             .zip(&mapped.states)
             .map(|(p, s)| (p.position[0], p.position[1], f(s)))
             .collect()
     };
-    plot::field_map(
-        &out.path("pwp.svg"),
-        "Mapped pore-water pressure (stand-in field)",
-        "pwp (kPa)",
-        &field(&|s| s.pwp),
-    )?;
-    plot::field_map(
-        &out.path("effective_stress_yy.svg"),
-        "Mapped vertical effective stress σ'yy",
-        "σ'yy (kPa)",
-        &field(&|s| s.effective()[1]),
-    )?;
-    plot::field_map(
-        &out.path("total_stress_yy.svg"),
-        "Mapped vertical total stress σyy",
-        "σyy (kPa)",
-        &field(&|s| s.total[1]),
-    )?;
+    let plots: [FieldPlot<'_>; 3] = [
+        (
+            "pwp.svg",
+            "Mapped pore-water pressure (stand-in field)",
+            "pwp (kPa)",
+            &|s| s.pwp,
+        ),
+        (
+            "effective_stress_yy.svg",
+            "Mapped vertical effective stress σ'yy",
+            "σ'yy (kPa)",
+            &|s| s.effective()[1],
+        ),
+        (
+            "total_stress_yy.svg",
+            "Mapped vertical total stress σyy",
+            "σyy (kPa)",
+            &|s| s.total[1],
+        ),
+    ];
+    for (name, title, unit, f) in plots {
+        plot::field_map(&out.path(name), title, unit, &field(f))?;
+        written.push(name.to_string());
+    }
+    written.push("calibration.svg".into());
     let target = out.commit()?;
+    let (pwp_lo, pwp_hi) = range(&mapped.states, |s| s.pwp);
+    let (syy_lo, syy_hi) = range(&mapped.states, |s| s.total[1]);
     println!(
-        "3 map        {} MPs, pwp {:.2} .. {:.2} kPa, σyy {:.2} .. {:.2} kPa (Anura3D signs); MAPF h = {:.2e} m",
+        "3 map        {} MPs, pwp {pwp_lo:.2} .. {pwp_hi:.2} kPa, σyy {syy_lo:.2} .. {syy_hi:.2} kPa (Anura3D signs, {}); MAPF h = {:.2e} m",
         pts.len(),
-        mapped
-            .states
-            .iter()
-            .map(|s| s.pwp)
-            .fold(f64::INFINITY, f64::min),
-        mapped
-            .states
-            .iter()
-            .map(|s| s.pwp)
-            .fold(f64::NEG_INFINITY, f64::max),
-        mapped
-            .states
-            .iter()
-            .map(|s| s.total[1])
-            .fold(f64::INFINITY, f64::min),
-        mapped
-            .states
-            .iter()
-            .map(|s| s.total[1])
-            .fold(f64::NEG_INFINITY, f64::max),
+        mapped.report.stress_source,
         mapped.report.mapf_smoothing_length
     );
 
     // 4. Verify with the explicit MPM runner.
-    let verify_args = VerifyArgs {
-        inputs: StateInputs::folder(target.clone()),
-        max_steps: 20_000,
-        damping: None,
-        out: Some(target.join("verify")),
-        force: true,
-        fos: false,
-    };
-    let (outcome, verify_dir) = verify::verify_core(&verify_args)?;
+    let source = StateSource::Folder(target.clone());
+    let (outcome, verify_dir) = check::verify(
+        &source,
+        &VerifyOptions::default(),
+        Some(&target.join("verify")),
+        true,
+    )?;
     match &outcome.run {
         Some(r) => println!(
             "4 verify     {}: initial residual {:.3}, {} MPs yielded, max displacement {:.3} m after {:.3} s",
@@ -203,49 +199,33 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         .and_then(|k| k.sigma_zz_defect.as_ref())
     {
         println!(
-            "             σ'zz: Anura3D's 2D MAPF reader sets σ'zz := τxy on all {} MPs; {} of them start outside the yield surface because of it (README: \"The 2D σ'zz defect\")",
-            d.affected, d.outside_because_of_defect
+            "             σ'zz: Anura3D's 2D MAPF reader sets σ'zz := τxy on {} of the {} MPs; {} of them start outside the yield surface because of it (README: \"The 2D σ'zz defect\")",
+            d.affected,
+            pts.len(),
+            d.outside_because_of_defect
         );
     }
-    // 5. Factor of safety by strength reduction: zero pwp, then the mapped pwp.
+    // 5. Factor of safety by strength reduction on the state Anura3D will
+    // hold: zero pwp, then the mapped pwp.
+    let mut fos_folders = Vec::new();
     if !args.no_fos {
-        let [(zero, _), (with_pwp, _)] = super::fos::zero_and_mapped(
-            &mapped.project.model,
-            pts,
-            &mapped.states,
-            mapped.project.cps.as_ref(),
-            &target,
-        )?;
-        println!(
-            "5 fos        zero pwp:   {}",
-            super::fos::factor_line(&zero)
-        );
-        println!(
-            "             mapped pwp: {}",
-            super::fos::factor_line(&with_pwp)
-        );
+        let start = Start::load(&source)?;
+        let [(zero, zero_dir), (with_pwp, mapped_dir)] =
+            fos::zero_and_mapped(&start, &target, &reads)?;
+        println!("5 fos        zero pwp:   {}", fos::factor_line(&zero));
+        println!("             mapped pwp: {}", fos::factor_line(&with_pwp));
+        fos_folders.push((zero_dir, fos::file_names(&zero)));
+        fos_folders.push((mapped_dir, fos::file_names(&with_pwp)));
+    }
+    println!("\nfiles ({:.1} s):", started.elapsed().as_secs_f64());
+    let names: Vec<&str> = written.iter().map(String::as_str).collect();
+    println!("  {}", wrote(&target, &names));
+    println!("  {}", wrote(&verify_dir, &check::file_names(&outcome)));
+    for (folder, files) in &fos_folders {
+        println!("  {}", wrote(folder, files));
     }
     println!(
-        "\nfiles in {}/ ({:.1} s):",
-        target.display(),
-        started.elapsed().as_secs_f64()
-    );
-    println!("  Anura3D project  slope.GOM, slope.CPS_001 (MAPF on, K0 off), slope.MAPF");
-    println!("  tables, ParaView mps.csv, mps.vtu, fem.vtu, report.json");
-    println!(
-        "  plots            pwp.svg, effective_stress_yy.svg, total_stress_yy.svg, calibration.svg"
-    );
-    println!(
-        "  MPM check        {}/verify.json, verify_history.svg, mps_start.vtu, mps_end.vtu",
-        verify_dir.display()
-    );
-    if !args.no_fos {
-        println!(
-            "  factor of safety fos_zero_pwp/, fos_mapped/ (fos.json, fos_trials.svg, fos_mechanism.svg, fos_mechanism.vtu)"
-        );
-    }
-    println!(
-        "  run-out          a3d-init run {} --time 2 --snapshots 0.3,0.8,1.2,2.0",
+        "  run-out: a3d-init run {} --time 2 --snapshots 0.3,0.8,1.2,2.0",
         target.display()
     );
     Ok(())

@@ -1,16 +1,14 @@
-//! `a3d-init map`: turns the arguments into a [`MapConfig`], runs the library
-//! pipeline (load the project and the FEM nodes, [`pipeline::map::map`],
-//! [`pipeline::write::write_project`] into an atomic output folder) and prints
-//! a summary. The work itself lives in [`crate::pipeline`].
+//! `a3d-init map`: turns the arguments into a [`MapJob`], runs
+//! [`pipeline::mapping::map`] (load the project and the FEM nodes, map, write
+//! into an atomic output folder) and prints a summary.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 use super::args::FemArgs;
-use super::output::OutputDir;
 use crate::kernel::KernelKind;
-use crate::pipeline::map::{MapConfig, Mapped, MixedState, Outside, SmoothingLength, StressSource};
-use crate::pipeline::{self, Project};
+use crate::pipeline::map::{MapConfig, MixedState, Outside, SmoothingLength, StressSource};
+use crate::pipeline::{self, mapping::MapJob};
 
 #[derive(Debug, clap::Args)]
 pub struct MapArgs {
@@ -93,73 +91,23 @@ impl MapArgs {
     }
 }
 
-/// Loads the project and the FEM files, maps (timing each phase).
-pub fn compute(args: &MapArgs, h: Option<SmoothingLength>) -> anyhow::Result<Mapped> {
-    // The model and the FEM files are independent: read side by side, so that
-    // each fills the other's serial stretches (file reads, placement).
-    let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
-    let (project, fem) = rayon::join(
-        || {
-            let t = Instant::now();
-            Project::load(&args.mpm).map(|p| (p, ms(t)))
-        },
-        || {
-            let t = Instant::now();
-            args.fem.load().map(|f| (f, ms(t)))
-        },
-    );
-    let (project, t_model) = project?;
-    // No CPS → refuse unless --generate-cps (#14).
-    if project.files.cps.is_none() && !args.generate_cps {
-        anyhow::bail!(
-            "{}",
-            crate::formats::project::missing_cps_message(&project.files)
-        );
+impl MapArgs {
+    /// The library's job these arguments describe.
+    pub fn job(&self) -> anyhow::Result<MapJob> {
+        Ok(MapJob {
+            model: self.mpm.clone(),
+            fem: self.fem.options()?,
+            config: self.config(2)?,
+            generate_cps: self.generate_cps,
+            fem_vtu: self.fem_vtu,
+        })
     }
-    let (fem, t_fem) = fem?;
-    let mut config = args.config(project.n_dim())?;
-    config.keep_fem_fields = args.fem_vtu || fem.nodes.len() <= pipeline::write::FEM_VTU_AUTO_MAX;
-    if let Some(h) = h {
-        config.h = h;
-    }
-    let mut mapped = pipeline::map::map(project, fem, &config)?;
-    mapped.report.timings_ms.splice(
-        0..0,
-        [
-            ("read model and place MPs".to_string(), t_model),
-            ("read FEM".to_string(), t_fem),
-        ],
-    );
-    Ok(mapped)
-}
-
-/// Writes the mapped project into the staging folder of `out`.
-pub fn write(mapped: &Mapped, out: &OutputDir, fem_vtu: bool) -> anyhow::Result<Vec<String>> {
-    Ok(pipeline::write::write_project(
-        mapped,
-        &out.path(""),
-        fem_vtu,
-    )?)
-}
-
-/// Default output folder: `<project>.a3d-init/` beside the model.
-pub fn default_out(project_dir: &Path, name: &str) -> PathBuf {
-    project_dir.join(format!("{name}.a3d-init"))
 }
 
 pub fn run(args: MapArgs) -> anyhow::Result<()> {
     let started = Instant::now();
     let progress = super::progress::show();
-    let mapped = compute(&args, None)?;
-    let target = args
-        .out
-        .clone()
-        .unwrap_or_else(|| default_out(&mapped.project.files.dir, &mapped.project.files.name));
-    let mut inputs = super::args::project_inputs(&mapped.project.files);
-    inputs.extend(args.fem.input_paths());
-    let out = OutputDir::create(&target, args.force, &inputs)?;
-    let written = write(&mapped, &out, args.fem_vtu)?;
-    let target = out.commit()?;
+    let (mapped, written) = pipeline::mapping::map(&args.job()?, args.out.as_deref(), args.force)?;
     drop(progress);
     let r = &mapped.report;
     eprintln!(
@@ -186,8 +134,8 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
     }
     eprintln!(
         "  wrote {}/ : {} ({:.2} s)",
-        target.display(),
-        written.join(", "),
+        written.folder.display(),
+        written.files.join(", "),
         started.elapsed().as_secs_f64()
     );
     Ok(())

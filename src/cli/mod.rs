@@ -11,8 +11,7 @@ mod diff;
 mod fos;
 mod inspect;
 pub mod map;
-pub mod output;
-pub mod plot;
+mod print;
 mod progress;
 mod verify;
 
@@ -97,10 +96,21 @@ pub fn main() -> ExitCode {
                 ExitCode::from(v.code)
             }
             None => {
-                eprintln!("error: {e:#}");
+                eprintln!("error: {}", message(&e));
                 ExitCode::from(2)
             }
         },
+    }
+}
+
+/// The error's chain as one line, with the command-line flag where the
+/// library names a concept.
+fn message(e: &anyhow::Error) -> String {
+    match e.downcast_ref::<crate::pipeline::PipelineError>() {
+        Some(crate::pipeline::PipelineError::Exists(path)) => {
+            format!("{} exists; pass --force to replace it", path.display())
+        }
+        _ => format!("{e:#}"),
     }
 }
 

@@ -435,7 +435,7 @@ pub fn attach_mesh_by_id(
     mesh: &[[f64; 3]],
     mesh_path: &Path,
 ) -> Result<Vec<String>, FormatError> {
-    let text = std::fs::read(csv_path).map_err(|e| FormatError::io(csv_path, e))?;
+    let text = super::input::read_bytes(csv_path)?;
     let rows = data_row_lines(&text, report.header_line);
     let mesh_name = mesh_path.display().to_string();
     let subset = join_mesh(nodes, csv_path, &rows, mesh, &mesh_name)?;

@@ -3,12 +3,19 @@
 //! byte is read, so nothing hangs or fills memory), and no read goes past a size
 //! limit. Readers call [`read_bytes`] or [`read_text`] instead of `std::fs::read`.
 //!
+//! Every file opened here is also noted in each live [`ReadLog`], so that a
+//! command's outputs can be checked against everything it read, whatever
+//! reader read it and on whatever thread (the output guard in
+//! `pipeline::output` takes a `ReadLog`, not a list a command could forget to
+//! fill).
+//!
 //! What it leaves to the readers: checking declared counts against the bytes
 //! actually read (each reader knows its own record sizes).
 
 use std::fs::File;
 use std::io::Read;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, PoisonError, Weak};
 
 use super::error::{FormatError, ParseError, Position};
 
@@ -34,11 +41,84 @@ pub fn entry_limit(archive_bytes: u64) -> u64 {
         .clamp(ENTRY_FLOOR_BYTES, MAX_ENTRY_BYTES)
 }
 
+/// The files read while a [`ReadLog`] lives: shared between the log and the
+/// registry of live logs.
+type Reads = Mutex<Vec<PathBuf>>;
+
+/// The live logs. A log unregisters itself when dropped; dead entries are
+/// pruned on the next registration.
+static LIVE_LOGS: Mutex<Vec<Weak<Reads>>> = Mutex::new(Vec::new());
+
+/// Every input file opened, by any reader on any thread, from the moment the
+/// log starts until it is dropped. A command starts one before it reads
+/// anything; its output guard refuses to write over any file in it. Logs of
+/// calls running at the same time in one process also see each other's reads,
+/// which can only make the guard stricter.
+#[derive(Debug)]
+pub struct ReadLog {
+    reads: Arc<Reads>,
+}
+
+impl ReadLog {
+    /// Starts recording.
+    pub fn start() -> ReadLog {
+        let reads = Arc::new(Mutex::new(Vec::new()));
+        let mut live = LIVE_LOGS.lock().unwrap_or_else(PoisonError::into_inner);
+        live.retain(|w| w.strong_count() > 0);
+        live.push(Arc::downgrade(&reads));
+        ReadLog { reads }
+    }
+
+    /// The files read so far, in the order first opened, each once.
+    pub fn files(&self) -> Vec<PathBuf> {
+        self.reads
+            .lock()
+            .unwrap_or_else(PoisonError::into_inner)
+            .clone()
+    }
+
+    /// Notes a file read other than through this module.
+    pub fn note(&self, path: &Path) {
+        push_once(&self.reads, path);
+    }
+}
+
+impl Drop for ReadLog {
+    fn drop(&mut self) {
+        let mut live = LIVE_LOGS.lock().unwrap_or_else(PoisonError::into_inner);
+        live.retain(|w| {
+            w.strong_count() > 0 && !std::ptr::eq(w.as_ptr(), Arc::as_ptr(&self.reads))
+        });
+    }
+}
+
+fn push_once(reads: &Reads, path: &Path) {
+    let mut reads = reads.lock().unwrap_or_else(PoisonError::into_inner);
+    if !reads.iter().any(|p| p == path) {
+        reads.push(path.to_path_buf());
+    }
+}
+
+/// Notes `path` in every live [`ReadLog`].
+fn record(path: &Path) {
+    let live: Vec<Arc<Reads>> = LIVE_LOGS
+        .lock()
+        .unwrap_or_else(PoisonError::into_inner)
+        .iter()
+        .filter_map(Weak::upgrade)
+        .collect();
+    for reads in live {
+        push_once(&reads, path);
+    }
+}
+
 /// Opens `path` for reading if it is a regular file (symlinks followed) and
 /// returns it with its size. Anything else is refused without blocking: the
 /// type is checked before opening, and the open itself is non-blocking so a file
-/// swapped for a FIFO in between cannot hang the run.
+/// swapped for a FIFO in between cannot hang the run. The path is noted in
+/// every live [`ReadLog`] first.
 pub fn open_regular(path: &Path) -> Result<(File, u64), FormatError> {
+    record(path);
     let meta = std::fs::metadata(path).map_err(|e| FormatError::io(path, e))?;
     check_kind(path, &meta)?;
     let file = open_nonblocking(path).map_err(|e| FormatError::io(path, e))?;
@@ -139,6 +219,39 @@ pub fn read_entry_limited(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_read_log_sees_every_file_opened_while_it_lives_on_any_thread() {
+        let dir = tempfile::tempdir().unwrap();
+        let (a, b, c) = (
+            dir.path().join("a"),
+            dir.path().join("b"),
+            dir.path().join("c"),
+        );
+        for p in [&a, &b, &c] {
+            std::fs::write(p, "x").unwrap();
+        }
+        read_bytes(&a).unwrap();
+        let log = ReadLog::start();
+        read_bytes(&b).unwrap();
+        std::thread::scope(|s| {
+            s.spawn(|| read_text(&c).unwrap());
+        });
+        read_bytes(&b).unwrap();
+        let files = log.files();
+        assert!(!files.contains(&a), "{files:?}");
+        assert_eq!(files.iter().filter(|p| **p == b).count(), 1, "{files:?}");
+        assert!(files.contains(&c), "{files:?}");
+        drop(log);
+        assert!(
+            LIVE_LOGS
+                .lock()
+                .unwrap()
+                .iter()
+                .all(|w| w.strong_count() > 0),
+            "a dropped log stays registered"
+        );
+    }
 
     #[test]
     fn folders_and_devices_are_refused_before_reading() {

@@ -105,7 +105,9 @@ pub fn write_points(w: &mut dyn Write, points: &[MaterialPoint]) -> std::io::Res
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct MpDiagnostics {
     pub neighbours: u32,
-    pub shepard: f64,
+    /// The Shepard ratio Σw·l^dim, where one was computed (written as an
+    /// empty cell otherwise).
+    pub shepard: Option<f64>,
     /// `mapped`, `nearest` or `skipped`.
     pub status: &'static str,
 }
@@ -138,7 +140,7 @@ struct StateRow<'a> {
     #[serde(default)]
     neighbours: u32,
     #[serde(default)]
-    shepard: Real,
+    shepard: Option<Real>,
     #[serde(default, borrow)]
     status: &'a str,
 }
@@ -152,7 +154,10 @@ impl Row for StateRow<'_> {
         push_reals(out, &[self.saturation]);
         out.push(b',');
         push_u32(out, self.neighbours);
-        push_reals(out, &[self.shepard]);
+        match self.shepard {
+            Some(v) => push_reals(out, &[v]),
+            None => out.push(b','),
+        }
         out.push(b',');
         out.extend_from_slice(self.status.as_bytes());
     }
@@ -182,7 +187,7 @@ impl StateRow<'_> {
             esxz,
             saturation: Real(s.saturation),
             neighbours: d.neighbours,
-            shepard: Real(d.shepard),
+            shepard: d.shepard.map(Real),
             status: d.status,
         }
     }
@@ -237,9 +242,29 @@ pub fn write_states(
     })
 }
 
+/// A mapped-state table read back whole.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct StateTable {
+    pub points: Vec<MaterialPoint>,
+    pub states: Vec<MpState>,
+    /// The mapping diagnostics of each row (zero, empty and empty where the
+    /// table has no such columns).
+    pub diagnostics: Vec<DiagnosticsRead>,
+    /// The 1-based line of each row.
+    pub lines: Vec<usize>,
+}
+
+/// The diagnostic columns of one row, as read.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct DiagnosticsRead {
+    pub neighbours: u32,
+    pub shepard: Option<f64>,
+    pub status: String,
+}
+
 /// Reads a mapped-state table back: (points, states). Positioned errors.
 pub fn read_states(path: &Path) -> Result<(Vec<MaterialPoint>, Vec<MpState>), FormatError> {
-    read_states_with_lines(path).map(|(p, s, _)| (p, s))
+    read_table(path).map(|t| (t.points, t.states))
 }
 
 /// Like [`read_states`], and checks the table against the MPs a model places
@@ -249,7 +274,12 @@ pub fn read_states_for(
     path: &Path,
     expected: &[MaterialPoint],
 ) -> Result<(Vec<MaterialPoint>, Vec<MpState>), FormatError> {
-    let (points, states, lines) = read_states_with_lines(path)?;
+    let StateTable {
+        points,
+        states,
+        lines,
+        ..
+    } = read_table(path)?;
     if points.len() != expected.len() {
         let line = lines
             .get(expected.len())
@@ -284,10 +314,9 @@ pub fn read_states_for(
     Ok((points, states))
 }
 
-type StateRows = (Vec<MaterialPoint>, Vec<MpState>, Vec<usize>);
-
-/// The rows with the 1-based line of each.
-fn read_states_with_lines(path: &Path) -> Result<StateRows, FormatError> {
+/// Reads a mapped-state table back whole (`mps.csv`, `verify/start.csv` of a
+/// model whose MPs are all finite). Positioned errors.
+pub fn read_table(path: &Path) -> Result<StateTable, FormatError> {
     let text = super::keyword_doc::read_text(path)?;
     let header = text.lines().next().map(str::trim).unwrap_or("");
     if !header.starts_with("id,element,material,local,x,y,z,volume,pwp,sxx") {
@@ -304,9 +333,7 @@ fn read_states_with_lines(path: &Path) -> Result<StateRows, FormatError> {
         .flexible(true)
         .trim(csv::Trim::All)
         .from_reader(text.as_bytes());
-    let mut points = Vec::new();
-    let mut states = Vec::new();
-    let mut line_numbers = Vec::new();
+    let mut table = StateTable::default();
     let mut record = csv::StringRecord::new();
     loop {
         match reader.read_record(&mut record) {
@@ -337,12 +364,17 @@ fn read_states_with_lines(path: &Path) -> Result<StateRows, FormatError> {
         if let Some(k) = row.first_non_finite() {
             return Err(field_error(path, line, &record, k, "expected a finite number").into());
         }
+        table.diagnostics.push(DiagnosticsRead {
+            neighbours: row.neighbours,
+            shepard: row.shepard.map(|v| v.0),
+            status: row.status.to_string(),
+        });
         let (point, state) = row.into_model();
-        points.push(point);
-        states.push(state);
-        line_numbers.push(line);
+        table.points.push(point);
+        table.states.push(state);
+        table.lines.push(line);
     }
-    Ok((points, states, line_numbers))
+    Ok(table)
 }
 
 /// A csv error as a positioned error: the record's line, and with `record`
@@ -464,7 +496,7 @@ pub(crate) mod tests {
         let diagnostics: Vec<MpDiagnostics> = (0..points.len())
             .map(|i| MpDiagnostics {
                 neighbours: i as u32 % 70,
-                shepard: 1.0 / (i as f64 + 3.0),
+                shepard: Some(1.0 / (i as f64 + 3.0)),
                 status: "mapped",
             })
             .collect();
@@ -489,7 +521,7 @@ pub(crate) mod tests {
         for (i, (p, s)) in points.iter().zip(&states).enumerate() {
             let d = MpDiagnostics {
                 neighbours: [0, 7, u32::MAX][i % 3],
-                shepard: [0.0, 1.0 / 3.0, 1e-300][i % 3],
+                shepard: [Some(0.0), Some(1.0 / 3.0), None][i % 3],
                 status: statuses[i % 3],
             };
             let row = StateRow::of(p, s, &d);
@@ -513,7 +545,7 @@ pub(crate) mod tests {
         let (points, states) = sample(1, 1);
         let d = MpDiagnostics {
             neighbours: 1,
-            shepard: 1.0,
+            shepard: Some(1.0),
             status: "mapped",
         };
         let mut w = csv::Writer::from_writer(Vec::new());
@@ -545,10 +577,11 @@ pub(crate) mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("mps.csv");
         std::fs::write(&path, &table).unwrap();
-        let (p, s, l) = read_states_with_lines(&path).unwrap();
-        assert_eq!(p.len(), 3);
-        assert_eq!(s.len(), 3);
-        assert_eq!(l, vec![2, 5, 6]);
+        let t = read_table(&path).unwrap();
+        assert_eq!(t.points.len(), 3);
+        assert_eq!(t.states.len(), 3);
+        assert_eq!(t.lines, vec![2, 5, 6]);
+        assert_eq!(t.diagnostics[0], DiagnosticsRead::default());
     }
 
     #[test]

@@ -196,7 +196,7 @@ pub struct VtuPoints {
 /// Reads a `.vtu` written by [`write_points`] (binary appended raw) or by earlier
 /// versions (ASCII). Checks the vertex cells.
 pub fn read(path: &Path) -> Result<VtuPoints, FormatError> {
-    let bytes = std::fs::read(path).map_err(|e| FormatError::io(path, e))?;
+    let bytes = super::input::read_bytes(path)?;
     parse(path, &bytes)
 }
 

@@ -167,6 +167,15 @@ impl KernelKind {
         }
     }
 
+    /// The same kernel for a problem of dimension `dim` (the Wendland
+    /// function has its own form in 1D).
+    pub fn for_dim(self, dim: usize) -> KernelKind {
+        match self {
+            KernelKind::Wendland { .. } => KernelKind::Wendland { dim1: dim == 1 },
+            k => k,
+        }
+    }
+
     /// The paper's spacing rule (§2.2): h = factor · l with l the median
     /// nearest-node spacing; 1.0 for the cubic spline (and Wendland), 0.8 for
     /// the Gaussian. The one place this constant lives.

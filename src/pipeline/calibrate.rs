@@ -115,3 +115,195 @@ fn field_values(fem: &FemNodes, fields: &[Quantity]) -> Vec<f64> {
     }
     values
 }
+
+/// How well h, calibrated on one FEM, predicts the nodes of another (finer)
+/// FEM of the same field: `calibrate --check`.
+#[derive(Clone, Debug, Serialize)]
+pub struct Check {
+    pub file: std::path::PathBuf,
+    pub nodes: usize,
+    pub r2: f64,
+    pub mae: f64,
+    pub max_error: f64,
+    /// (observed, predicted) at every check node, for the 1:1 plot.
+    #[serde(skip)]
+    pub pairs: Vec<(f64, f64)>,
+}
+
+/// Predicts field `q` at the nodes of `other` from `fem` with the calibrated
+/// h (MPs beyond every node's support take the nearest node's value) and
+/// compares with `other`'s own values.
+pub fn check(
+    fem: &FemNodes,
+    outcome: &Outcome,
+    kernel: KernelKind,
+    q: Quantity,
+    other: &FemNodes,
+    other_path: &std::path::Path,
+) -> Result<Check, PipelineError> {
+    let observed = other.field(q).ok_or_else(|| {
+        PipelineError::Input(format!("{}: no {} column", other_path.display(), q.name()))
+    })?;
+    let values = fem.field(q).unwrap_or(&[]).to_vec();
+    let cloud = mapper::NodeCloud {
+        positions: &fem.positions,
+        dim: fem.dim,
+        values: &values,
+        n_fields: 1,
+        group: None,
+        node_volume: outcome.spacing.powi(fem.dim as i32),
+    };
+    let settings = mapper::MapSettings {
+        kernel,
+        h: outcome.h,
+        min_shepard: 0.0,
+        outside: mapper::OutsidePolicy::Nearest,
+    };
+    let predicted = mapper::map_points(&cloud, &other.positions, None, &settings)
+        .map_err(|e| PipelineError::Numerical(e.to_string()))?;
+    let mean = observed.iter().sum::<f64>() / observed.len() as f64;
+    let (mut sse, mut sst, mut mae, mut max_error) = (0.0, 0.0, 0.0, 0.0f64);
+    for (o, p) in observed.iter().zip(&predicted.values) {
+        sse += (o - p).powi(2);
+        sst += (o - mean).powi(2);
+        mae += (o - p).abs();
+        max_error = max_error.max((o - p).abs());
+    }
+    Ok(Check {
+        file: other_path.to_path_buf(),
+        nodes: observed.len(),
+        r2: if sst > 0.0 { 1.0 - sse / sst } else { 1.0 },
+        mae: mae / observed.len() as f64,
+        max_error,
+        pairs: observed
+            .iter()
+            .copied()
+            .zip(predicted.values.iter().copied())
+            .collect(),
+    })
+}
+
+/// Writes the objective-against-h plot with the optimum marked (SVG).
+pub fn plot_curve(path: &std::path::Path, outcome: &Outcome) -> Result<(), PipelineError> {
+    use super::plot::{Series, line_chart};
+    use plotters::style::RGBColor;
+    let unit = if outcome.fields.len() == 1 {
+        "kPa"
+    } else {
+        "normalised"
+    };
+    line_chart(
+        path,
+        &format!(
+            "Leave-one-out error, {} kernel (h = {:.4} m, h/l = {:.3})",
+            outcome.kernel, outcome.h, outcome.h_over_l
+        ),
+        "smoothing length h (m)",
+        &format!("LOO objective Σ|e| ({unit})"),
+        &[
+            Series {
+                label: "objective",
+                points: outcome.curve.clone(),
+                color: RGBColor(31, 119, 180),
+                markers: false,
+            },
+            Series {
+                label: "annealer samples",
+                points: outcome.calibration.trace.clone(),
+                color: RGBColor(200, 200, 200),
+                markers: true,
+            },
+            Series {
+                label: "optimum",
+                points: vec![(outcome.h, outcome.calibration.value)],
+                color: RGBColor(214, 39, 40),
+                markers: true,
+            },
+        ],
+        false,
+    )
+}
+
+/// What `calibrate` runs on.
+#[derive(Clone, Debug)]
+pub struct CalibrateOptions {
+    /// The FEM files the field comes from.
+    pub fem: super::fem::FemOptions,
+    /// `pwp`, `sxx`, … or `all`.
+    pub field: String,
+    pub kernel: KernelKind,
+    pub seed: u64,
+    pub norm: Norm,
+    /// A second (finer) FEM file to check the calibrated h on, read with the
+    /// same options.
+    pub check: Option<std::path::PathBuf>,
+}
+
+/// What `calibrate` found and wrote.
+#[derive(Clone, Debug, Serialize)]
+pub struct Calibrated {
+    #[serde(flatten)]
+    pub outcome: Outcome,
+    pub check: Option<Check>,
+}
+
+impl Calibrated {
+    /// The files [`calibrate`] writes, in order.
+    pub fn file_names(&self) -> Vec<&'static str> {
+        let mut files = vec!["calibration.json", "calibration.svg"];
+        if self.check.is_some() {
+            files.push("check.svg");
+        }
+        files
+    }
+}
+
+/// `calibrate`: reads the FEM, calibrates h, checks it on a second FEM where
+/// one is given, and writes `calibration.json`, `calibration.svg` and
+/// `check.svg` into `out` (replaced under `force`).
+pub fn calibrate(
+    options: &CalibrateOptions,
+    out: &std::path::Path,
+    force: bool,
+) -> Result<(Calibrated, std::path::PathBuf), PipelineError> {
+    let reads = super::output::ReadLog::start();
+    let fem = super::fem::load(&options.fem)?;
+    let fields = select_fields(&fem.nodes, &options.field)?;
+    let kernel = options.kernel.for_dim(fem.nodes.dim);
+    let outcome = calibrate_h(&fem.nodes, &fields, kernel, options.seed, options.norm)?;
+    let check = match &options.check {
+        Some(path) => {
+            let other = super::fem::load(&super::fem::FemOptions {
+                paths: vec![path.clone()],
+                ..options.fem.clone()
+            })?;
+            Some(self::check(
+                &fem.nodes,
+                &outcome,
+                kernel,
+                fields[0],
+                &other.nodes,
+                path,
+            )?)
+        }
+        None => None,
+    };
+    let dir = super::output::OutputDir::create(out, force, &reads)?;
+    plot_curve(&dir.path("calibration.svg"), &outcome)?;
+    if let Some(c) = &check {
+        super::plot::scatter_1to1(
+            &dir.path("check.svg"),
+            &format!(
+                "Validation: {} predicted at the check nodes",
+                fields[0].name()
+            ),
+            "kPa",
+            &c.pairs,
+        )?;
+    }
+    let calibrated = Calibrated { outcome, check };
+    let json = serde_json::to_string_pretty(&calibrated)
+        .map_err(|e| PipelineError::Output(format!("calibration.json: {e}")))?;
+    dir.write("calibration.json", |w| w.write_all(json.as_bytes()))?;
+    Ok((calibrated, dir.commit()?))
+}

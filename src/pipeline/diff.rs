@@ -1,40 +1,53 @@
-//! `a3d-init diff A B`: a semantic diff of Anura3D inputs and a3d-init outputs —
-//! GOM and CPS/OPD block by block and keyword by keyword (numbers within
-//! `--rtol/--atol`, the rest as text, block order ignored), MAPF and `mps.csv`
-//! column statistics with rows matched by position or id. Folders are compared
-//! file by file. Exit code 0 when equal within tolerance, 1 when different, 2 on error.
+//! `diff` as a library call: a semantic diff of Anura3D inputs and a3d-init
+//! outputs — GOM and CPS/OPD block by block and keyword by keyword (numbers
+//! within the tolerances, the rest as text, block order ignored), MAPF and
+//! `mps.csv` column statistics with rows matched by position or id. Folders are
+//! compared file by file. The MAPF and `mps.csv` are read by the same readers
+//! `verify` uses ([`crate::formats::mapf::read`],
+//! [`crate::formats::mps_table::read_table`]); other CSV tables as text cells.
 
 use std::collections::BTreeMap;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use anyhow::{Context, bail};
 use serde::Serialize;
 
-use super::Verdict;
+use super::PipelineError;
 use crate::formats::cps::CpsDocument;
 use crate::formats::gom::GomDocument;
 use crate::formats::keyword_doc::{KeywordDocument, read_text};
-use crate::formats::lex;
+use crate::formats::{lex, mapf, mps_table};
 
-#[derive(Debug, clap::Args)]
-pub struct DiffArgs {
-    /// First file or project folder.
-    pub a: PathBuf,
-    /// Second file or project folder.
-    pub b: PathBuf,
+/// Tolerances and row matching of a diff.
+#[derive(Clone, Debug, PartialEq)]
+pub struct DiffOptions {
     /// Relative tolerance for numbers.
-    #[arg(long, default_value_t = 1e-9)]
     pub rtol: f64,
     /// Absolute tolerance for numbers.
-    #[arg(long, default_value_t = 1e-12)]
     pub atol: f64,
-    /// Match table rows by this id column (e.g. `id` in mps.csv) instead of by position.
-    #[arg(long, value_name = "COLUMN")]
+    /// Match table rows by this id column (e.g. `id` in mps.csv) instead of
+    /// by position.
     pub by: Option<String>,
-    /// Print JSON instead of text.
-    #[arg(long)]
-    pub json: bool,
+}
+
+impl Default for DiffOptions {
+    fn default() -> Self {
+        DiffOptions {
+            rtol: 1e-9,
+            atol: 1e-12,
+            by: None,
+        }
+    }
+}
+
+/// The comparison of two files or two folders.
+#[derive(Debug, Serialize, Default)]
+pub struct DiffReport {
+    /// Equal within the tolerances, and the same files in both folders.
+    pub equal: bool,
+    /// Files only in one of two folders.
+    pub notes: Vec<String>,
+    /// One comparison per pair of files.
+    pub files: Vec<FileDiff>,
 }
 
 /// The comparison of one pair of files.
@@ -92,6 +105,13 @@ fn kind_of(path: &Path) -> &'static str {
     }
 }
 
+fn no_column(path: &Path, column: &str) -> PipelineError {
+    PipelineError::Option(format!(
+        "{}: no column `{column}` to match rows by",
+        path.display()
+    ))
+}
+
 fn close(a: f64, b: f64, rtol: f64, atol: f64) -> bool {
     (a - b).abs() <= atol + rtol * a.abs().max(b.abs())
 }
@@ -123,7 +143,7 @@ fn diff_documents(
     a: &KeywordDocument,
     b: &KeywordDocument,
     fold_case: bool,
-    args: &DiffArgs,
+    args: &DiffOptions,
     out: &mut FileDiff,
 ) {
     if a.version() != b.version() {
@@ -191,20 +211,93 @@ fn diff_documents(
     }
 }
 
-/// A table as text cells: headers and rows. Comma-separated files (`mps.csv`,
-/// FEM tables) are read with the `csv` reader, one `Vec<String>` per record
-/// (the columns are whatever the header names); whitespace-separated ones
-/// (MAPF) are split on blanks. Cells are trimmed and blank lines skipped.
-struct Table {
-    headers: Vec<String>,
-    rows: Vec<Vec<String>>,
+/// A table's cell: a number, or text where a reader keeps text.
+#[derive(Clone, Debug, PartialEq)]
+enum Cell {
+    Num(f64),
+    Text(String),
 }
 
-fn read_table(path: &Path) -> anyhow::Result<Table> {
+impl Cell {
+    fn text(cell: &str) -> Cell {
+        lex::parse_real(cell).map_or_else(|| Cell::Text(cell.to_string()), Cell::Num)
+    }
+
+    fn label(&self) -> String {
+        match self {
+            Cell::Num(v) => v.to_string(),
+            Cell::Text(t) => t.clone(),
+        }
+    }
+}
+
+/// A table: headers and rows of cells.
+struct Table {
+    headers: Vec<String>,
+    rows: Vec<Vec<Cell>>,
+}
+
+/// A MAPF, through the reader `verify` uses.
+fn read_mapf(path: &Path) -> Result<Table, PipelineError> {
+    let table = mapf::read(path)?;
+    Ok(Table {
+        headers: table.headers,
+        rows: table
+            .rows
+            .into_iter()
+            .map(|r| r.into_iter().map(Cell::Num).collect())
+            .collect(),
+    })
+}
+
+/// An `mps.csv`, through the reader `verify` uses: every column it reads (the
+/// effective stresses are derived from these and not read back).
+fn read_mps(path: &Path) -> Result<Table, PipelineError> {
+    let t = mps_table::read_table(path)?;
+    let headers = "id,element,material,local,x,y,z,volume,pwp,sxx,syy,szz,sxy,syz,sxz,saturation,neighbours,shepard,status";
+    let rows = t
+        .points
+        .iter()
+        .zip(&t.states)
+        .zip(&t.diagnostics)
+        .map(|((p, s), d)| {
+            let mut row: Vec<Cell> = [p.id, p.element + 1, p.material, p.local]
+                .into_iter()
+                .map(|v| Cell::Num(f64::from(v)))
+                .collect();
+            row.extend(
+                p.position
+                    .iter()
+                    .chain([&p.volume, &s.pwp])
+                    .map(|&v| Cell::Num(v)),
+            );
+            row.extend(s.total.iter().chain([&s.saturation]).map(|&v| Cell::Num(v)));
+            row.push(Cell::Num(f64::from(d.neighbours)));
+            row.push(
+                d.shepard
+                    .map_or_else(|| Cell::Text(String::new()), Cell::Num),
+            );
+            row.push(Cell::Text(d.status.clone()));
+            row
+        })
+        .collect();
+    Ok(Table {
+        headers: headers.split(',').map(str::to_string).collect(),
+        rows,
+    })
+}
+
+/// Any other table as text cells: comma-separated files are read with the
+/// `csv` reader, one record per row (the columns are whatever the header
+/// names); whitespace-separated ones are split on blanks. Cells are trimmed
+/// and blank lines skipped.
+fn read_text_table(path: &Path) -> Result<Table, PipelineError> {
+    let empty = || PipelineError::Input(format!("{}: empty table", path.display()));
     let text = read_text(path)?;
     let Some(header) = text.lines().find(|l| !l.trim().is_empty()) else {
-        bail!("{}: empty table", path.display());
+        return Err(empty());
     };
+    let cells = |r: Vec<String>| r.iter().map(|c| Cell::text(c)).collect();
     if !header.contains(',') {
         let mut rows = text
             .lines()
@@ -212,7 +305,7 @@ fn read_table(path: &Path) -> anyhow::Result<Table> {
             .filter(|r| !r.is_empty());
         return Ok(Table {
             headers: rows.next().unwrap_or_default(),
-            rows: rows.collect(),
+            rows: rows.map(cells).collect(),
         });
     }
     let mut reader = csv::ReaderBuilder::new()
@@ -224,28 +317,44 @@ fn read_table(path: &Path) -> anyhow::Result<Table> {
         row.as_ref()
             .map_or(true, |cells| cells.iter().any(|c| !c.is_empty()))
     });
-    let mut next = || -> anyhow::Result<Option<Vec<String>>> {
+    let mut next = || -> Result<Option<Vec<String>>, PipelineError> {
         rows.next().transpose().map_err(|e| {
             let line = e.position().map_or(0, |p| p.line());
-            anyhow::anyhow!("{}:{line}:1: {e}", path.display())
+            PipelineError::Positioned(format!("{}:{line}:1: {e}", path.display()))
         })
     };
     let Some(headers) = next()? else {
-        bail!("{}: empty table", path.display());
+        return Err(empty());
     };
     let mut table = Table {
         headers,
         rows: Vec::new(),
     };
     while let Some(row) = next()? {
-        table.rows.push(row);
+        table.rows.push(cells(row));
     }
     Ok(table)
 }
 
-fn diff_tables(a: &Path, b: &Path, args: &DiffArgs, out: &mut FileDiff) -> anyhow::Result<()> {
-    let ta = read_table(a)?;
-    let tb = read_table(b)?;
+/// The table at `path`, by the reader its kind takes.
+fn read_table(path: &Path, kind: &str) -> Result<Table, PipelineError> {
+    if kind == "mapf" {
+        read_mapf(path)
+    } else if path.file_name().is_some_and(|n| n == "mps.csv") {
+        read_mps(path)
+    } else {
+        read_text_table(path)
+    }
+}
+
+fn diff_tables(
+    a: &Path,
+    b: &Path,
+    args: &DiffOptions,
+    out: &mut FileDiff,
+) -> Result<(), PipelineError> {
+    let ta = read_table(a, out.kind)?;
+    let tb = read_table(b, out.kind)?;
     if ta.headers != tb.headers {
         out.findings.push(format!(
             "columns: [{}] → [{}]",
@@ -264,23 +373,23 @@ fn diff_tables(a: &Path, b: &Path, args: &DiffArgs, out: &mut FileDiff) -> anyho
                 .headers
                 .iter()
                 .position(|h| h == col)
-                .ok_or_else(|| anyhow::anyhow!("{}: no column `{col}`", a.display()))?;
+                .ok_or_else(|| no_column(a, col))?;
             let ib = tb
                 .headers
                 .iter()
                 .position(|h| h == col)
-                .ok_or_else(|| anyhow::anyhow!("{}: no column `{col}`", b.display()))?;
-            let index: BTreeMap<&str, usize> = tb
+                .ok_or_else(|| no_column(b, col))?;
+            let index: BTreeMap<String, usize> = tb
                 .rows
                 .iter()
                 .enumerate()
-                .filter_map(|(k, r)| r.get(ib).map(|v| (v.as_str(), k)))
+                .filter_map(|(k, r)| r.get(ib).map(|v| (v.label(), k)))
                 .collect();
             let mut missing = 0;
             let mut pairs = Vec::new();
             for (k, r) in ta.rows.iter().enumerate() {
-                match r.get(ia).and_then(|id| index.get(id.as_str())) {
-                    Some(&j) => pairs.push((format!("{col} {}", r[ia]), k, j)),
+                match r.get(ia).and_then(|id| index.get(&id.label())) {
+                    Some(&j) => pairs.push((format!("{col} {}", r[ia].label()), k, j)),
                     None => missing += 1,
                 }
             }
@@ -309,12 +418,13 @@ fn diff_tables(a: &Path, b: &Path, args: &DiffArgs, out: &mut FileDiff) -> anyho
         let mut diffs: Vec<(f64, String, f64, f64)> = Vec::new();
         let mut text_changes = 0;
         for (label, i, j) in &pairs {
+            let none = Cell::Text(String::new());
             let (x, y) = (
-                ta.rows[*i].get(ca).map(String::as_str).unwrap_or(""),
-                tb.rows[*j].get(cb).map(String::as_str).unwrap_or(""),
+                ta.rows[*i].get(ca).unwrap_or(&none),
+                tb.rows[*j].get(cb).unwrap_or(&none),
             );
-            match (lex::parse_real(x), lex::parse_real(y)) {
-                (Some(u), Some(v)) => {
+            match (x, y) {
+                (&Cell::Num(u), &Cell::Num(v)) => {
                     let d = (u - v).abs();
                     stats.max_abs = stats.max_abs.max(d);
                     stats.mean_abs += d;
@@ -356,7 +466,7 @@ fn diff_tables(a: &Path, b: &Path, args: &DiffArgs, out: &mut FileDiff) -> anyho
     Ok(())
 }
 
-fn diff_files(a: &Path, b: &Path, args: &DiffArgs) -> anyhow::Result<FileDiff> {
+fn diff_files(a: &Path, b: &Path, args: &DiffOptions) -> Result<FileDiff, PipelineError> {
     let kind = kind_of(a);
     let mut out = FileDiff {
         a: a.to_path_buf(),
@@ -408,10 +518,11 @@ fn diff_files(a: &Path, b: &Path, args: &DiffArgs) -> anyhow::Result<FileDiff> {
     Ok(out)
 }
 
-fn files_of(dir: &Path) -> anyhow::Result<BTreeMap<String, PathBuf>> {
+fn files_of(dir: &Path) -> Result<BTreeMap<String, PathBuf>, PipelineError> {
+    let listing = |e: std::io::Error| PipelineError::Input(format!("{}: {e}", dir.display()));
     let mut out = BTreeMap::new();
-    for entry in std::fs::read_dir(dir).with_context(|| dir.display().to_string())? {
-        let p = entry?.path();
+    for entry in std::fs::read_dir(dir).map_err(listing)? {
+        let p = entry.map_err(listing)?.path();
         if p.is_file() {
             let name = p
                 .file_name()
@@ -425,89 +536,44 @@ fn files_of(dir: &Path) -> anyhow::Result<BTreeMap<String, PathBuf>> {
     Ok(out)
 }
 
-pub fn run(args: DiffArgs) -> anyhow::Result<()> {
-    let mut diffs = Vec::new();
+/// Compares two files, or two folders file by file (the files both hold; a
+/// file only in one is a note). Differences are in the report, not errors.
+pub fn diff(a: &Path, b: &Path, options: &DiffOptions) -> Result<DiffReport, PipelineError> {
+    let mut files = Vec::new();
     let mut notes = Vec::new();
-    for path in [&args.a, &args.b] {
+    for path in [a, b] {
         if !path.exists() {
-            bail!("{}: no such file or folder", path.display());
+            return Err(PipelineError::Input(format!(
+                "{}: no such file or folder",
+                path.display()
+            )));
         }
     }
-    match (args.a.is_dir(), args.b.is_dir()) {
+    match (a.is_dir(), b.is_dir()) {
         (true, true) => {
-            let (fa, fb) = (files_of(&args.a)?, files_of(&args.b)?);
+            let (fa, fb) = (files_of(a)?, files_of(b)?);
             for (name, pa) in &fa {
                 match fb.get(name) {
-                    Some(pb) => diffs.push(diff_files(pa, pb, &args)?),
-                    None => notes.push(format!("{name}: only in {}", args.a.display())),
+                    Some(pb) => files.push(diff_files(pa, pb, options)?),
+                    None => notes.push(format!("{name}: only in {}", a.display())),
                 }
             }
             for name in fb.keys().filter(|n| !fa.contains_key(*n)) {
-                notes.push(format!("{name}: only in {}", args.b.display()));
+                notes.push(format!("{name}: only in {}", b.display()));
             }
         }
-        (false, false) => {
-            diffs.push(diff_files(&args.a, &args.b, &args)?);
-        }
-        (a_is_dir, _) => bail!(
-            "{} is a folder and {} a file: compare two files or two folders",
-            if a_is_dir { &args.a } else { &args.b }.display(),
-            if a_is_dir { &args.b } else { &args.a }.display()
-        ),
-    }
-    let equal = notes.is_empty() && diffs.iter().all(|d| d.equal);
-    let mut out = std::io::stdout().lock();
-    if args.json {
-        #[derive(Serialize)]
-        struct Json<'a> {
-            equal: bool,
-            notes: &'a [String],
-            files: &'a [FileDiff],
-        }
-        serde_json::to_writer_pretty(
-            &mut out,
-            &Json {
-                equal,
-                notes: &notes,
-                files: &diffs,
-            },
-        )?;
-        writeln!(out)?;
-    } else {
-        for n in &notes {
-            writeln!(out, "{n}")?;
-        }
-        for d in &diffs {
-            if d.equal {
-                writeln!(
-                    out,
-                    "= {} ({}): equal within rtol {} / atol {}",
-                    d.b.display(),
-                    d.kind,
-                    args.rtol,
-                    args.atol
-                )?;
-            } else {
-                writeln!(
-                    out,
-                    "≠ {} vs {} ({}):",
-                    d.a.display(),
-                    d.b.display(),
-                    d.kind
-                )?;
-                for f in &d.findings {
-                    writeln!(out, "    {f}")?;
-                }
-            }
+        (false, false) => files.push(diff_files(a, b, options)?),
+        (a_is_dir, _) => {
+            return Err(PipelineError::Input(format!(
+                "{} is a folder and {} a file: compare two files or two folders",
+                if a_is_dir { a } else { b }.display(),
+                if a_is_dir { b } else { a }.display()
+            )));
         }
     }
-    if equal {
-        Ok(())
-    } else {
-        Err(Verdict {
-            message: "differences found".into(),
-            code: 1,
-        }
-        .into())
-    }
+    Ok(DiffReport {
+        equal: notes.is_empty() && files.iter().all(|d| d.equal),
+        notes,
+        files,
+    })
 }

@@ -24,6 +24,20 @@ pub struct FemOptions {
     pub step: StepChoice,
 }
 
+impl FemOptions {
+    /// `paths` read with the defaults: columns by their headers, units from
+    /// the headers, GeoStudio signs, the last saved step of a `.gsz`.
+    pub fn files(paths: Vec<PathBuf>) -> FemOptions {
+        FemOptions {
+            paths,
+            csv: CsvOptions::default(),
+            mesh: None,
+            analysis: None,
+            step: StepChoice::Last,
+        }
+    }
+}
+
 /// The readers a FEM file can go through.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum FemReader {

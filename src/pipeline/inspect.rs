@@ -1,62 +1,48 @@
-//! `a3d-init inspect`: a readable (or JSON) summary of an Anura3D model, with
-//! the predicted material points, or of a FEM node file.
+//! `inspect` as library calls: the summary of an Anura3D project (files,
+//! versions, mesh, MPs, materials with their unit weights), of FEM node files
+//! (how each column was read, extents, field ranges, node spacing), and of a
+//! GeoStudio `.gsz` archive (analyses, saved steps, the last step's nodes).
+//! The CLI prints these; `--json` serialises them as they are.
 
-use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use anyhow::Context;
 use serde::Serialize;
 
+use super::PipelineError;
+use super::fem::{FemOptions, LoadedFem};
+use super::output::{ReadLog, write_new};
+use super::project::Project;
+use crate::diagnose::Extent;
 use crate::formats::cps::CpsDocument;
-use crate::formats::project::ProjectFiles;
+use crate::formats::fem_csv::FemReadReport;
+use crate::formats::gsz::{self, GszProject, StepChoice};
+use crate::formats::project::{OutputNames, ProjectFiles};
+use crate::model::{FemNodes, Material};
 
-#[derive(Debug, clap::Args)]
-pub struct InspectArgs {
-    /// Anura3D model: a `.GOM`, `.GOM_stage<k>`, `-2.dat`, `.CPS_<nnn>` or a project directory.
-    pub model: Option<PathBuf>,
-    /// Inspect FEM node file(s) instead: how each column was understood.
-    #[command(flatten)]
-    pub fem: super::args::FemArgs,
-    /// Write the predicted material points (id, element, material, x, y, z, volume) to this CSV.
-    #[arg(long, value_name = "CSV")]
-    pub mps: Option<PathBuf>,
-    /// Print a machine-readable JSON summary instead of text.
-    #[arg(long)]
-    pub json: bool,
-    /// Replace an existing --mps file.
-    #[arg(long)]
-    pub force: bool,
-}
-
-pub use crate::pipeline::Project as LoadedProject;
-
-/// Reads a project and places its MPs for its computation method.
-pub fn load_project(path: &std::path::Path) -> anyhow::Result<LoadedProject> {
-    Ok(LoadedProject::load(path)?)
-}
-
-#[derive(Serialize)]
-struct MaterialSummary {
-    index: u32,
-    name: String,
-    material_type: String,
-    model: Option<String>,
-    elements: usize,
-    mps: usize,
-    porosity: Option<f64>,
-    density_solid: Option<f64>,
-    k0: Option<f64>,
-    young_modulus: Option<f64>,
-    poisson_ratio: Option<f64>,
-    friction_angle: Option<f64>,
-    cohesion: Option<f64>,
-    dilatancy_angle: Option<f64>,
-    gamma_dry: f64,
+/// One material of a project: its parameters as read, where it is used and
+/// its dry unit weight.
+#[derive(Clone, Debug, Serialize)]
+pub struct MaterialSummary {
+    pub index: u32,
+    pub name: String,
+    pub material_type: String,
+    pub model: Option<String>,
+    pub elements: usize,
+    pub mps: usize,
+    pub porosity: Option<f64>,
+    pub density_solid: Option<f64>,
+    pub k0: Option<f64>,
+    pub young_modulus: Option<f64>,
+    pub poisson_ratio: Option<f64>,
+    pub friction_angle: Option<f64>,
+    pub cohesion: Option<f64>,
+    pub dilatancy_angle: Option<f64>,
+    pub gamma_dry: f64,
 }
 
 impl MaterialSummary {
     /// The summary of material `m` of `project`, its dry unit weight at gravity `g`.
-    fn of(m: &crate::model::Material, project: &LoadedProject, g: f64) -> MaterialSummary {
+    pub fn of(m: &Material, project: &Project, g: f64) -> MaterialSummary {
         MaterialSummary {
             index: m.index,
             name: m.name.clone(),
@@ -86,368 +72,205 @@ impl MaterialSummary {
     }
 }
 
-#[derive(Serialize)]
-struct Summary<'a> {
-    files: &'a ProjectFiles,
-    version: &'a str,
-    cps_version: Option<&'a str>,
-    dimension: &'static str,
-    element_type: &'static str,
-    formulation: Option<&'a str>,
-    computation_method: &'static str,
-    nodes: usize,
-    elements: usize,
-    active_elements: usize,
-    material_points: usize,
-    fixed_nodes: usize,
-    bounding_box: ([f64; 3], [f64; 3]),
-    materials: Vec<MaterialSummary>,
-    warnings: &'a [String],
+/// What `inspect MODEL` shows of a project.
+#[derive(Clone, Debug, Serialize)]
+pub struct ProjectSummary {
+    pub files: ProjectFiles,
+    pub version: String,
+    pub cps_version: Option<String>,
+    /// The file names a ready-to-run project of this model uses, and why.
+    #[serde(skip)]
+    pub output_names: OutputNames,
+    pub dimension: &'static str,
+    pub element_type: &'static str,
+    pub formulation: Option<String>,
+    pub computation_method: &'static str,
+    pub nodes: usize,
+    pub elements: usize,
+    pub active_elements: usize,
+    pub material_points: usize,
+    pub fixed_nodes: usize,
+    pub bounding_box: ([f64; 3], [f64; 3]),
+    pub materials: Vec<MaterialSummary>,
+    pub warnings: Vec<String>,
 }
 
-pub fn run(args: InspectArgs) -> anyhow::Result<()> {
-    if !args.fem.fem.is_empty() {
-        return inspect_fem(&args);
+impl ProjectSummary {
+    /// The summary of a loaded project.
+    pub fn of(p: &Project) -> ProjectSummary {
+        let g = p
+            .cps
+            .as_ref()
+            .map_or(crate::model::DEFAULT_GRAVITY, CpsDocument::gravity);
+        let mesh = &p.model.mesh;
+        ProjectSummary {
+            files: p.files.clone(),
+            version: p.gom_version.clone(),
+            cps_version: p.cps.as_ref().map(|c| c.version().to_string()),
+            output_names: p.files.output_names(&p.gom_version),
+            dimension: mesh.dimension.gom_name(),
+            element_type: mesh.element_type.gom_name(),
+            formulation: p.info.formulation.clone(),
+            computation_method: p.method.cps_name(),
+            nodes: mesh.n_nodes(),
+            elements: mesh.n_elements(),
+            active_elements: p.model.element_material.iter().filter(|&&m| m > 0).count(),
+            material_points: p.points.len(),
+            fixed_nodes: p
+                .model
+                .solid_fixity
+                .iter()
+                .filter(|f| f.iter().any(|&b| b))
+                .count(),
+            bounding_box: mesh.bounding_box(),
+            materials: p
+                .model
+                .materials
+                .iter()
+                .map(|m| MaterialSummary::of(m, p, g))
+                .collect(),
+            warnings: p.info.warnings.clone(),
+        }
     }
-    let Some(model) = &args.model else {
-        anyhow::bail!("give a model (GOM, CPS or folder) or --fem FILE");
-    };
-    if model
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("gsz"))
-    {
-        return inspect_gsz(model, args.json);
-    }
-    let p = load_project(model)?;
-    let g = p
-        .cps
-        .as_ref()
-        .map_or(crate::model::DEFAULT_GRAVITY, CpsDocument::gravity);
-    let materials = p
-        .model
-        .materials
-        .iter()
-        .map(|m| MaterialSummary::of(m, &p, g))
-        .collect();
-    let mesh = &p.model.mesh;
-    let summary = Summary {
-        files: &p.files,
-        version: &p.gom_version,
-        cps_version: p.cps.as_ref().map(CpsDocument::version),
-        dimension: mesh.dimension.gom_name(),
-        element_type: mesh.element_type.gom_name(),
-        formulation: p.info.formulation.as_deref(),
-        computation_method: p.method.cps_name(),
-        nodes: mesh.n_nodes(),
-        elements: mesh.n_elements(),
-        active_elements: p.model.element_material.iter().filter(|&&m| m > 0).count(),
-        material_points: p.points.len(),
-        fixed_nodes: p
-            .model
-            .solid_fixity
-            .iter()
-            .filter(|f| f.iter().any(|&b| b))
-            .count(),
-        bounding_box: mesh.bounding_box(),
-        materials,
-        warnings: &p.info.warnings,
-    };
-    if let Some(path) = &args.mps {
-        let inputs = super::args::project_inputs(&p.files);
-        crate::cli::output::write_new(path, args.force, &inputs, |w| {
+}
+
+/// Loads the project at `model` and summarises it; with `mps`, also writes
+/// the predicted MPs to that CSV (replaced under `force`).
+pub fn project(
+    model: &Path,
+    mps: Option<&Path>,
+    force: bool,
+) -> Result<ProjectSummary, PipelineError> {
+    let reads = ReadLog::start();
+    let p = Project::load(model)?;
+    if let Some(path) = mps {
+        write_new(path, force, &reads, |w| {
             crate::formats::mps_table::write_points(w, &p.points)
+        })?;
+    }
+    Ok(ProjectSummary::of(&p))
+}
+
+/// One field's range over the FEM nodes (Anura3D signs, kPa).
+#[derive(Clone, Debug, Serialize)]
+pub struct FieldRange {
+    pub name: String,
+    pub min: f64,
+    pub max: f64,
+}
+
+/// What `inspect --fem` shows of FEM node files.
+#[derive(Clone, Debug, Serialize)]
+pub struct FemSummary {
+    /// How each file was read.
+    pub reports: Vec<FemReadReport>,
+    pub notes: Vec<String>,
+    pub extent: Option<Extent>,
+    pub fields: Vec<FieldRange>,
+    /// Median nearest-node distance l (m).
+    pub spacing: f64,
+}
+
+impl FemSummary {
+    /// The summary of loaded FEM files.
+    pub fn of(fem: &LoadedFem) -> FemSummary {
+        let nodes = &fem.nodes;
+        FemSummary {
+            reports: fem.reports.clone(),
+            notes: fem.notes.clone(),
+            extent: Extent::of(&nodes.positions, nodes.dim),
+            fields: nodes
+                .fields
+                .iter()
+                .map(|(q, v)| {
+                    let (min, max) = v
+                        .iter()
+                        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                            (a.min(*x), b.max(*x))
+                        });
+                    FieldRange {
+                        name: q.name(),
+                        min,
+                        max,
+                    }
+                })
+                .collect(),
+            spacing: crate::kernel::mapper::median_spacing(&nodes.positions, nodes.dim),
+        }
+    }
+}
+
+/// Reads FEM node files and summarises them.
+pub fn fem(options: &FemOptions) -> Result<FemSummary, PipelineError> {
+    Ok(FemSummary::of(&super::fem::load(options)?))
+}
+
+/// The last saved step of one analysis of a `.gsz`, as read.
+#[derive(Clone, Debug)]
+pub enum GszStep {
+    /// The analysis has no saved step.
+    None,
+    /// The analysis has no mesh: its results cannot be placed.
+    NoMesh,
+    /// The step's nodes, with the note of the join of table and mesh.
+    Read { nodes: FemNodes, note: String },
+    /// The step could not be read.
+    Unreadable(String),
+}
+
+/// What `inspect project.gsz` shows.
+#[derive(Clone, Debug, Serialize)]
+pub struct GszSummary {
+    pub path: PathBuf,
+    #[serde(flatten)]
+    pub project: GszProject,
+    /// Per analysis, its last saved step.
+    #[serde(skip)]
+    pub last_steps: Vec<GszStep>,
+}
+
+impl GszSummary {
+    /// The error an archive whose listed results cannot be read is: the first
+    /// unreadable step's.
+    pub fn unreadable(&self) -> Option<PipelineError> {
+        self.last_steps.iter().find_map(|s| match s {
+            GszStep::Unreadable(e) => Some(PipelineError::Input(format!(
+                "{}: the archive lists results that cannot be read: {e}",
+                self.path.display()
+            ))),
+            _ => None,
         })
-        .with_context(|| format!("writing {}", path.display()))?;
     }
-    let mut out = std::io::stdout().lock();
-    if args.json {
-        serde_json::to_writer_pretty(&mut out, &summary)?;
-        writeln!(out)?;
-        return Ok(());
-    }
-    print_summary(&mut out, &summary)?;
-    if let Some(path) = &args.mps {
-        writeln!(out, "MP table written to {}", path.display())?;
-    }
-    Ok(())
 }
 
-fn print_summary(out: &mut impl Write, s: &Summary<'_>) -> std::io::Result<()> {
-    writeln!(out, "project    {}", s.files.name)?;
-    for note in &s.files.notes {
-        writeln!(out, "  {note}")?;
-    }
-    writeln!(
-        out,
-        "version    GOM {}{}",
-        s.version,
-        s.cps_version
-            .map(|v| format!(", CPS {v}"))
-            .unwrap_or_default()
-    )?;
-    // #14: the names the ready-to-run project uses, and why.
-    let names = s.files.output_names(s.version);
-    writeln!(
-        out,
-        "names      map writes {}, {}{} ({})",
-        names.gom,
-        names.cps,
-        names
-            .opd
-            .as_deref()
-            .map(|o| format!(", {o}"))
-            .unwrap_or_default(),
-        names.reason
-    )?;
-    writeln!(out, "dimension  {} ({})", s.dimension, s.element_type)?;
-    writeln!(
-        out,
-        "method     {}{}",
-        s.computation_method,
-        match s.computation_method {
-            "FEM" | "UL-FEM" =>
-                ": one MP per active element at the mean of its corners, whatever the GOM's counts",
-            "MPM-MIXED" =>
-                ": fully filled elements are integrated at one point (their MPs share MP 1's state after the first step)",
-            _ => "",
-        }
-    )?;
-    if let Some(f) = s.formulation {
-        writeln!(out, "formulation {f}")?;
-    }
-    writeln!(
-        out,
-        "mesh       {} nodes, {} elements ({} active), {} fixed nodes",
-        s.nodes, s.elements, s.active_elements, s.fixed_nodes
-    )?;
-    writeln!(out, "MPs        {}", s.material_points)?;
-    let (lo, hi) = s.bounding_box;
-    writeln!(
-        out,
-        "bbox       x {:.4} .. {:.4}, y {:.4} .. {:.4}, z {:.4} .. {:.4} m",
-        lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]
-    )?;
-    writeln!(out, "materials")?;
-    for m in &s.materials {
-        writeln!(
-            out,
-            "  {} {:<14} {} / {}: {} elements, {} MPs",
-            m.index,
-            m.name,
-            m.material_type,
-            m.model.as_deref().unwrap_or("-"),
-            m.elements,
-            m.mps
-        )?;
-        let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v}"));
-        writeln!(
-            out,
-            "      n = {}, ρs = {} kg/m³, γdry = {:.3} kN/m³, K0 = {}, E = {} kPa, ν = {}, φ' = {}°, c' = {} kPa, ψ = {}°",
-            fmt(m.porosity),
-            fmt(m.density_solid),
-            m.gamma_dry,
-            fmt(m.k0),
-            fmt(m.young_modulus),
-            fmt(m.poisson_ratio),
-            fmt(m.friction_angle),
-            fmt(m.cohesion),
-            fmt(m.dilatancy_angle)
-        )?;
-    }
-    if s.warnings.is_empty() {
-        writeln!(out, "warnings   none")?;
-    } else {
-        writeln!(out, "warnings")?;
-        for w in s.warnings {
-            writeln!(out, "  - {w}")?;
-        }
-    }
-    Ok(())
-}
-
-fn inspect_fem(args: &InspectArgs) -> anyhow::Result<()> {
-    let fem = args.fem.load()?;
-    let mut out = std::io::stdout().lock();
-    if args.json {
-        serde_json::to_writer_pretty(&mut out, &fem.reports)?;
-        writeln!(out)?;
-        return Ok(());
-    }
-    for r in &fem.reports {
-        writeln!(out, "file       {}", r.path.display())?;
-        writeln!(
-            out,
-            "dialect    delimiter `{}`, decimal {}, BOM {}, header on line {}",
-            r.delimiter,
-            if r.decimal_comma { "comma" } else { "point" },
-            if r.bom { "yes" } else { "no" },
-            r.header_line
-        )?;
-        writeln!(out, "nodes      {} ({}D)", r.nodes, r.dim)?;
-        writeln!(out, "sign       {:?}", r.sign)?;
-        writeln!(out, "columns")?;
-        for c in &r.columns {
-            writeln!(
-                out,
-                "  {:<32} → {:<8} unit {:<6} ×{}{}",
-                format!("`{}`", c.header),
-                c.understood_as,
-                c.unit.as_deref().unwrap_or("-"),
-                c.factor,
-                if c.sign_flipped { ", sign flipped" } else { "" }
-            )?;
-        }
-        for w in &r.warnings {
-            writeln!(out, "  warning: {w}")?;
-        }
-    }
-    for n in &fem.notes {
-        writeln!(out, "note       {n}")?;
-    }
-    let nodes = &fem.nodes;
-    // #14: the coordinate range of the table.
-    if let Some(extent) = crate::diagnose::Extent::of(&nodes.positions, nodes.dim) {
-        writeln!(out, "extent     {extent}")?;
-    }
-    for (q, v) in &nodes.fields {
-        let (lo, hi) = v
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
-                (a.min(*x), b.max(*x))
-            });
-        writeln!(
-            out,
-            "field      {:<6} {lo:.4} .. {hi:.4} kPa (Anura3D signs)",
-            q.name()
-        )?;
-    }
-    writeln!(
-        out,
-        "spacing    median nearest-node distance l = {:.6} m",
-        crate::kernel::mapper::median_spacing(&nodes.positions, nodes.dim)
-    )?;
-    Ok(())
-}
-
-fn inspect_gsz(path: &std::path::Path, json: bool) -> anyhow::Result<()> {
-    let project = crate::formats::gsz::read_project(path)?;
-    // The last saved step of every analysis with a mesh is read, so that an
-    // archive whose results cannot be read is an error (exit 2, #14).
-    let steps: Vec<_> = project
+/// Summarises a `.gsz`: its analyses and the last saved step of each (see
+/// [`GszSummary::unreadable`] for an archive whose results cannot be read).
+pub fn gsz(path: &Path) -> Result<GszSummary, PipelineError> {
+    let project = gsz::read_project(path)?;
+    let last_steps = project
         .analyses
         .iter()
         .map(|a| {
-            let last = a.steps.last().filter(|_| a.has_mesh)?;
-            Some(crate::formats::gsz::read_step(
+            let Some(last) = a.steps.last() else {
+                return GszStep::None;
+            };
+            if !a.has_mesh {
+                return GszStep::NoMesh;
+            }
+            match gsz::read_step(
                 path,
                 Some(&a.index.to_string()),
-                &crate::formats::gsz::StepChoice::Number(last.number),
+                &StepChoice::Number(last.number),
                 &Default::default(),
-            ))
+            ) {
+                Ok((nodes, _, note)) => GszStep::Read { nodes, note },
+                Err(e) => GszStep::Unreadable(e.to_string()),
+            }
         })
         .collect();
-    let mut out = std::io::stdout().lock();
-    if json {
-        serde_json::to_writer_pretty(&mut out, &project)?;
-        writeln!(out)?;
-    } else {
-        print_gsz(&mut out, path, &project, &steps)?;
-    }
-    match steps.into_iter().flatten().find_map(Result::err) {
-        Some(e) => Err(anyhow::Error::new(e).context(format!(
-            "{}: the archive lists results that cannot be read",
-            path.display()
-        ))),
-        None => Ok(()),
-    }
-}
-
-type StepRead = Result<
-    (
-        crate::model::FemNodes,
-        crate::formats::fem_csv::FemReadReport,
-        String,
-    ),
-    crate::formats::FormatError,
->;
-
-fn print_gsz(
-    out: &mut impl Write,
-    path: &std::path::Path,
-    project: &crate::formats::gsz::GszProject,
-    steps: &[Option<StepRead>],
-) -> anyhow::Result<()> {
-    let (length, pressure) = if project.unit_system.eq_ignore_ascii_case("Imperial") {
-        ("ft", "psf")
-    } else {
-        ("m", "kPa")
-    };
-    writeln!(out, "project    {} ({})", path.display(), project.xml_name)?;
-    writeln!(
-        out,
-        "units      {} base units: length {length}, pressure {pressure}, time s",
-        project.unit_system
-    )?;
-    for (a, step) in project.analyses.iter().zip(steps) {
-        writeln!(
-            out,
-            "analysis   {} `{}`: {} {}, folder `{}`, mesh {}",
-            a.index,
-            a.name,
-            a.kind,
-            a.method,
-            a.folder,
-            if a.has_mesh { "yes" } else { "no" }
-        )?;
-        let times: Vec<String> = a
-            .steps
-            .iter()
-            .map(|s| {
-                format!(
-                    "{}{}",
-                    s.folder,
-                    s.time.map(|t| format!(" (t = {t} s)")).unwrap_or_default()
-                )
-            })
-            .collect();
-        writeln!(
-            out,
-            "  saved steps ({}): {}",
-            a.steps.len(),
-            times.join(", ")
-        )?;
-        let Some(last) = a.steps.last() else {
-            continue;
-        };
-        match step {
-            None => writeln!(
-                out,
-                "  no Mesh.ply in `{}`: its results cannot be placed",
-                a.folder
-            )?,
-            Some(Ok((nodes, _, note))) => {
-                writeln!(
-                    out,
-                    "  step {}: {} nodes ({}D), fields: {}",
-                    last.folder,
-                    nodes.len(),
-                    nodes.dim,
-                    nodes
-                        .fields
-                        .iter()
-                        .map(|(q, _)| q.name())
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                )?;
-                if let Some(extent) = crate::diagnose::Extent::of(&nodes.positions, nodes.dim) {
-                    writeln!(out, "  extent {extent}")?;
-                }
-                if let Some((_, subset)) = note.split_once("; the table lists") {
-                    writeln!(out, "  note: the table lists{subset}")?;
-                }
-            }
-            Some(Err(e)) => writeln!(out, "  step {}: unreadable: {e}", last.folder)?,
-        }
-    }
-    Ok(())
+    Ok(GszSummary {
+        path: path.to_path_buf(),
+        project,
+        last_steps,
+    })
 }

@@ -572,7 +572,7 @@ pub fn map(
     let diagnostics: Vec<MpDiagnostics> = (0..points.len())
         .map(|i| MpDiagnostics {
             neighbours: result.n_neighbours[i],
-            shepard: result.shepard[i],
+            shepard: Some(result.shepard[i]),
             status: match result.status[i] {
                 PointStatus::Mapped => "mapped",
                 PointStatus::Nearest => "nearest",

@@ -1,9 +1,9 @@
 //! SVG plots (plotters): line charts with axis titles and units, and scatter
-//! plots with a 1:1 line. Used by `calibrate`, `verify` and `demo`.
+//! plots with a 1:1 line. Written by `calibrate`, `verify`, `run`, `fos` and `demo`.
 
 use std::path::Path;
 
-use anyhow::Context;
+use super::PipelineError;
 use plotters::prelude::*;
 
 /// One series of a line chart.
@@ -48,7 +48,7 @@ pub fn line_chart(
     y_label: &str,
     series: &[Series<'_>],
     log_y: bool,
-) -> anyhow::Result<()> {
+) -> Result<(), PipelineError> {
     let ((x0, x1), (y0, y1)) = bounds(series);
     let root = SVGBackend::new(path, (900, 560)).into_drawing_area();
     root.fill(&WHITE).ok();
@@ -123,9 +123,7 @@ pub fn line_chart(
         root.present()?;
         Ok(())
     };
-    draw()
-        .map_err(|e| anyhow::anyhow!("{e}"))
-        .with_context(|| format!("drawing {}", path.display()))
+    draw().map_err(|e| PipelineError::Output(format!("drawing {}: {e}", path.display())))
 }
 
 /// Predicted against observed, with the 1:1 line.
@@ -134,7 +132,7 @@ pub fn scatter_1to1(
     title: &str,
     unit: &str,
     pairs: &[(f64, f64)],
-) -> anyhow::Result<()> {
+) -> Result<(), PipelineError> {
     let (lo, hi) = pairs
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
@@ -186,7 +184,7 @@ pub fn field_map(
     title: &str,
     label: &str,
     points: &[(f64, f64, f64)],
-) -> anyhow::Result<()> {
+) -> Result<(), PipelineError> {
     let (mut x0, mut x1, mut y0, mut y1) = (
         f64::INFINITY,
         f64::NEG_INFINITY,
@@ -255,7 +253,5 @@ pub fn field_map(
         root.present()?;
         Ok(())
     };
-    draw()
-        .map_err(|e| anyhow::anyhow!("{e}"))
-        .with_context(|| format!("drawing {}", path.display()))
+    draw().map_err(|e| PipelineError::Output(format!("drawing {}: {e}", path.display())))
 }

@@ -37,10 +37,23 @@ pub struct KernelCheck {
     pub notes: Vec<String>,
 }
 
+/// mps.csv row by row against the MAPF as Anura3D reads it. Every count is
+/// of MPs or rows actually seen: `differing ≤ compared ≤` the model's MPs.
 #[derive(Clone, Debug, serde::Serialize)]
 pub struct TableComparison {
+    /// Rows in mps.csv.
     pub rows: usize,
+    /// The model's MPs that matched exactly one row (same id, element and
+    /// position) and were compared.
+    pub compared: usize,
+    /// Of those, the MPs whose states differ by more than 1e-9 of a column's
+    /// range.
     pub differing: usize,
+    /// Rows that match no MP of the model (an unknown id, another element or
+    /// position, or an id repeated).
+    pub unmatched_rows: usize,
+    /// The model's MPs without a row.
+    pub missing: usize,
     /// (MP id, largest difference relative to the column range), worst first.
     pub worst: Vec<(u32, f64)>,
 }
@@ -65,8 +78,6 @@ pub struct Judged {
     pub run_start: Vec<MpState>,
     /// Per MP: MAPF rows Anura3D weighs (non-zero kernel value).
     pub rows_in_reach: Vec<u32>,
-    /// The files read.
-    pub inputs: Vec<PathBuf>,
 }
 
 /// Judges a project folder by the files Anura3D reads: its MAPF rebuilt as the
@@ -93,29 +104,42 @@ pub fn judge_folder(project: &Project) -> Result<Judged, PipelineError> {
     let mut mps_csv = None;
     if mps_path.is_file() {
         let (mps_points, mps_states) = mps_table::read_states(&mps_path)?;
-        if same_points(&mps_points, &points) {
-            let worst =
-                anura3d::differing_points(&points, &kernel.states, &mps_states, n_dim, 1e-9);
-            mps_csv = Some(TableComparison {
-                rows: mps_points.len(),
-                differing: worst.len(),
-                worst: worst.into_iter().take(MAX_IDS).collect(),
-            });
-            intended = Some(mps_states);
+        let row_of = match_rows(&points, &mps_points);
+        let compared: Vec<usize> = (0..points.len()).filter(|&i| row_of[i].is_some()).collect();
+        let pick = |v: &[MpState], rows: bool| -> Vec<MpState> {
+            compared
+                .iter()
+                .map(|&i| v[if rows { row_of[i].unwrap_or(i) } else { i }])
+                .collect()
+        };
+        let compared_points: Vec<MaterialPoint> = compared.iter().map(|&i| points[i]).collect();
+        let worst = anura3d::differing_points(
+            &compared_points,
+            &pick(&kernel.states, false),
+            &pick(&mps_states, true),
+            n_dim,
+            1e-9,
+        );
+        let comparison = TableComparison {
+            rows: mps_points.len(),
+            compared: compared.len(),
+            differing: worst.len(),
+            unmatched_rows: mps_points.len() - compared.len(),
+            missing: points.len() - compared.len(),
+            worst: worst.into_iter().take(MAX_IDS).collect(),
+        };
+        if comparison.missing == 0 {
+            intended = Some(pick(&mps_states, true));
         } else {
             notes.push(format!(
-                "{} holds {} MPs that are not the {} MPs Anura3D creates for this model ({}): it is ignored",
+                "{} has no row for {} of the {} MPs Anura3D creates for this model ({}): it is not used as the intended state",
                 mps_path.display(),
-                mps_points.len(),
+                comparison.missing,
                 points.len(),
                 project.method.cps_name()
             ));
-            mps_csv = Some(TableComparison {
-                rows: mps_points.len(),
-                differing: mps_points.len().max(points.len()),
-                worst: Vec::new(),
-            });
         }
+        mps_csv = Some(comparison);
     }
     let nan: Vec<u32> = kernel.nan_points.clone();
     // Yield checks need each material's model; materials the runner cannot
@@ -176,12 +200,6 @@ pub fn judge_folder(project: &Project) -> Result<Judged, PipelineError> {
         crate::state::mixed::collapse_to_first(&points, &mut states);
         spread
     });
-    let mut inputs = vec![project.files.gom.clone(), mapf_path.clone()];
-    inputs.extend(project.files.cps.clone());
-    inputs.extend(project.files.opd.clone());
-    if mps_path.is_file() {
-        inputs.push(mps_path);
-    }
     let check = KernelCheck {
         gom: project.files.gom.clone(),
         cps: project.files.cps.clone(),
@@ -204,11 +222,23 @@ pub fn judge_folder(project: &Project) -> Result<Judged, PipelineError> {
         rows_in_reach: kernel.rows_in_reach,
         start: kernel.states,
         run_start: states,
-        inputs,
     })
 }
 
-/// True when two MP lists are the same MPs (ids, elements, positions).
-pub fn same_points(a: &[MaterialPoint], b: &[MaterialPoint]) -> bool {
-    a.len() == b.len() && a.iter().zip(b).all(|(x, y)| x.same_as(y))
+/// For each MP of `points`, the row of `rows` that is the same MP (same id,
+/// element and position), each row used at most once: a repeated row is left
+/// unmatched.
+pub fn match_rows(points: &[MaterialPoint], rows: &[MaterialPoint]) -> Vec<Option<usize>> {
+    let by_id: std::collections::HashMap<u32, usize> =
+        points.iter().enumerate().map(|(i, p)| (p.id, i)).collect();
+    let mut row_of = vec![None; points.len()];
+    for (r, row) in rows.iter().enumerate() {
+        if let Some(&i) = by_id.get(&row.id)
+            && row_of[i].is_none()
+            && row.same_as(&points[i])
+        {
+            row_of[i] = Some(r);
+        }
+    }
+    row_of
 }

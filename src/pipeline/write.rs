@@ -126,7 +126,7 @@ pub fn write_project(
         vtu::ArrayFn::scalar("material", |i| points[i].material as f64),
         vtu::ArrayFn::scalar("volume", |i| points[i].volume),
         vtu::ArrayFn::scalar("neighbours", |i| diags[i].neighbours as f64),
-        vtu::ArrayFn::scalar("shepard", |i| diags[i].shepard),
+        vtu::ArrayFn::scalar("shepard", |i| diags[i].shepard.unwrap_or(f64::NAN)),
     ];
     out.write("mps.vtu", |w| {
         vtu::write_points_with(w, points.len(), &|i| points[i].position, &arrays)

@@ -207,7 +207,7 @@ fn discover_gid(path: &Path, dir: &Path, name: &str) -> Result<ProjectFiles, For
     let mut warnings = Vec::new();
     // Older problem types write other things to `-1.dat`: only a file with an
     // Anura3D header is taken as the CPS.
-    let is_cps = std::fs::read(&gid_cps).is_ok_and(|b| {
+    let is_cps = crate::formats::input::read_bytes(&gid_cps).is_ok_and(|b| {
         b.strip_prefix(b"\xEF\xBB\xBF".as_slice())
             .unwrap_or(&b)
             .starts_with(b"### Anura3D_")

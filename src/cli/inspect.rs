@@ -1,0 +1,298 @@
+//! `a3d-init inspect`: prints the library's summaries ([`pipeline::inspect`])
+//! of an Anura3D model (with the predicted material points), of FEM node
+//! files, or of a GeoStudio `.gsz` archive, as text or JSON.
+
+use std::io::Write;
+use std::path::PathBuf;
+
+use crate::pipeline::inspect::{self, FemSummary, GszStep, GszSummary, ProjectSummary};
+
+#[derive(Debug, clap::Args)]
+pub struct InspectArgs {
+    /// Anura3D model: a `.GOM`, `.GOM_stage<k>`, `-2.dat`, `.CPS_<nnn>` or a project directory.
+    pub model: Option<PathBuf>,
+    /// Inspect FEM node file(s) instead: how each column was understood.
+    #[command(flatten)]
+    pub fem: super::args::FemArgs,
+    /// Write the predicted material points (id, element, material, x, y, z, volume) to this CSV.
+    #[arg(long, value_name = "CSV")]
+    pub mps: Option<PathBuf>,
+    /// Print a machine-readable JSON summary instead of text.
+    #[arg(long)]
+    pub json: bool,
+    /// Replace an existing --mps file.
+    #[arg(long)]
+    pub force: bool,
+}
+
+pub fn run(args: InspectArgs) -> anyhow::Result<()> {
+    if !args.fem.fem.is_empty() {
+        let summary = inspect::fem(&args.fem.options()?)?;
+        let mut out = std::io::stdout().lock();
+        if args.json {
+            serde_json::to_writer_pretty(&mut out, &summary.reports)?;
+            writeln!(out)?;
+            return Ok(());
+        }
+        return Ok(print_fem(&mut out, &summary)?);
+    }
+    let Some(model) = &args.model else {
+        anyhow::bail!("give a model (GOM, CPS or folder) or --fem FILE");
+    };
+    if model
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("gsz"))
+    {
+        let summary = inspect::gsz(model)?;
+        let mut out = std::io::stdout().lock();
+        if args.json {
+            serde_json::to_writer_pretty(&mut out, &summary.project)?;
+            writeln!(out)?;
+        } else {
+            print_gsz(&mut out, &summary)?;
+        }
+        return match summary.unreadable() {
+            Some(e) => Err(e.into()),
+            None => Ok(()),
+        };
+    }
+    let summary = inspect::project(model, args.mps.as_deref(), args.force)?;
+    let mut out = std::io::stdout().lock();
+    if args.json {
+        serde_json::to_writer_pretty(&mut out, &summary)?;
+        writeln!(out)?;
+        return Ok(());
+    }
+    print_summary(&mut out, &summary)?;
+    if let Some(path) = &args.mps {
+        writeln!(out, "MP table written to {}", path.display())?;
+    }
+    Ok(())
+}
+
+fn print_summary(out: &mut impl Write, s: &ProjectSummary) -> std::io::Result<()> {
+    writeln!(out, "project    {}", s.files.name)?;
+    for note in &s.files.notes {
+        writeln!(out, "  {note}")?;
+    }
+    writeln!(
+        out,
+        "version    GOM {}{}",
+        s.version,
+        s.cps_version
+            .as_deref()
+            .map(|v| format!(", CPS {v}"))
+            .unwrap_or_default()
+    )?;
+    // #14: the names the ready-to-run project uses, and why.
+    let names = &s.output_names;
+    writeln!(
+        out,
+        "names      map writes {}, {}{} ({})",
+        names.gom,
+        names.cps,
+        names
+            .opd
+            .as_deref()
+            .map(|o| format!(", {o}"))
+            .unwrap_or_default(),
+        names.reason
+    )?;
+    writeln!(out, "dimension  {} ({})", s.dimension, s.element_type)?;
+    writeln!(
+        out,
+        "method     {}{}",
+        s.computation_method,
+        match s.computation_method {
+            "FEM" | "UL-FEM" =>
+                ": one MP per active element at the mean of its corners, whatever the GOM's counts",
+            "MPM-MIXED" =>
+                ": fully filled elements are integrated at one point (their MPs share MP 1's state after the first step)",
+            _ => "",
+        }
+    )?;
+    if let Some(f) = &s.formulation {
+        writeln!(out, "formulation {f}")?;
+    }
+    writeln!(
+        out,
+        "mesh       {} nodes, {} elements ({} active), {} fixed nodes",
+        s.nodes, s.elements, s.active_elements, s.fixed_nodes
+    )?;
+    writeln!(out, "MPs        {}", s.material_points)?;
+    let (lo, hi) = s.bounding_box;
+    writeln!(
+        out,
+        "bbox       x {:.4} .. {:.4}, y {:.4} .. {:.4}, z {:.4} .. {:.4} m",
+        lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]
+    )?;
+    writeln!(out, "materials")?;
+    for m in &s.materials {
+        writeln!(
+            out,
+            "  {} {:<14} {} / {}: {} elements, {} MPs",
+            m.index,
+            m.name,
+            m.material_type,
+            m.model.as_deref().unwrap_or("-"),
+            m.elements,
+            m.mps
+        )?;
+        let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v}"));
+        writeln!(
+            out,
+            "      n = {}, ρs = {} kg/m³, γdry = {:.3} kN/m³, K0 = {}, E = {} kPa, ν = {}, φ' = {}°, c' = {} kPa, ψ = {}°",
+            fmt(m.porosity),
+            fmt(m.density_solid),
+            m.gamma_dry,
+            fmt(m.k0),
+            fmt(m.young_modulus),
+            fmt(m.poisson_ratio),
+            fmt(m.friction_angle),
+            fmt(m.cohesion),
+            fmt(m.dilatancy_angle)
+        )?;
+    }
+    if s.warnings.is_empty() {
+        writeln!(out, "warnings   none")?;
+    } else {
+        writeln!(out, "warnings")?;
+        for w in &s.warnings {
+            writeln!(out, "  - {w}")?;
+        }
+    }
+    Ok(())
+}
+
+fn print_fem(out: &mut impl Write, s: &FemSummary) -> std::io::Result<()> {
+    for r in &s.reports {
+        writeln!(out, "file       {}", r.path.display())?;
+        writeln!(
+            out,
+            "dialect    delimiter `{}`, decimal {}, BOM {}, header on line {}",
+            r.delimiter,
+            if r.decimal_comma { "comma" } else { "point" },
+            if r.bom { "yes" } else { "no" },
+            r.header_line
+        )?;
+        writeln!(out, "nodes      {} ({}D)", r.nodes, r.dim)?;
+        writeln!(out, "sign       {:?}", r.sign)?;
+        writeln!(out, "columns")?;
+        for c in &r.columns {
+            writeln!(
+                out,
+                "  {:<32} → {:<8} unit {:<6} ×{}{}",
+                format!("`{}`", c.header),
+                c.understood_as,
+                c.unit.as_deref().unwrap_or("-"),
+                c.factor,
+                if c.sign_flipped { ", sign flipped" } else { "" }
+            )?;
+        }
+        for w in &r.warnings {
+            writeln!(out, "  warning: {w}")?;
+        }
+    }
+    for n in &s.notes {
+        writeln!(out, "note       {n}")?;
+    }
+    // #14: the coordinate range of the table.
+    if let Some(extent) = &s.extent {
+        writeln!(out, "extent     {extent}")?;
+    }
+    for f in &s.fields {
+        writeln!(
+            out,
+            "field      {:<6} {:.4} .. {:.4} kPa (Anura3D signs)",
+            f.name, f.min, f.max
+        )?;
+    }
+    writeln!(
+        out,
+        "spacing    median nearest-node distance l = {:.6} m",
+        s.spacing
+    )
+}
+
+fn print_gsz(out: &mut impl Write, s: &GszSummary) -> std::io::Result<()> {
+    let project = &s.project;
+    let (length, pressure) = if project.unit_system.eq_ignore_ascii_case("Imperial") {
+        ("ft", "psf")
+    } else {
+        ("m", "kPa")
+    };
+    writeln!(
+        out,
+        "project    {} ({})",
+        s.path.display(),
+        project.xml_name
+    )?;
+    writeln!(
+        out,
+        "units      {} base units: length {length}, pressure {pressure}, time s",
+        project.unit_system
+    )?;
+    for (a, step) in project.analyses.iter().zip(&s.last_steps) {
+        writeln!(
+            out,
+            "analysis   {} `{}`: {} {}, folder `{}`, mesh {}",
+            a.index,
+            a.name,
+            a.kind,
+            a.method,
+            a.folder,
+            if a.has_mesh { "yes" } else { "no" }
+        )?;
+        let times: Vec<String> = a
+            .steps
+            .iter()
+            .map(|s| {
+                format!(
+                    "{}{}",
+                    s.folder,
+                    s.time.map(|t| format!(" (t = {t} s)")).unwrap_or_default()
+                )
+            })
+            .collect();
+        writeln!(
+            out,
+            "  saved steps ({}): {}",
+            a.steps.len(),
+            times.join(", ")
+        )?;
+        let Some(last) = a.steps.last() else {
+            continue;
+        };
+        match step {
+            GszStep::None => {}
+            GszStep::NoMesh => writeln!(
+                out,
+                "  no Mesh.ply in `{}`: its results cannot be placed",
+                a.folder
+            )?,
+            GszStep::Read { nodes, note } => {
+                writeln!(
+                    out,
+                    "  step {}: {} nodes ({}D), fields: {}",
+                    last.folder,
+                    nodes.len(),
+                    nodes.dim,
+                    nodes
+                        .fields
+                        .iter()
+                        .map(|(q, _)| q.name())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )?;
+                if let Some(extent) = crate::diagnose::Extent::of(&nodes.positions, nodes.dim) {
+                    writeln!(out, "  extent {extent}")?;
+                }
+                if let Some((_, subset)) = note.split_once("; the table lists") {
+                    writeln!(out, "  note: the table lists{subset}")?;
+                }
+            }
+            GszStep::Unreadable(e) => writeln!(out, "  step {}: unreadable: {e}", last.folder)?,
+        }
+    }
+    Ok(())
+}

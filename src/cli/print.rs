@@ -1,0 +1,186 @@
+//! The text several commands print for the same library results: the
+//! `wrote DIR/ (…)` line, `verify`'s outcome, the runner's figures and the
+//! factor of safety. Commands share these through this module, never through
+//! each other.
+
+use std::path::Path;
+
+use crate::mpm;
+use crate::mpm::fos::FosReport;
+use crate::pipeline::check::VerifyOutcome;
+
+/// The `wrote      DIR/ (a, b, c)` line a command prints once its folder is written.
+pub fn wrote(target: &Path, files: &[&str]) -> String {
+    format!("wrote      {}/ ({})", target.display(), files.join(", "))
+}
+
+/// Prints the Anura3D-side checks, the run and the verdict with its causes.
+pub fn verify_outcome(o: &VerifyOutcome, target: &Path) {
+    if let Some(k) = &o.anura3d {
+        println!(
+            "Anura3D    {} ({}), MAPF {} rows, h = {:.3e} m{}",
+            k.gom.display(),
+            k.computation_method,
+            k.mapf_rows,
+            k.smoothing_length,
+            if k.mapf_read {
+                ""
+            } else {
+                " (not read: switch off)"
+            }
+        );
+        if let Some(t) = &k.mps_csv {
+            for line in table_comparison(t) {
+                println!("           {line}");
+            }
+        }
+        if let Some(m) = &k.mixed
+            && m.elements > 0
+            && (m.pwp > 0.0 || m.stress > 0.0)
+        {
+            println!(
+                "           MPM-MIXED: the first step gives every MP of {} elements its element's first-MP state (spread up to {:.3} kPa pwp, {:.3} kPa stress)",
+                m.elements, m.pwp, m.stress
+            );
+        }
+        for n in &k.notes {
+            println!("           {n}");
+        }
+    }
+    if let Some(r) = &o.run {
+        run_report(r);
+    }
+    if o.equilibrium {
+        println!("verdict    IN EQUILIBRIUM");
+    } else {
+        println!("verdict    NOT IN EQUILIBRIUM");
+        for c in &o.causes {
+            println!("           - {c}");
+        }
+        if let Some(r) = &o.run
+            && !r.verdict.is_equilibrium()
+        {
+            for e in r.worst_residual_elements.iter().take(5) {
+                println!(
+                    "           largest residual: element {} at ({:.3}, {:.3}): {:.3e}",
+                    e.id, e.centroid[0], e.centroid[1], e.value
+                );
+            }
+            for e in r.plastic_elements.iter().take(5) {
+                println!(
+                    "           plastic flow: element {} at ({:.3}, {:.3}): {} MPs",
+                    e.id, e.centroid[0], e.centroid[1], e.value
+                );
+            }
+        }
+    }
+    println!("{}", wrote(target, &crate::pipeline::check::file_names(o)));
+}
+
+/// The lines that say how mps.csv compares with the MAPF: counts of MPs
+/// compared (never more than the model's), rows that match no MP, MPs
+/// without a row, and the worst MPs where there are any.
+pub fn table_comparison(t: &crate::pipeline::verify::TableComparison) -> Vec<String> {
+    let mut lines = Vec::new();
+    if t.differing == 0 {
+        lines.push(format!(
+            "mps.csv agrees with what Anura3D reads from the MAPF ({} MPs compared)",
+            t.compared
+        ));
+    } else {
+        let worst: Vec<String> = t
+            .worst
+            .iter()
+            .take(5)
+            .map(|(id, d)| format!("MP {id} by {:.2}% of range", d * 100.0))
+            .collect();
+        lines.push(format!(
+            "mps.csv and the MAPF disagree on {} of {} MPs compared{}",
+            t.differing,
+            t.compared,
+            if worst.is_empty() {
+                String::new()
+            } else {
+                format!(" (worst: {})", worst.join(", "))
+            }
+        ));
+    }
+    if t.unmatched_rows > 0 {
+        lines.push(format!(
+            "{} of the {} rows of mps.csv match no MP of the model (unknown id, another element or position, or a repeated row)",
+            t.unmatched_rows, t.rows
+        ));
+    }
+    if t.missing > 0 {
+        lines.push(format!(
+            "{} MPs of the model have no row in mps.csv",
+            t.missing
+        ));
+    }
+    lines
+}
+
+/// Prints the runner's figures (no verdict).
+pub fn run_report(r: &mpm::RunReport) {
+    println!(
+        "MPM check  {} MPs on {} elements, dt = {:.3e} s, {} steps, t = {:.4} s ({:?})",
+        r.n_points, r.n_elements, r.time_step, r.steps, r.time, r.stop
+    );
+    println!(
+        "           g = {} m/s², local damping α = {}, Courant {}",
+        r.gravity, r.damping, r.courant
+    );
+    println!(
+        "residual   start {:.3e}, end {:.3e} (limit {:.0e})",
+        r.initial_residual_ratio, r.final_residual_ratio, r.thresholds.residual_ratio
+    );
+    println!(
+        "movement   max displacement {:.3e} m (limit {:.0e} × height {:.3} m)",
+        r.max_displacement, r.thresholds.displacement_fraction, r.model_height
+    );
+    println!(
+        "plastic    {} MPs start outside the yield surface, {} yielded during the run",
+        r.inadmissible_points, r.plastic_points
+    );
+}
+
+/// Prints a strength-reduction analysis: the factor, the method, the
+/// materials, every trial and the mechanism.
+pub fn fos_report(report: &FosReport, target: &Path, elapsed: f64) {
+    use crate::pipeline::fos::{factor_line, file_names};
+    println!("factor     {}", factor_line(report));
+    println!(
+        "method     strength reduction: tan φ′/F, c′/F, ψ ≤ φ′_F; pwp frozen; {} MPs, window {:.2} s per trial, dt = {:.3e} s, damping α = {}",
+        report.n_points, report.window, report.time_step, report.settings.run.damping
+    );
+    let names = |v: &[crate::mpm::fos::MaterialNote]| {
+        if v.is_empty() {
+            "none".to_string()
+        } else {
+            v.iter()
+                .map(|m| format!("{} {} ({})", m.index, m.name, m.model))
+                .collect::<Vec<_>>()
+                .join(", ")
+        }
+    };
+    println!("reduced    {}", names(&report.reduced_materials));
+    println!("unreduced  {}", names(&report.unreduced_materials));
+    for t in &report.trials {
+        println!(
+            "  F = {:.4}  {:<17} max |u| = {:.3e} m after {:.2} s ({} steps), {} MPs yielded",
+            t.factor,
+            format!("{:?}", t.end),
+            t.max_displacement,
+            t.time,
+            t.steps,
+            t.plastic_points
+        );
+    }
+    if let Some(m) = &report.mechanism {
+        println!(
+            "mechanism  F = {:.4}: {} MPs in motion (fos_mechanism.svg, fos_mechanism.vtu)",
+            m.factor, m.points_in_motion
+        );
+    }
+    println!("{} in {elapsed:.1} s", wrote(target, &file_names(report)));
+}

@@ -1,0 +1,229 @@
+//! `verify` as a library call: load the state a check starts from
+//! ([`super::start`]), run the built-in explicit solver under gravity
+//! ([`crate::mpm::verify`]) with settings from the project's CPS, name every
+//! cause of a negative verdict separately, and write `verify.json`,
+//! `start.csv`, `mps_start.vtu` and, after a run, `verify_history.svg` and
+//! `mps_end.vtu`.
+
+use std::path::{Path, PathBuf};
+
+use super::PipelineError;
+use super::output::{OutputDir, ReadLog};
+use super::runner::{self, history_plot, write_snapshot};
+use super::start::{Start, StateSource};
+use super::verify::KernelCheck;
+use crate::formats::mps_table;
+use crate::model::MpState;
+use crate::mpm::{self, RunSettings};
+
+/// How `verify` runs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct VerifyOptions {
+    /// Most explicit steps.
+    pub max_steps: usize,
+    /// Local damping α (`None`: the CPS `$$HOMOGENEOUS_LOCAL_DAMPING`, else
+    /// [`runner::DEFAULT_DAMPING`]).
+    pub damping: Option<f64>,
+}
+
+impl Default for VerifyOptions {
+    fn default() -> Self {
+        VerifyOptions {
+            max_steps: 20_000,
+            damping: None,
+        }
+    }
+}
+
+impl VerifyOptions {
+    /// The runner's settings for this project's CPS.
+    pub fn settings(&self, cps: Option<&crate::formats::cps::CpsDocument>) -> RunSettings {
+        let mut s = runner::with_cps(RunSettings::verify(), cps, self.damping);
+        s.max_steps = self.max_steps;
+        s.record_every = 10;
+        s
+    }
+}
+
+/// What `verify` found: every cause named separately, the Anura3D-side checks
+/// and the runner's report.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct VerifyOutcome {
+    pub equilibrium: bool,
+    pub causes: Vec<String>,
+    pub anura3d: Option<KernelCheck>,
+    /// `None` when the run could not start (NaN MPs, or a model the runner
+    /// does not support).
+    pub run: Option<mpm::RunReport>,
+}
+
+/// The causes behind a verdict, each on its own.
+fn causes(check: Option<&KernelCheck>, run: Option<&mpm::RunReport>) -> Vec<String> {
+    let mut out = Vec::new();
+    if let Some(k) = check {
+        if k.nan_points > 0 {
+            out.push(format!(
+                "{} MPs will hold NaN in Anura3D: no row of {} within 2h = {:.3e} m (first ids: {:?})",
+                k.nan_points,
+                k.mapf.display(),
+                2.0 * k.smoothing_length,
+                k.nan_ids
+            ));
+        }
+        if let Some(d) = &k.sigma_zz_defect
+            && d.outside_because_of_defect > 0
+        {
+            out.push(format!(
+                "{} MPs start outside their yield surface only because Anura3D's 2D MAPF reader sets σ'zz := SigXY; its first step return-maps them, changing σ'xx, σ'yy, σ'zz, τxy by up to {:.3}, {:.3}, {:.3}, {:.3} kPa",
+                d.outside_because_of_defect,
+                d.first_step_change[0],
+                d.first_step_change[1],
+                d.first_step_change[2],
+                d.first_step_change[3]
+            ));
+        }
+        if k.intended_outside_yield > 0 {
+            out.push(format!(
+                "{} MPs are outside their yield surface in the intended state itself",
+                k.intended_outside_yield
+            ));
+        }
+    }
+    if let Some(r) = run
+        && let mpm::Verdict::NotInEquilibrium { reasons } = &r.verdict
+    {
+        for reason in reasons {
+            if check.is_some() && matches!(reason, mpm::Reason::InadmissibleStress { .. }) {
+                continue; // split into the two causes above
+            }
+            out.push(reason.to_string());
+        }
+    }
+    out
+}
+
+/// Runs the equilibrium check on a loaded start (writes nothing).
+pub fn check(start: &Start, options: &VerifyOptions) -> Result<VerifyOutcome, PipelineError> {
+    let settings = options.settings(start.project.cps.as_ref());
+    // A model the runner cannot simulate still gets its Anura3D-side checks
+    // and start.csv; the verdict then says why no run was made.
+    let mut run_error = None;
+    let report = if start.runnable() {
+        match mpm::verify(
+            &start.project.model,
+            &start.points,
+            &start.states,
+            &settings,
+        ) {
+            Ok(r) => Some(r),
+            Err(
+                e
+                @ (mpm::MpmError::Unsupported(_) | mpm::MpmError::UnsupportedMaterialModel { .. }),
+            ) if start.kernel.is_some() => {
+                run_error = Some(format!("no equilibrium run: {e}"));
+                None
+            }
+            Err(e) => return Err(runner::runner_error(e)),
+        }
+    } else {
+        None
+    };
+    let mut causes = causes(start.kernel.as_ref(), report.as_ref());
+    causes.extend(run_error);
+    let equilibrium = report.as_ref().is_some_and(|r| r.verdict.is_equilibrium())
+        && start.kernel.as_ref().is_none_or(|k| k.nan_points == 0);
+    Ok(VerifyOutcome {
+        equilibrium,
+        causes,
+        anura3d: start.kernel.clone(),
+        run: report,
+    })
+}
+
+/// The files `verify` writes, in order.
+pub fn file_names(outcome: &VerifyOutcome) -> Vec<&'static str> {
+    let mut files = vec!["verify.json", "start.csv", "mps_start.vtu"];
+    if outcome.run.is_some() {
+        files.extend(["verify_history.svg", "mps_end.vtu"]);
+    }
+    files
+}
+
+/// Writes the outcome's files into `out`'s staging folder.
+pub fn write(
+    outcome: &VerifyOutcome,
+    start: &Start,
+    out: &OutputDir<'_>,
+) -> Result<(), PipelineError> {
+    let json = serde_json::to_string_pretty(outcome)
+        .map_err(|e| PipelineError::Output(format!("verify.json: {e}")))?;
+    out.write("verify.json", |w| w.write_all(json.as_bytes()))?;
+    // start.csv holds Anura3D's state at t = 0: the rows in reach are its
+    // diagnostics; no Shepard ratio was computed, so that column stays empty.
+    let diagnostics: Vec<mps_table::MpDiagnostics> = start
+        .at_zero
+        .iter()
+        .enumerate()
+        .map(|(i, s)| mps_table::MpDiagnostics {
+            neighbours: start.rows_in_reach.get(i).copied().unwrap_or(0),
+            shepard: None,
+            status: if s.pwp.is_finite() && s.total.iter().all(|v| v.is_finite()) {
+                "anura3d"
+            } else {
+                "nan"
+            },
+        })
+        .collect();
+    out.write("start.csv", |w| {
+        mps_table::write_states(w, &start.points, &start.at_zero, &diagnostics)
+    })?;
+    let positions: Vec<[f64; 3]> = start.points.iter().map(|p| p.position).collect();
+    let start_stress: Vec<[f64; 6]> = start.at_zero.iter().map(MpState::effective).collect();
+    write_snapshot(
+        out,
+        "mps_start.vtu",
+        &positions,
+        &vec![[0.0; 3]; positions.len()],
+        &start_stress,
+        &vec![false; positions.len()],
+    )?;
+    if let Some(report) = &outcome.run {
+        history_plot(&out.path("verify_history.svg"), report)?;
+        let end_positions: Vec<[f64; 3]> = positions
+            .iter()
+            .zip(&report.final_displacements)
+            .map(|(p, d)| [p[0] + d[0], p[1] + d[1], p[2] + d[2]])
+            .collect();
+        write_snapshot(
+            out,
+            "mps_end.vtu",
+            &end_positions,
+            &report.final_displacements,
+            &report.final_stresses,
+            &report.final_plastic,
+        )?;
+    }
+    Ok(())
+}
+
+/// `verify`: loads the state `source` names, checks it and writes the outputs
+/// into `out` (default `verify/` in the state's folder; rerunning replaces
+/// that default folder without `force`). Returns the outcome and the folder
+/// written. A negative verdict is an outcome, not an error.
+pub fn verify(
+    source: &StateSource,
+    options: &VerifyOptions,
+    out: Option<&Path>,
+    force: bool,
+) -> Result<(VerifyOutcome, PathBuf), PipelineError> {
+    let reads = ReadLog::start();
+    let start = Start::load(source)?;
+    let target = runner::out_dir(out, &start.home, "verify");
+    // Rerunning `verify DIR` replaces its own default subfolder.
+    let own_folder = out.is_none() && matches!(source, StateSource::Folder(_));
+    let force = force || (own_folder && target.join("verify.json").is_file());
+    let dir = OutputDir::create(&target, force, &reads)?;
+    let outcome = check(&start, options)?;
+    write(&outcome, &start, &dir)?;
+    Ok((outcome, dir.commit()?))
+}

@@ -1,0 +1,99 @@
+//! `map` as one library call: read the Anura3D project and the FEM files side
+//! by side, map ([`super::map::map`]) and write the ready-to-run project with
+//! its diagnostics ([`super::write::write_project`]) into an atomic, durable
+//! output folder ([`super::output`]).
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use super::PipelineError;
+use super::fem::FemOptions;
+use super::map::{MapConfig, Mapped};
+use super::output::{OutputDir, ReadLog};
+use super::project::Project;
+
+/// Everything `map` needs.
+#[derive(Clone, Debug)]
+pub struct MapJob {
+    /// The Anura3D model: a GOM, `.GOM_stage<k>`, `-2.dat`, `.CPS_<nnn>` or
+    /// a project folder.
+    pub model: PathBuf,
+    /// The FEM files and how to read them.
+    pub fem: FemOptions,
+    /// How to map.
+    pub config: MapConfig,
+    /// Without a CPS beside the model, write a complete default CPS for the
+    /// model's version (else a model without a CPS is refused).
+    pub generate_cps: bool,
+    /// Write `fem.vtu` whatever the FEM's size (otherwise only up to
+    /// [`super::write::FEM_VTU_AUTO_MAX`] nodes).
+    pub fem_vtu: bool,
+}
+
+/// Loads the project and the FEM files side by side (they are independent,
+/// and each fills the other's serial stretches) and maps, timing each phase.
+pub fn compute(job: &MapJob) -> Result<Mapped, PipelineError> {
+    let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
+    let (project, fem) = rayon::join(
+        || {
+            let t = Instant::now();
+            Project::load(&job.model).map(|p| (p, ms(t)))
+        },
+        || {
+            let t = Instant::now();
+            super::fem::load(&job.fem).map(|f| (f, ms(t)))
+        },
+    );
+    let (project, t_model) = project?;
+    if project.files.cps.is_none() && !job.generate_cps {
+        return Err(PipelineError::Input(
+            crate::formats::project::missing_cps_message(&project.files),
+        ));
+    }
+    let (fem, t_fem) = fem?;
+    let mut config = job.config.clone();
+    config.kernel = config.kernel.for_dim(project.n_dim());
+    config.keep_fem_fields = job.fem_vtu || fem.nodes.len() <= super::write::FEM_VTU_AUTO_MAX;
+    let mut mapped = super::map::map(project, fem, &config)?;
+    mapped.report.timings_ms.splice(
+        0..0,
+        [
+            ("read model and place MPs".to_string(), t_model),
+            ("read FEM".to_string(), t_fem),
+        ],
+    );
+    Ok(mapped)
+}
+
+/// Default output folder: `<project>.a3d-init/` beside the model.
+pub fn default_out(project_dir: &Path, name: &str) -> PathBuf {
+    project_dir.join(format!("{name}.a3d-init"))
+}
+
+/// What [`map`] wrote.
+pub struct Written {
+    /// The files, in the order written.
+    pub files: Vec<String>,
+    /// The output folder.
+    pub folder: PathBuf,
+}
+
+/// `map`: computes and writes the project into `out` (default
+/// `<project>.a3d-init/` beside the model; an existing folder is replaced
+/// only under `force`, and never when it is or holds an input).
+pub fn map(
+    job: &MapJob,
+    out: Option<&Path>,
+    force: bool,
+) -> Result<(Mapped, Written), PipelineError> {
+    let reads = ReadLog::start();
+    let mapped = compute(job)?;
+    let target = out.map_or_else(
+        || default_out(&mapped.project.files.dir, &mapped.project.files.name),
+        Path::to_path_buf,
+    );
+    let dir = OutputDir::create(&target, force, &reads)?;
+    let files = super::write::write_project(&mapped, &dir.staging(), job.fem_vtu)?;
+    let folder = dir.commit()?;
+    Ok((mapped, Written { files, folder }))
+}

@@ -1,0 +1,119 @@
+//! What `verify`, `run` and `fos` share around the built-in runner
+//! ([`crate::mpm`]): its settings from the project's CPS, and the files it
+//! leaves (MP snapshots as VTU, the kinetic-energy and residual history as SVG).
+
+use std::path::Path;
+
+use plotters::style::RGBColor;
+
+use super::PipelineError;
+use super::output::OutputDir;
+use super::plot::{self, Series};
+use crate::formats::cps::CpsDocument;
+use crate::formats::vtu;
+use crate::mpm::{self, RunSettings};
+
+/// Local damping α when neither the caller nor the CPS gives one.
+pub const DEFAULT_DAMPING: f64 = 0.75;
+
+/// `s` with the CPS's gravity and Courant number (capped at 0.9) and the local
+/// damping α: `damping`, else the CPS `$$HOMOGENEOUS_LOCAL_DAMPING`, else
+/// [`DEFAULT_DAMPING`], clamped to [0, 0.99].
+pub fn with_cps(
+    mut s: RunSettings,
+    cps: Option<&CpsDocument>,
+    damping: Option<f64>,
+) -> RunSettings {
+    if let Some(cps) = cps {
+        s.gravity = cps.gravity();
+        if let Some(c) = cps.get_real("$$COURANT_NUMBER", 0) {
+            s.courant = c.min(0.9);
+        }
+    }
+    s.damping = damping
+        .or_else(|| cps.and_then(CpsDocument::local_damping))
+        .unwrap_or(DEFAULT_DAMPING)
+        .clamp(0.0, 0.99);
+    s
+}
+
+/// The runner's error as a pipeline error: an unsupported element or material
+/// is the model's, anything else numerical.
+pub fn runner_error(e: mpm::MpmError) -> PipelineError {
+    match e {
+        mpm::MpmError::Unsupported(_) | mpm::MpmError::UnsupportedMaterialModel { .. } => {
+            PipelineError::Model(e.to_string())
+        }
+        _ => PipelineError::Numerical(e.to_string()),
+    }
+}
+
+/// MP positions, displacements, effective stresses and plastic flags as a VTU.
+pub fn write_snapshot(
+    out: &OutputDir<'_>,
+    name: &str,
+    positions: &[[f64; 3]],
+    displacements: &[[f64; 3]],
+    stresses: &[[f64; 6]],
+    plastic: &[bool],
+) -> Result<(), PipelineError> {
+    let arrays = vec![
+        vtu::PointArray {
+            name: "displacement".into(),
+            components: 3,
+            values: displacements.iter().flat_map(|d| *d).collect(),
+        },
+        vtu::PointArray {
+            name: "effective_stress".into(),
+            components: 9,
+            values: stresses.iter().flat_map(vtu::tensor9).collect(),
+        },
+        vtu::PointArray {
+            name: "plastic".into(),
+            components: 1,
+            values: plastic.iter().map(|&p| if p { 1.0 } else { 0.0 }).collect(),
+        },
+    ];
+    out.write(name, |w| vtu::write_points(w, positions, &arrays))
+}
+
+/// Kinetic energy and out-of-balance force ratio against time (SVG).
+pub fn history_plot(path: &Path, report: &mpm::RunReport) -> Result<(), PipelineError> {
+    let ke: Vec<(f64, f64)> = report
+        .records
+        .iter()
+        .map(|r| (r.time, r.kinetic_energy))
+        .collect();
+    let res: Vec<(f64, f64)> = report
+        .records
+        .iter()
+        .map(|r| (r.time, r.residual_ratio))
+        .collect();
+    plot::line_chart(
+        path,
+        "Kinetic energy and out-of-balance force ratio",
+        "time t (s)",
+        "kinetic energy (kJ/m) · residual ratio (–)",
+        &[
+            Series {
+                label: "kinetic energy (kJ/m)",
+                points: ke,
+                color: RGBColor(31, 119, 180),
+                markers: false,
+            },
+            Series {
+                label: "residual ratio (–)",
+                points: res,
+                color: RGBColor(214, 39, 40),
+                markers: false,
+            },
+        ],
+        true,
+    )
+}
+
+/// Where a command writes: the folder asked for, else `default_name` in the
+/// start's home folder.
+pub fn out_dir(asked: Option<&Path>, home: &Path, default_name: &str) -> std::path::PathBuf {
+    asked.map_or_else(|| home.join(default_name), Path::to_path_buf)
+}

@@ -1,0 +1,300 @@
+//! Outputs are durable before they are visible, and no command deletes an
+//! input (#24, #30): the order of syncs and publishing renames of `map --out`
+//! (new folder, `--force` over an old one, the two-rename fallback), checked
+//! with the library's recorded trace and, where the machine lets it run, with
+//! `strace` on the real binary; an injected sync failure that leaves the old
+//! output in place; and the `fos --state` data loss.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use a3d_init::pipeline::fem::FemOptions;
+use a3d_init::pipeline::map::MapConfig;
+use a3d_init::pipeline::mapping::{self, MapJob};
+use a3d_init::pipeline::output::trace::{self, Event};
+use a3d_init::pipeline::{ErrorKind, PipelineError};
+use common::{fixture, run, run_ok};
+
+fn slope_job() -> MapJob {
+    MapJob {
+        model: fixture("slope"),
+        fem: FemOptions::files(vec![fixture("slope/sand-nodes.csv")]),
+        config: MapConfig::default(),
+        generate_cps: false,
+        fem_vtu: false,
+    }
+}
+
+/// Every file of `target` was synced (in the staging folder) before the
+/// publishing rename of `target`, the staging folder too, and `target`'s
+/// parent folder after it.
+#[track_caller]
+fn assert_durable_order(events: &[Event], target: &Path) {
+    let rename = events
+        .iter()
+        .position(|e| *e == Event::Rename(target.to_path_buf()))
+        .unwrap_or_else(|| panic!("no rename onto {}: {events:#?}", target.display()));
+    let synced_before: Vec<&PathBuf> = events[..rename]
+        .iter()
+        .filter_map(|e| match e {
+            Event::SyncFile(p) | Event::SyncDir(p) => Some(p),
+            Event::Rename(_) => None,
+        })
+        .collect();
+    for entry in std::fs::read_dir(target).unwrap() {
+        let name = entry.unwrap().file_name();
+        assert!(
+            synced_before
+                .iter()
+                .any(|p| p.file_name() == Some(name.as_os_str())
+                    && p.parent().is_some_and(|d| d != target)),
+            "{name:?} was not synced in the staging folder before the rename: {events:#?}"
+        );
+    }
+    let staging = synced_before.iter().find(|p| {
+        p.file_name()
+            .is_some_and(|n| n.to_string_lossy().starts_with(".a3d-init-staging-"))
+    });
+    assert!(
+        staging.is_some(),
+        "the staging folder was not synced: {events:#?}"
+    );
+    let parent = target.parent().unwrap();
+    assert!(
+        events[rename..].contains(&Event::SyncDir(parent.to_path_buf())),
+        "the parent folder was not synced after the rename: {events:#?}"
+    );
+}
+
+/// One test, so that the recorded trace (process-wide) holds one run at a time.
+#[test]
+fn map_outputs_are_synced_before_the_publishing_rename_and_a_failed_sync_keeps_the_old_output() {
+    let tmp = tempfile::tempdir().unwrap();
+    let target = tmp.path().join("out");
+    let job = slope_job();
+
+    // A new folder.
+    trace::start();
+    mapping::map(&job, Some(&target), false).unwrap();
+    assert_durable_order(&trace::take(), &target);
+
+    // --force over the old one (RENAME_EXCHANGE).
+    trace::start();
+    mapping::map(&job, Some(&target), true).unwrap();
+    assert_durable_order(&trace::take(), &target);
+
+    // The two-rename fallback.
+    trace::disable_exchange(true);
+    trace::start();
+    let result = mapping::map(&job, Some(&target), true);
+    trace::disable_exchange(false);
+    result.unwrap();
+    assert_durable_order(&trace::take(), &target);
+
+    // An injected sync failure: an error of the run (kind Output, naming the
+    // file), the old output intact, nothing left beside it.
+    let before: Vec<(std::ffi::OsString, Vec<u8>)> = {
+        let mut v: Vec<_> = std::fs::read_dir(&target)
+            .unwrap()
+            .map(|e| {
+                let e = e.unwrap();
+                (e.file_name(), std::fs::read(e.path()).unwrap())
+            })
+            .collect();
+        v.sort();
+        v
+    };
+    std::fs::write(target.join("marker.txt"), "old output").unwrap();
+    for (failing, exchange) in [
+        ("mps.csv", true),
+        (".a3d-init-staging-", true),
+        ("mps.csv", false),
+    ] {
+        trace::disable_exchange(!exchange);
+        trace::fail_sync_of(Some(failing));
+        let result = mapping::map(&job, Some(&target), true);
+        trace::fail_sync_of(None);
+        trace::disable_exchange(false);
+        let Err(e) = result else {
+            panic!("a failed sync of {failing} must fail the run");
+        };
+        assert_eq!(e.kind(), ErrorKind::Output, "{e}");
+        assert!(
+            e.to_string().contains("syncing") && e.to_string().contains(failing),
+            "{e}"
+        );
+        assert_eq!(
+            std::fs::read_to_string(target.join("marker.txt")).unwrap(),
+            "old output",
+            "the old output was replaced although a sync failed ({failing})"
+        );
+        for (name, bytes) in &before {
+            assert_eq!(
+                &std::fs::read(target.join(name)).unwrap(),
+                bytes,
+                "{name:?}"
+            );
+        }
+        let left: Vec<_> = std::fs::read_dir(tmp.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(left, ["out"], "staging left behind ({failing})");
+    }
+}
+
+/// An output error through the binary (here: an existing folder without
+/// `--force`) exits 2, naming the path and the flag.
+#[test]
+fn an_output_error_exits_2_and_names_the_path() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    run_ok(&[
+        "map",
+        "--fem",
+        fixture("slope/sand-nodes.csv").to_str().unwrap(),
+        "--mpm",
+        fixture("slope").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let (code, text) = run(&[
+        "map",
+        "--fem",
+        fixture("slope/sand-nodes.csv").to_str().unwrap(),
+        "--mpm",
+        fixture("slope").to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{text}");
+    assert!(
+        text.contains(&format!("{} exists; pass --force", out.display())),
+        "{text}"
+    );
+}
+
+/// Regression (#24): `fos --mpm model --state run1/state.csv --out run1
+/// --force` exited 0 and deleted `run1/state.csv`, because `fos` listed only
+/// the model among its inputs. Every file a command reads now guards its
+/// output.
+#[test]
+fn regression_fos_state_table_inside_the_output_folder_is_not_deleted() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mapped = tmp.path().join("mapped");
+    run_ok(&[
+        "map",
+        "--fem",
+        fixture("slope/sand-nodes.csv").to_str().unwrap(),
+        "--mpm",
+        fixture("slope").to_str().unwrap(),
+        "--out",
+        mapped.to_str().unwrap(),
+    ]);
+    let run1 = tmp.path().join("run1");
+    std::fs::create_dir(&run1).unwrap();
+    let state = run1.join("state.csv");
+    std::fs::copy(mapped.join("mps.csv"), &state).unwrap();
+    let before = std::fs::read(&state).unwrap();
+    for command in ["fos", "verify", "run"] {
+        let (code, text) = run(&[
+            command,
+            "--mpm",
+            fixture("slope").to_str().unwrap(),
+            "--state",
+            state.to_str().unwrap(),
+            "--out",
+            run1.to_str().unwrap(),
+            "--force",
+        ]);
+        assert_eq!(code, 2, "{command}: {text}");
+        assert!(text.contains("holds the input"), "{command}: {text}");
+        assert_eq!(
+            std::fs::read(&state).unwrap(),
+            before,
+            "{command} changed the input"
+        );
+    }
+    // The same through the library, without the CLI.
+    let source = a3d_init::pipeline::start::StateSource::Table {
+        model: fixture("slope"),
+        state: state.clone(),
+    };
+    let e =
+        a3d_init::pipeline::fos::fos(&source, &Default::default(), Some(&run1), true).unwrap_err();
+    assert!(matches!(e, PipelineError::Output(_)), "{e}");
+    assert!(state.is_file());
+}
+
+/// The same order seen from outside: `strace` on the real binary (where
+/// ptrace is allowed), every file of the new folder `fsync`ed before the
+/// `renameat2` that publishes it, and the parent folder after it.
+#[test]
+#[allow(clippy::print_stderr)] // a skip must be visible in the test output
+fn strace_sees_every_output_synced_before_the_rename() {
+    let works = Command::new("strace")
+        .args(["-f", "-o", "/dev/null", "true"])
+        .status()
+        .is_ok_and(|s| s.success());
+    if !works {
+        eprintln!(
+            "SKIPPED strace_sees_every_output_synced_before_the_rename: strace cannot run here (the recorded trace above covers the order)"
+        );
+        return;
+    }
+    let tmp = tempfile::tempdir().unwrap();
+    let log = tmp.path().join("strace.log");
+    for force in [false, true] {
+        let out = tmp.path().join("out");
+        let mut args = vec![
+            "-f".to_string(),
+            "-y".into(),
+            "-e".into(),
+            "trace=fsync,fdatasync,rename,renameat,renameat2".into(),
+            "-o".into(),
+            log.display().to_string(),
+            env!("CARGO_BIN_EXE_a3d-init").into(),
+            "map".into(),
+            "--fem".into(),
+            fixture("slope/sand-nodes.csv").display().to_string(),
+            "--mpm".into(),
+            fixture("slope").display().to_string(),
+            "--out".into(),
+            out.display().to_string(),
+        ];
+        if force {
+            args.push("--force".into());
+        }
+        let status = Command::new("strace").args(&args).status().unwrap();
+        assert!(status.success());
+        let text = std::fs::read_to_string(&log).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        let out_name = out.display().to_string();
+        let publish = lines
+            .iter()
+            .position(|l| {
+                l.contains("renameat2(")
+                    && l.contains(".a3d-init-staging-")
+                    && l.contains(&format!("\"{out_name}\""))
+            })
+            .unwrap_or_else(|| panic!("no renameat2 onto {out_name}:\n{text}"));
+        for entry in std::fs::read_dir(&out).unwrap() {
+            let name = entry.unwrap().file_name().to_string_lossy().into_owned();
+            assert!(
+                lines[..publish].iter().any(|l| l.contains("fsync(")
+                    && l.contains(".a3d-init-staging-")
+                    && l.contains(&format!("/{name}>"))),
+                "{name} not fsynced before the rename (force {force}):\n{text}"
+            );
+        }
+        let parent = tmp.path().display().to_string();
+        assert!(
+            lines[publish..]
+                .iter()
+                .any(|l| l.contains("fsync(") && l.contains(&format!("<{parent}>"))),
+            "the parent folder was not fsynced after the rename (force {force}):\n{text}"
+        );
+    }
+}
