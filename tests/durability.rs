@@ -298,3 +298,101 @@ fn strace_sees_every_output_synced_before_the_rename() {
         );
     }
 }
+
+/// A pipe whose reader is already gone: every write to it fails with EPIPE.
+fn closed_pipe() -> std::process::Stdio {
+    let (reader, writer) = std::io::pipe().unwrap();
+    drop(reader);
+    writer.into()
+}
+
+/// Regression (#30): `a3d-init inspect --fem f.csv 2>&1 | head -1` aborted
+/// (SIGABRT, exit 134) when the reader had gone: writing the broken-pipe error
+/// to the same closed pipe panicked, and the panic hook's own print panicked
+/// again. Now output stops quietly and the command keeps its exit code.
+#[test]
+fn regression_a_closed_pipe_is_not_a_crash() {
+    let fem = fixture("geostudio-csv/k0-slope-hydrostatic.csv");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let cases: [(Vec<String>, bool, bool); 5] = [
+        // stdout closed, stderr read.
+        (
+            vec!["inspect".into(), "--fem".into(), fem.display().to_string()],
+            true,
+            false,
+        ),
+        (
+            vec!["inspect".into(), fixture("slope").display().to_string()],
+            true,
+            false,
+        ),
+        (
+            vec![
+                "inspect".into(),
+                "--fem".into(),
+                fem.display().to_string(),
+                "--json".into(),
+            ],
+            true,
+            false,
+        ),
+        // Both closed, as with `2>&1 | head -1`.
+        (
+            vec!["inspect".into(), "--fem".into(), fem.display().to_string()],
+            true,
+            true,
+        ),
+        // map prints to stderr: closed; its output is complete.
+        (
+            vec![
+                "map".into(),
+                "--fem".into(),
+                fixture("slope/sand-nodes.csv").display().to_string(),
+                "--mpm".into(),
+                fixture("slope").display().to_string(),
+                "--out".into(),
+                out.display().to_string(),
+            ],
+            true,
+            true,
+        ),
+    ];
+    for (args, close_out, close_err) in cases {
+        let mut command = common::bin();
+        command.args(&args).stdin(std::process::Stdio::null());
+        command.stdout(if close_out {
+            closed_pipe()
+        } else {
+            std::process::Stdio::piped()
+        });
+        command.stderr(if close_err {
+            closed_pipe()
+        } else {
+            std::process::Stdio::piped()
+        });
+        let output = command.output().unwrap();
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        assert_eq!(
+            output.status.code(),
+            Some(0),
+            "{args:?}: {:?} {stderr}",
+            output.status
+        );
+        assert!(
+            !stderr.contains("panicked") && !stderr.contains("internal error"),
+            "{args:?}: {stderr}"
+        );
+    }
+    assert!(out.join("report.json").is_file());
+    // A negative verdict keeps its exit code with stdout closed.
+    let (a, b) = (tmp.path().join("a.csv"), tmp.path().join("b.csv"));
+    std::fs::write(&a, "x,y\n1,2\n").unwrap();
+    std::fs::write(&b, "x,y\n1,3\n").unwrap();
+    let output = common::bin()
+        .args(["diff", a.to_str().unwrap(), b.to_str().unwrap()])
+        .stdout(closed_pipe())
+        .output()
+        .unwrap();
+    assert_eq!(output.status.code(), Some(1), "{output:?}");
+}

@@ -42,7 +42,11 @@ fn map_verify_run_fos_diff_inspect_and_calibrate_run_without_the_cli() {
     let out = tmp.path().join("out");
     let (mapped, written) = mapping::map(&job, Some(&out), false).unwrap();
     assert_eq!(written.folder, out);
-    assert!(written.files.iter().any(|f| f == "TwoMat.MAPF"), "{:?}", written.files);
+    assert!(
+        written.files.iter().any(|f| f == "TwoMat.MAPF"),
+        "{:?}",
+        written.files
+    );
     assert_eq!(mapped.states.len(), mapped.project.points.len());
     let e = mapping::map(&job, Some(&out), false).err().unwrap();
     assert_eq!(e.kind(), ErrorKind::Output);
@@ -81,7 +85,10 @@ fn map_verify_run_fos_diff_inspect_and_calibrate_run_without_the_cli() {
     assert_eq!(verify_dir, out.join("verify"));
     let check = outcome.anura3d.as_ref().unwrap();
     let table = check.mps_csv.as_ref().unwrap();
-    assert_eq!((table.compared, table.unmatched_rows, table.missing), (12, 0, 0));
+    assert_eq!(
+        (table.compared, table.unmatched_rows, table.missing),
+        (12, 0, 0)
+    );
     assert!(outcome.run.is_some());
     for f in pipeline::check::file_names(&outcome) {
         assert!(verify_dir.join(f).is_file(), "{f}");
@@ -116,8 +123,7 @@ fn map_verify_run_fos_diff_inspect_and_calibrate_run_without_the_cli() {
     assert_eq!(e.kind(), ErrorKind::OptionValue, "{e}");
 
     // fos, on the same start verify judged.
-    let (fos, fos_dir) =
-        pipeline::fos::fos(&source, &FosOptions::default(), None, false).unwrap();
+    let (fos, fos_dir) = pipeline::fos::fos(&source, &FosOptions::default(), None, false).unwrap();
     assert!(fos.factor.is_finite() && fos.factor > 0.0, "{}", fos.factor);
     assert_eq!(fos.n_points, mapped.states.len());
     assert!(fos_dir.join("fos.json").is_file());

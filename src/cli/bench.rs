@@ -131,7 +131,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
                 mean_neighbours =
                     r.n_neighbours.iter().map(|&n| n as f64).sum::<f64>() / points.len() as f64;
             }
-            println!(
+            say!(
                 "map {dim}D ({:?}): {} nodes → {} points, cubic, h = {h:.5}, {mean_neighbours:.1} neighbours/query, {threads} thread(s): {:.3} s (index build included) = {:.3e} queries/s ({:.3e} per thread)",
                 args.search,
                 args.nodes,
@@ -179,7 +179,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
                 &Default::default(),
             );
             let full = t.elapsed().as_secs_f64() + build;
-            println!(
+            say!(
                 "loo: {} nodes, {threads} thread(s): neighbour lists {:.3} s, one objective {:.2} ms, full calibration {:.3} s ({} evaluations, h/l = {:.3})",
                 args.nodes,
                 build,
@@ -205,7 +205,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
                 best = best.min(t.elapsed().as_secs_f64());
                 std::hint::black_box(nodes);
             }
-            println!(
+            say!(
                 "csv: {} rows × 10 columns, {mb:.1} MB, {threads} thread(s): {best:.3} s = {:.0} MB/s",
                 args.nodes,
                 mb / best
@@ -227,7 +227,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
                 best = best.min(t.elapsed().as_secs_f64());
                 std::hint::black_box(model);
             }
-            println!(
+            say!(
                 "gom: {} elements, {mb:.1} MB, {threads} thread(s): {best:.3} s = {:.0} MB/s (lossless document + typed view)",
                 2 * nx * ny,
                 mb / best
@@ -321,14 +321,14 @@ fn e2e(args: &BenchArgs) -> anyhow::Result<()> {
     let report = serde_json::to_value(&mapped.report)?;
     let mps = report["material_points"].as_u64().unwrap_or(0);
     drop(mapped);
-    println!(
+    say!(
         "e2e: {} FEM nodes → {mps} MPs, h = {:.4} m, {threads} thread(s) (case generated in {generate_s:.2} s, not counted)",
         args.nodes,
         support / 2.0
     );
     if let Some(phases) = report["timings_ms"].as_array() {
         for p in phases {
-            println!(
+            say!(
                 "  {:<28} {:>8.3} s",
                 p[0].as_str().unwrap_or("?"),
                 p[1].as_f64().unwrap_or(0.0) / 1e3
@@ -339,21 +339,21 @@ fn e2e(args: &BenchArgs) -> anyhow::Result<()> {
     for name in &written {
         bytes += std::fs::metadata(target.join(name)).map_or(0, |m| m.len());
     }
-    println!(
+    say!(
         "  {:<28} {compute_s:>8.3} s",
         "compute (with untimed steps)"
     );
-    println!(
+    say!(
         "  {:<28} {write_s:>8.3} s ({:.0} MB: {})",
         "write outputs",
         bytes as f64 / 1e6,
         written.join(", ")
     );
-    println!("  {:<28} {:>8.3} s", "total", compute_s + write_s);
+    say!("  {:<28} {:>8.3} s", "total", compute_s + write_s);
     if let Ok(status) = std::fs::read_to_string("/proc/self/status")
         && let Some(line) = status.lines().find(|l| l.starts_with("VmHWM"))
     {
-        println!("  peak RSS {}", line.trim_start_matches("VmHWM:").trim());
+        say!("  peak RSS {}", line.trim_start_matches("VmHWM:").trim());
     }
     Ok(())
 }

@@ -71,32 +71,35 @@ pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
     };
     let (calibrated, target) = pipeline::calibrate::calibrate(&options, &args.out, args.force)?;
     let outcome = &calibrated.outcome;
-    println!(
+    say!(
         "h          {:.6} m ({} kernel, fields: {})",
         outcome.h,
         outcome.kernel,
         outcome.fields.join(", ")
     );
-    println!(
+    say!(
         "h/l        {:.4} (l = {:.6} m, median nearest-node spacing)",
-        outcome.h_over_l, outcome.spacing
+        outcome.h_over_l,
+        outcome.spacing
     );
-    println!(
+    say!(
         "objective  {:.6e} ({:?} norm, seed {}, {} evaluations)",
         outcome.calibration.value,
         outcome.norm,
         outcome.calibration.seed,
         outcome.calibration.evaluations
     );
-    println!(
+    say!(
         "LOO        R² = {:.6}, MAE = {:.6} kPa, max error = {:.6} kPa",
-        outcome.stats.r2, outcome.stats.mae, outcome.stats.max_error
+        outcome.stats.r2,
+        outcome.stats.mae,
+        outcome.stats.max_error
     );
     if let Some(f) = &outcome.fallback {
-        println!("note       {f}");
+        say!("note       {f}");
     }
     if let Some(c) = &calibrated.check {
-        println!(
+        say!(
             "check      {} nodes of {}: R² = {:.6}, MAE = {:.6} kPa, max error = {:.6} kPa",
             c.nodes,
             c.file.display(),
@@ -105,6 +108,6 @@ pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
             c.max_error
         );
     }
-    println!("{}", wrote(&target, &calibrated.file_names()));
+    say!("{}", wrote(&target, &calibrated.file_names()));
     Ok(())
 }

@@ -63,14 +63,14 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     let reads = ReadLog::start();
     let dir = fixture_dir()?;
     let fem_file = dir.join("sand-nodes.csv");
-    println!("a3d-init demo: the rainfall-loaded slope of the seed paper (Lora et al. 2016)");
-    println!(
+    say!("a3d-init demo: the rainfall-loaded slope of the seed paper (Lora et al. 2016)");
+    say!(
         "  NOTE: the pore pressures are a documented STAND-IN field (fixtures/slope/README.md), not SEEP/W results."
     );
 
     // 1. Inspect.
     let project = Project::load(&dir)?;
-    println!(
+    say!(
         "1 inspect    {}: {} nodes, {} {} elements ({}), {} MPs; materials {}",
         project.files.gom.display(),
         project.model.mesh.n_nodes(),
@@ -97,7 +97,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         1,
         crate::kernel::loo::Norm::L1,
     )?;
-    println!(
+    say!(
         "2 calibrate  {} FEM nodes: h = {:.4} m, h/l = {:.3} (paper: h = 0.046 m on a 0.05 m mesh, h/l 0.7–1.0); LOO R² = {:.5}",
         fem.nodes.len(),
         outcome.h,
@@ -160,7 +160,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     let target = out.commit()?;
     let (pwp_lo, pwp_hi) = range(&mapped.states, |s| s.pwp);
     let (syy_lo, syy_hi) = range(&mapped.states, |s| s.total[1]);
-    println!(
+    say!(
         "3 map        {} MPs, pwp {pwp_lo:.2} .. {pwp_hi:.2} kPa, σyy {syy_lo:.2} .. {syy_hi:.2} kPa (Anura3D signs, {}); MAPF h = {:.2e} m",
         pts.len(),
         mapped.report.stress_source,
@@ -176,7 +176,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         true,
     )?;
     match &outcome.run {
-        Some(r) => println!(
+        Some(r) => say!(
             "4 verify     {}: initial residual {:.3}, {} MPs yielded, max displacement {:.3} m after {:.3} s",
             if outcome.equilibrium {
                 "IN EQUILIBRIUM"
@@ -188,17 +188,17 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
             r.max_displacement,
             r.time
         ),
-        None => println!("4 verify     NOT IN EQUILIBRIUM: the run could not start"),
+        None => say!("4 verify     NOT IN EQUILIBRIUM: the run could not start"),
     }
     for c in &outcome.causes {
-        println!("             - {c}");
+        say!("             - {c}");
     }
     if let Some(d) = outcome
         .anura3d
         .as_ref()
         .and_then(|k| k.sigma_zz_defect.as_ref())
     {
-        println!(
+        say!(
             "             σ'zz: Anura3D's 2D MAPF reader sets σ'zz := τxy on {} of the {} MPs; {} of them start outside the yield surface because of it (README: \"The 2D σ'zz defect\")",
             d.affected,
             pts.len(),
@@ -212,19 +212,19 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         let start = Start::load(&source)?;
         let [(zero, zero_dir), (with_pwp, mapped_dir)] =
             fos::zero_and_mapped(&start, &target, &reads)?;
-        println!("5 fos        zero pwp:   {}", fos::factor_line(&zero));
-        println!("             mapped pwp: {}", fos::factor_line(&with_pwp));
+        say!("5 fos        zero pwp:   {}", fos::factor_line(&zero));
+        say!("             mapped pwp: {}", fos::factor_line(&with_pwp));
         fos_folders.push((zero_dir, fos::file_names(&zero)));
         fos_folders.push((mapped_dir, fos::file_names(&with_pwp)));
     }
-    println!("\nfiles ({:.1} s):", started.elapsed().as_secs_f64());
+    say!("\nfiles ({:.1} s):", started.elapsed().as_secs_f64());
     let names: Vec<&str> = written.iter().map(String::as_str).collect();
-    println!("  {}", wrote(&target, &names));
-    println!("  {}", wrote(&verify_dir, &check::file_names(&outcome)));
+    say!("  {}", wrote(&target, &names));
+    say!("  {}", wrote(&verify_dir, &check::file_names(&outcome)));
     for (folder, files) in &fos_folders {
-        println!("  {}", wrote(folder, files));
+        say!("  {}", wrote(folder, files));
     }
-    println!(
+    say!(
         "  run-out: a3d-init run {} --time 2 --snapshots 0.3,0.8,1.2,2.0",
         target.display()
     );

@@ -2,7 +2,6 @@
 //! the semantic diff of Anura3D inputs and a3d-init outputs. Exit code 0 when
 //! equal within tolerance, 1 when different, 2 on error.
 
-use std::io::Write;
 use std::path::PathBuf;
 
 use super::Verdict;
@@ -35,34 +34,26 @@ pub fn run(args: DiffArgs) -> anyhow::Result<()> {
         by: args.by.clone(),
     };
     let report = pipeline::diff::diff(&args.a, &args.b, &options)?;
-    let mut out = std::io::stdout().lock();
+    // say!: a closed stdout must not turn a verdict into an error.
     if args.json {
-        serde_json::to_writer_pretty(&mut out, &report)?;
-        writeln!(out)?;
+        say!("{}", serde_json::to_string_pretty(&report)?);
     } else {
         for n in &report.notes {
-            writeln!(out, "{n}")?;
+            say!("{n}");
         }
         for d in &report.files {
             if d.equal {
-                writeln!(
-                    out,
+                say!(
                     "= {} ({}): equal within rtol {} / atol {}",
                     d.b.display(),
                     d.kind,
                     args.rtol,
                     args.atol
-                )?;
+                );
             } else {
-                writeln!(
-                    out,
-                    "≠ {} vs {} ({}):",
-                    d.a.display(),
-                    d.b.display(),
-                    d.kind
-                )?;
+                say!("≠ {} vs {} ({}):", d.a.display(), d.b.display(), d.kind);
                 for f in &d.findings {
-                    writeln!(out, "    {f}")?;
+                    say!("    {f}");
                 }
             }
         }

@@ -110,7 +110,7 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
     let (mapped, written) = pipeline::mapping::map(&args.job()?, args.out.as_deref(), args.force)?;
     drop(progress);
     let r = &mapped.report;
-    eprintln!(
+    say_err!(
         "a3d-init map: {} FEM nodes → {} MPs ({} kernel, h = {:.4} m; {})",
         r.fem_nodes,
         r.material_points,
@@ -118,21 +118,25 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         r.smoothing.smoothing_length,
         r.smoothing.smoothing_length_rule
     );
-    eprintln!(
+    say_err!(
         "  stress: {}; material separation: {}",
-        r.stress_source, r.material_separation
+        r.stress_source,
+        r.material_separation
     );
-    eprintln!(
+    say_err!(
         "  pwp {:.3} .. {:.3} kPa, σyy {:.3} .. {:.3} kPa (Anura3D signs)",
-        r.pwp_range.0, r.pwp_range.1, r.sigma_yy_range.0, r.sigma_yy_range.1
+        r.pwp_range.0,
+        r.pwp_range.1,
+        r.sigma_yy_range.0,
+        r.sigma_yy_range.1
     );
     for n in &r.notes {
-        eprintln!("  note: {n}");
+        say_err!("  note: {n}");
     }
     for w in &r.warnings {
-        eprintln!("  warning: {w}");
+        say_err!("  warning: {w}");
     }
-    eprintln!(
+    say_err!(
         "  wrote {}/ : {} ({:.2} s)",
         written.folder.display(),
         written.files.join(", "),

@@ -1,7 +1,26 @@
 //! Command-line interface: arguments → validated configuration → pipeline.
 //! This is the only module that prints or chooses an exit code. Errors travel as
 //! `anyhow::Error` and print as one chain (`error: {:#}`); see [`main`].
-#![allow(clippy::print_stdout, clippy::print_stderr)]
+//!
+//! Output goes through `say!` and `say_err!`, never `println!`: a closed
+//! stdout or stderr (a reader that went away, `| head -1`) ends that stream's
+//! output quietly, and the command goes on to its own exit code, as ripgrep
+//! and cargo do. Nothing here can panic on a broken pipe, the panic hook
+//! included.
+
+/// `println!` that never panics: once stdout is closed, output stops quietly.
+macro_rules! say {
+    ($($arg:tt)*) => {
+        $crate::cli::write_line(false, format_args!($($arg)*))
+    };
+}
+
+/// `eprintln!` that never panics: once stderr is closed, output stops quietly.
+macro_rules! say_err {
+    ($($arg:tt)*) => {
+        $crate::cli::write_line(true, format_args!($($arg)*))
+    };
+}
 
 pub mod args;
 mod bench;
@@ -15,7 +34,9 @@ mod print;
 mod progress;
 mod verify;
 
+use std::io::Write;
 use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use clap::{Parser, Subcommand};
 
@@ -47,6 +68,42 @@ pub enum Command {
     Fos(fos::FosArgs),
     /// Keep the explicit MPM solver going for a given time, with snapshots (run-out demonstration).
     Run(verify::RunArgs),
+}
+
+/// Set once a write to stdout (or stderr) failed: later lines are dropped.
+static STDOUT_CLOSED: AtomicBool = AtomicBool::new(false);
+static STDERR_CLOSED: AtomicBool = AtomicBool::new(false);
+
+/// Writes one line to stdout (`to_stderr`: stderr). A failed write (a closed
+/// pipe) marks the stream closed; nothing is ever retried or reported.
+pub fn write_line(to_stderr: bool, args: std::fmt::Arguments<'_>) {
+    let closed = if to_stderr {
+        &STDERR_CLOSED
+    } else {
+        &STDOUT_CLOSED
+    };
+    if closed.load(Ordering::Relaxed) {
+        return;
+    }
+    let written = if to_stderr {
+        writeln!(std::io::stderr().lock(), "{args}")
+    } else {
+        writeln!(std::io::stdout().lock(), "{args}")
+    };
+    if written.is_err() {
+        closed.store(true, Ordering::Relaxed);
+    }
+}
+
+/// True when `e` comes from writing to a closed pipe.
+fn is_broken_pipe(e: &anyhow::Error) -> bool {
+    let pipe = Some(std::io::ErrorKind::BrokenPipe);
+    e.chain().any(|c| {
+        c.downcast_ref::<std::io::Error>().map(std::io::Error::kind) == pipe
+            || c.downcast_ref::<serde_json::Error>()
+                .and_then(serde_json::Error::io_error_kind)
+                == pipe
+    })
 }
 
 /// An error that carries its own exit code (1 = a negative verdict).
@@ -82,7 +139,11 @@ pub fn main() -> ExitCode {
             .map(|s| s.to_string())
             .or_else(|| info.payload().downcast_ref::<String>().cloned())
             .unwrap_or_default();
-        eprintln!("error: internal error{location}: {message} (please report this bug)");
+        // Never panics, even on a closed stderr.
+        let _ = writeln!(
+            std::io::stderr(),
+            "error: internal error{location}: {message} (please report this bug)"
+        );
     }));
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(cli)));
     let Ok(result) = result else {
@@ -92,11 +153,14 @@ pub fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => match e.downcast_ref::<Verdict>() {
             Some(v) => {
-                eprintln!("{}", v.message);
+                say_err!("{}", v.message);
                 ExitCode::from(v.code)
             }
+            // A table written straight to a closed stdout: the reader has
+            // what it wanted.
+            None if is_broken_pipe(&e) => ExitCode::SUCCESS,
             None => {
-                eprintln!("error: {}", message(&e));
+                say_err!("error: {}", message(&e));
                 ExitCode::from(2)
             }
         },

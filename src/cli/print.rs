@@ -17,7 +17,7 @@ pub fn wrote(target: &Path, files: &[&str]) -> String {
 /// Prints the Anura3D-side checks, the run and the verdict with its causes.
 pub fn verify_outcome(o: &VerifyOutcome, target: &Path) {
     if let Some(k) = &o.anura3d {
-        println!(
+        say!(
             "Anura3D    {} ({}), MAPF {} rows, h = {:.3e} m{}",
             k.gom.display(),
             k.computation_method,
@@ -31,50 +31,58 @@ pub fn verify_outcome(o: &VerifyOutcome, target: &Path) {
         );
         if let Some(t) = &k.mps_csv {
             for line in table_comparison(t) {
-                println!("           {line}");
+                say!("           {line}");
             }
         }
         if let Some(m) = &k.mixed
             && m.elements > 0
             && (m.pwp > 0.0 || m.stress > 0.0)
         {
-            println!(
+            say!(
                 "           MPM-MIXED: the first step gives every MP of {} elements its element's first-MP state (spread up to {:.3} kPa pwp, {:.3} kPa stress)",
-                m.elements, m.pwp, m.stress
+                m.elements,
+                m.pwp,
+                m.stress
             );
         }
         for n in &k.notes {
-            println!("           {n}");
+            say!("           {n}");
         }
     }
     if let Some(r) = &o.run {
         run_report(r);
     }
     if o.equilibrium {
-        println!("verdict    IN EQUILIBRIUM");
+        say!("verdict    IN EQUILIBRIUM");
     } else {
-        println!("verdict    NOT IN EQUILIBRIUM");
+        say!("verdict    NOT IN EQUILIBRIUM");
         for c in &o.causes {
-            println!("           - {c}");
+            say!("           - {c}");
         }
         if let Some(r) = &o.run
             && !r.verdict.is_equilibrium()
         {
             for e in r.worst_residual_elements.iter().take(5) {
-                println!(
+                say!(
                     "           largest residual: element {} at ({:.3}, {:.3}): {:.3e}",
-                    e.id, e.centroid[0], e.centroid[1], e.value
+                    e.id,
+                    e.centroid[0],
+                    e.centroid[1],
+                    e.value
                 );
             }
             for e in r.plastic_elements.iter().take(5) {
-                println!(
+                say!(
                     "           plastic flow: element {} at ({:.3}, {:.3}): {} MPs",
-                    e.id, e.centroid[0], e.centroid[1], e.value
+                    e.id,
+                    e.centroid[0],
+                    e.centroid[1],
+                    e.value
                 );
             }
         }
     }
-    println!("{}", wrote(target, &crate::pipeline::check::file_names(o)));
+    say!("{}", wrote(target, &crate::pipeline::check::file_names(o)));
 }
 
 /// The lines that say how mps.csv compares with the MAPF: counts of MPs
@@ -122,25 +130,37 @@ pub fn table_comparison(t: &crate::pipeline::verify::TableComparison) -> Vec<Str
 
 /// Prints the runner's figures (no verdict).
 pub fn run_report(r: &mpm::RunReport) {
-    println!(
+    say!(
         "MPM check  {} MPs on {} elements, dt = {:.3e} s, {} steps, t = {:.4} s ({:?})",
-        r.n_points, r.n_elements, r.time_step, r.steps, r.time, r.stop
+        r.n_points,
+        r.n_elements,
+        r.time_step,
+        r.steps,
+        r.time,
+        r.stop
     );
-    println!(
+    say!(
         "           g = {} m/s², local damping α = {}, Courant {}",
-        r.gravity, r.damping, r.courant
+        r.gravity,
+        r.damping,
+        r.courant
     );
-    println!(
+    say!(
         "residual   start {:.3e}, end {:.3e} (limit {:.0e})",
-        r.initial_residual_ratio, r.final_residual_ratio, r.thresholds.residual_ratio
+        r.initial_residual_ratio,
+        r.final_residual_ratio,
+        r.thresholds.residual_ratio
     );
-    println!(
+    say!(
         "movement   max displacement {:.3e} m (limit {:.0e} × height {:.3} m)",
-        r.max_displacement, r.thresholds.displacement_fraction, r.model_height
+        r.max_displacement,
+        r.thresholds.displacement_fraction,
+        r.model_height
     );
-    println!(
+    say!(
         "plastic    {} MPs start outside the yield surface, {} yielded during the run",
-        r.inadmissible_points, r.plastic_points
+        r.inadmissible_points,
+        r.plastic_points
     );
 }
 
@@ -148,10 +168,13 @@ pub fn run_report(r: &mpm::RunReport) {
 /// materials, every trial and the mechanism.
 pub fn fos_report(report: &FosReport, target: &Path, elapsed: f64) {
     use crate::pipeline::fos::{factor_line, file_names};
-    println!("factor     {}", factor_line(report));
-    println!(
+    say!("factor     {}", factor_line(report));
+    say!(
         "method     strength reduction: tan φ′/F, c′/F, ψ ≤ φ′_F; pwp frozen; {} MPs, window {:.2} s per trial, dt = {:.3e} s, damping α = {}",
-        report.n_points, report.window, report.time_step, report.settings.run.damping
+        report.n_points,
+        report.window,
+        report.time_step,
+        report.settings.run.damping
     );
     let names = |v: &[crate::mpm::fos::MaterialNote]| {
         if v.is_empty() {
@@ -163,10 +186,10 @@ pub fn fos_report(report: &FosReport, target: &Path, elapsed: f64) {
                 .join(", ")
         }
     };
-    println!("reduced    {}", names(&report.reduced_materials));
-    println!("unreduced  {}", names(&report.unreduced_materials));
+    say!("reduced    {}", names(&report.reduced_materials));
+    say!("unreduced  {}", names(&report.unreduced_materials));
     for t in &report.trials {
-        println!(
+        say!(
             "  F = {:.4}  {:<17} max |u| = {:.3e} m after {:.2} s ({} steps), {} MPs yielded",
             t.factor,
             format!("{:?}", t.end),
@@ -177,10 +200,11 @@ pub fn fos_report(report: &FosReport, target: &Path, elapsed: f64) {
         );
     }
     if let Some(m) = &report.mechanism {
-        println!(
+        say!(
             "mechanism  F = {:.4}: {} MPs in motion (fos_mechanism.svg, fos_mechanism.vtu)",
-            m.factor, m.points_in_motion
+            m.factor,
+            m.points_in_motion
         );
     }
-    println!("{} in {elapsed:.1} s", wrote(target, &file_names(report)));
+    say!("{} in {elapsed:.1} s", wrote(target, &file_names(report)));
 }

@@ -103,16 +103,20 @@ pub fn run_run(args: RunArgs) -> anyhow::Result<()> {
         args.verify.force,
     )?;
     let r = &outcome.report;
-    println!(
+    say!(
         "run        {} MPs, {} steps, t = {:.3} s, damping α = {}",
-        r.n_points, r.steps, r.time, r.damping
+        r.n_points,
+        r.steps,
+        r.time,
+        r.damping
     );
-    println!(
+    say!(
         "final      max displacement {:.4} m, {} MPs yielded",
-        r.max_displacement, r.plastic_points
+        r.max_displacement,
+        r.plastic_points
     );
     let snapshots = format!("{} snapshots", outcome.snapshots.len());
-    println!(
+    say!(
         "{}",
         print::wrote(
             &outcome.folder,
