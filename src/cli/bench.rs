@@ -266,8 +266,7 @@ pub fn generated_fem_csv(n: usize, seed: u64) -> String {
 /// phases.
 fn e2e(args: &BenchArgs) -> anyhow::Result<()> {
     use super::args::FemArgs;
-    use super::map::{self, MapArgs};
-    use crate::pipeline::map::{MixedState, Outside, StressSource};
+    use super::map::{self, MapArgs, MixedStateArg, OutsideArg, StressArg};
     let threads = rayon::current_num_threads();
     let tmp;
     let dir = match &args.dir {
@@ -302,11 +301,11 @@ fn e2e(args: &BenchArgs) -> anyhow::Result<()> {
         kernel: "cubic".into(),
         h: Some(format!("{}", support / 2.0)),
         seed: 1,
-        outside: Outside::Nearest,
+        outside: OutsideArg::Nearest,
         min_shepard: 0.02,
-        stress: StressSource::Auto,
+        stress: StressArg::Auto,
         material_map: None,
-        mixed_state: MixedState::Mean,
+        mixed_state: MixedStateArg::Mean,
         out: Some(dir.join("out")),
         force: true,
         fem_vtu: args.fem_vtu,

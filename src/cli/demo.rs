@@ -12,14 +12,14 @@ use anyhow::bail;
 use super::args::FemArgs;
 use super::args::StateInputs;
 use super::calibrate::plot_curve;
-use super::map::{self, MapArgs};
+use super::map::{self, MapArgs, MixedStateArg, OutsideArg, StressArg};
 use super::output::OutputDir;
 use super::plot;
 use super::verify::{self, VerifyArgs};
 use crate::kernel::KernelKind;
 use crate::model::Quantity;
 use crate::pipeline::calibrate::calibrate_h;
-use crate::pipeline::map::{MixedState, Outside, SmoothingLength, StressSource};
+use crate::pipeline::map::SmoothingLength;
 
 #[derive(Debug, clap::Args)]
 pub struct DemoArgs {
@@ -95,11 +95,11 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         kernel: "cubic".into(),
         h: None,
         seed: 1,
-        outside: Outside::Error,
+        outside: OutsideArg::Error,
         min_shepard: 0.02,
-        stress: StressSource::Geostatic,
+        stress: StressArg::Geostatic,
         material_map: None,
-        mixed_state: MixedState::Mean,
+        mixed_state: MixedStateArg::Mean,
         out: Some(args.out.clone()),
         force: args.force,
         generate_cps: false,

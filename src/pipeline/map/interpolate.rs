@@ -230,6 +230,6 @@ pub fn null_points(result: &MapResult) -> usize {
 /// The report's warning about `null_points` MPs handled by `outside`, if any.
 pub fn null_point_warning(null_points: usize, outside: Outside) -> Option<String> {
     (null_points > 0).then(|| {
-        format!("{null_points} MP(s) had no FEM node inside the support: handled with --outside {outside:?}").to_lowercase()
+        format!("{null_points} mp(s) had no fem node inside the support: handled with --outside {outside}")
     })
 }

@@ -118,7 +118,7 @@ pub fn build_report(r: ReportInputs<'_>) -> MapReport {
             r.smoothing.spacing,
             r.project.n_dim(),
         ),
-        stress_source: format!("{:?}", r.stress_source).to_lowercase(),
+        stress_source: r.stress_source.name().to_string(),
         computation_method: r.project.method,
         mixed_state: r.mixed_state,
         calibration: r.smoothing.calibration,
