@@ -9,7 +9,9 @@ use std::time::Instant;
 use super::args::FemArgs;
 use super::output::OutputDir;
 use crate::kernel::KernelKind;
-use crate::pipeline::map::{MapConfig, Mapped, MixedState, Outside, SmoothingLength, StressSource};
+use crate::pipeline::map::{
+    MapConfig, Mapped, MaterialMap, MixedState, Outside, SmoothingLength, StressSource,
+};
 use crate::pipeline::{self, Project};
 
 /// A clap mirror of one of the library's plain enums: the same variants, with
@@ -89,7 +91,7 @@ pub struct MapArgs {
     pub stress: StressArg,
     /// FEM region → GOM material, e.g. `sand=1,clay=Base` (default: by name or index).
     #[arg(long, value_name = "REGION=MATERIAL,…")]
-    pub material_map: Option<String>,
+    pub material_map: Option<MaterialMap>,
     /// MPM-MIXED models: what the MPs of a fully filled element carry. Anura3D
     /// integrates such an element at one point and, after its first step, gives
     /// every MP the state of the element's first MP.

@@ -4,6 +4,7 @@
 //! smoothed across a material boundary.
 
 use super::{PipelineError, Project};
+use crate::formats::material_map::MaterialMap;
 use crate::model::FemNodes;
 use crate::model::material::lookup;
 
@@ -16,11 +17,12 @@ macro_rules! input_err {
 pub(super) fn groups(
     project: &Project,
     fem: &FemNodes,
-    material_map: Option<&str>,
+    material_map: Option<&MaterialMap>,
 ) -> Result<(Option<Vec<u32>>, String), PipelineError> {
     let materials = &project.model.materials;
     let explicit = match material_map {
-        Some(spec) => crate::formats::material_map::parse(spec, materials, fem.region.as_deref())
+        Some(map) => map
+            .resolve(materials, fem.region.as_deref())
             .map_err(|e| input_err!("--material-map: {e}"))?,
         None => Vec::new(),
     };

@@ -4,6 +4,7 @@
 //! The enums have names (`name`, `FromStr`, `Display`); the CLI's argument
 //! enums convert into them.
 
+use crate::formats::material_map::MaterialMap;
 use crate::kernel::KernelKind;
 use crate::kernel::mapper::{MapSettings, OutsidePolicy};
 
@@ -131,8 +132,9 @@ pub struct MapConfig {
     /// Null-point threshold on the Shepard ratio Σw·l^dim.
     pub min_shepard: f64,
     pub stress: StressSource,
-    /// FEM region → GOM material, `region=material,…` (names or indices).
-    pub material_map: Option<String>,
+    /// FEM region → GOM material (names or indices), resolved against the
+    /// model's materials and the FEM's regions by the placement stage.
+    pub material_map: Option<MaterialMap>,
     /// MPM-MIXED models: element means or per-MP values.
     pub mixed_state: MixedState,
     /// Keep the FEM fields in [`super::Mapped::fem`] after mapping (for

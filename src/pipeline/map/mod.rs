@@ -38,6 +38,7 @@ pub mod smoothing;
 pub mod stress;
 
 pub use super::report::{InputFile, MapReport, MaterialCount, Smoothing};
+pub use crate::formats::material_map::{MaterialMap, MaterialRef};
 pub use config::{MapConfig, MixedState, Outside, SmoothingLength, StressSource};
 pub use interpolate::FemCloud;
 pub use place::Placement;
@@ -81,7 +82,7 @@ pub fn map(
     let mut placement = place::place(
         &project,
         &fem,
-        config.material_map.as_deref(),
+        config.material_map.as_ref(),
         source,
         config.outside,
         config.kernel.support() * chosen.h,

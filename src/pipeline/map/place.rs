@@ -8,6 +8,7 @@ use std::borrow::Cow;
 
 use super::{Outside, StressSource};
 use crate::diagnose::Reach;
+use crate::formats::material_map::MaterialMap;
 use crate::kernel::mapper;
 use crate::pipeline::fem::LoadedFem;
 use crate::pipeline::regions::groups;
@@ -47,7 +48,7 @@ pub struct Placement {
 pub fn place(
     project: &Project,
     fem: &LoadedFem,
-    material_map: Option<&str>,
+    material_map: Option<&MaterialMap>,
     source: StressSource,
     outside: Outside,
     support: f64,
