@@ -127,6 +127,8 @@ pub fn map(
     }
     // The FEM values' row-major copy is no longer needed.
     drop(sampler);
+    let assumed = stress::assumed_defaults(&project, source, &quantities);
+    notes.extend(assumed.iter().map(stress::default_note));
     warnings.extend(stress.warnings);
     notes.push(report::mapf_note(dim).into());
 
@@ -161,6 +163,7 @@ pub fn map(
         null_points,
         mixed_state: collapse.applied,
         states: &states,
+        assumed_defaults: assumed,
         notes,
         warnings,
         timings_ms: timings,

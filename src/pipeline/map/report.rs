@@ -12,6 +12,7 @@ use crate::pipeline::report::{
     InputFile, MapReport, MaterialCount, Smoothing, describe_in_background,
 };
 use crate::pipeline::{PipelineError, Project};
+use crate::state::defaults::AssumedDefault;
 
 /// The input files' SHA-256, read and hashed on a thread of its own beside the
 /// mapping (a serial pass over every input file, which would otherwise come
@@ -65,6 +66,8 @@ pub struct ReportInputs<'a> {
     pub mixed_state: Option<MixedState>,
     /// The final state of each MP.
     pub states: &'a [MpState],
+    /// The material defaults the states rely on.
+    pub assumed_defaults: Vec<AssumedDefault>,
     pub notes: Vec<String>,
     pub warnings: Vec<String>,
     pub timings_ms: Vec<(String, f64)>,
@@ -132,6 +135,7 @@ pub fn build_report(r: ReportInputs<'_>) -> MapReport {
         min_mp_spacing: min_mp,
         pwp_range: range(r.states.iter().map(|s| s.pwp)),
         sigma_yy_range: range(r.states.iter().map(|s| s.total[1])),
+        assumed_defaults: r.assumed_defaults,
         notes: r.notes,
         warnings: r.warnings,
         timings_ms: r.timings_ms,

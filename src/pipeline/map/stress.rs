@@ -9,6 +9,7 @@ use crate::formats::cps::CpsDocument;
 use crate::kernel::mapper::{MapSettings, OutsidePolicy, PointStatus};
 use crate::model::{MpState, Quantity, StressComponent};
 use crate::pipeline::{PipelineError, Project};
+use crate::state::defaults::{self, AssumedDefault, Parameter};
 use crate::state::{self, geostatic};
 
 /// The MPs' states with what the report says about them.
@@ -28,6 +29,58 @@ pub fn gravity(project: &Project) -> f64 {
         .map_or(crate::model::DEFAULT_GRAVITY, CpsDocument::gravity)
 }
 
+/// True when the stress `source` `fem` on a 2D `project` lacks σzz among the
+/// mapped `quantities`: it then comes from plane-strain elasticity.
+fn plane_strain_zz(project: &Project, source: StressSource, quantities: &[Quantity]) -> bool {
+    source == StressSource::Fem
+        && project.n_dim() == 2
+        && !quantities.contains(&Quantity::TotalStress(StressComponent::Zz))
+}
+
+/// The material defaults ([`crate::state::defaults`]) the stress of
+/// `project`'s MPs relies on, for the resolved stress `source` and the mapped
+/// `quantities`: K0 for the geostatic stress, ν for a plane-strain σzz; only
+/// materials that have MPs.
+pub fn assumed_defaults(
+    project: &Project,
+    source: StressSource,
+    quantities: &[Quantity],
+) -> Vec<AssumedDefault> {
+    let mut parameters = Vec::new();
+    if source == StressSource::Geostatic {
+        parameters.push(Parameter::K0);
+    }
+    if plane_strain_zz(project, source, quantities) {
+        parameters.push(Parameter::PoissonRatio);
+    }
+    let materials = &project.model.materials;
+    let mut has_mps = vec![false; materials.len()];
+    for p in &project.points {
+        if let Some(slot) = (p.material as usize)
+            .checked_sub(1)
+            .and_then(|i| has_mps.get_mut(i))
+        {
+            *slot = true;
+        }
+    }
+    defaults::assumed(materials, &parameters)
+        .into_iter()
+        .filter(|d| has_mps[d.material as usize - 1])
+        .collect()
+}
+
+/// The report's note on a default the stress relies on.
+pub fn default_note(assumed: &AssumedDefault) -> String {
+    match assumed.parameter {
+        Parameter::K0 => {
+            format!("{assumed} for its geostatic horizontal stress, σh = K0·σ'v + S·p")
+        }
+        Parameter::PoissonRatio => {
+            format!("{assumed} for its plane-strain σzz, σ'zz = ν(σ'xx + σ'yy)")
+        }
+    }
+}
+
 /// The state of each MP of `project` from `values`, the mapped rows of
 /// `quantities` (row-major, one row per MP; freed once read), for the resolved
 /// stress `source`: pwp and saturation, and with `fem` the mapped total stress.
@@ -39,12 +92,9 @@ pub fn derive_stress(
     quantities: &[Quantity],
     values: Vec<f64>,
 ) -> DerivedStress {
-    let dim = project.n_dim();
     let n_fields = quantities.len();
     let column = |q: Quantity| quantities.iter().position(|x| *x == q);
-    let plane_strain_zz = source == StressSource::Fem
-        && dim == 2
-        && column(Quantity::TotalStress(StressComponent::Zz)).is_none();
+    let plane_strain_zz = plane_strain_zz(project, source, quantities);
     let mut states: Vec<MpState> = Vec::with_capacity(project.points.len());
     for (i, p) in project.points.iter().enumerate() {
         let material = project.model.materials.get(p.material as usize - 1);
@@ -60,7 +110,7 @@ pub fn derive_stress(
             if plane_strain_zz {
                 // Plane strain, elastic: σ'zz = ν(σ'xx + σ'yy).
                 let s = state::saturation(material, pwp);
-                let nu = material.and_then(|m| m.poisson_ratio).unwrap_or(0.3);
+                let nu = Parameter::PoissonRatio.value(material);
                 total[2] = nu * (total[0] - s * pwp + total[1] - s * pwp) + s * pwp;
             }
         }
@@ -155,7 +205,7 @@ pub fn geostatic_stress(
     let sigma_v = geostatic::overburden(&model.mesh, active, &gamma, positions);
     for (i, p) in project.points.iter().enumerate() {
         let m = model.materials.get(p.material as usize - 1);
-        let k0 = m.and_then(|m| m.k0).unwrap_or(0.5);
+        let k0 = Parameter::K0.value(m);
         states[i].total =
             geostatic::geostatic_tensor(sigma_v[i], k0, states[i].pwp, states[i].saturation);
     }
