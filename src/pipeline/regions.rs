@@ -1,5 +1,5 @@
 //! Material separation: which GOM material each FEM node belongs to, from the
-//! FEM's region column, `--material-map region=material` and name or index
+//! FEM's region column, a material map (`region=material`) and name or index
 //! matching. MPs then take only nodes of their own material, so nothing is
 //! smoothed across a material boundary.
 
@@ -23,7 +23,7 @@ pub(super) fn groups(
     let explicit = match material_map {
         Some(map) => map
             .resolve(materials, fem.region.as_deref())
-            .map_err(|e| input_err!("--material-map: {e}"))?,
+            .map_err(|e| input_err!("material map: {e}"))?,
         None => Vec::new(),
     };
     let Some(regions) = &fem.region else {
@@ -52,7 +52,7 @@ pub(super) fn groups(
     }
     if !unknown.is_empty() {
         return Err(input_err!(
-            "FEM regions {} match no GOM material (materials: {}); map them with --material-map region=material",
+            "FEM regions {} match no GOM material (materials: {}); map them to materials in a material map (region=material)",
             unknown
                 .iter()
                 .map(|s| format!("`{s}`"))

@@ -66,7 +66,7 @@ pub fn stress_source(
         StressSource::Auto => StressSource::Geostatic,
         StressSource::Fem if !fem.nodes.has_total_stress() => {
             return Err(input_err!(
-                "--stress fem: the FEM files have no total stress columns (sxx, syy, sxy{})",
+                "stress source `fem`: the FEM files have no total stress columns (sxx, syy, sxy{})",
                 if fem.nodes.dim == 3 {
                     ", szz, syz, sxz"
                 } else {
@@ -78,7 +78,7 @@ pub fn stress_source(
     };
     if source != StressSource::Fem && fem.nodes.field(crate::model::Quantity::Pwp).is_none() {
         return Err(input_err!(
-            "{}: --stress {:?} needs a pore-water pressure column",
+            "{}: the stress source `{}` needs a pore-water pressure column",
             fem.paths[0].display(),
             source
         ));

@@ -77,7 +77,7 @@ pub fn place(
                     ));
                 } else if outside == Outside::Error {
                     return Err(PipelineError::Input(format!(
-                        "material {} `{}` has MPs but no FEM nodes of its region; give its nodes, map a region to it with --material-map, or use --outside nearest|skip",
+                        "material {} `{}` has MPs but no FEM nodes of its region; give its nodes, map a region to it in the material map, or choose the outside policy `nearest` or `skip`",
                         m.index, m.name
                     )));
                 }

@@ -87,7 +87,7 @@ pub fn choose_h(
             });
             if diagonal > 0.0 && kernel.support() * h > 2.0 * diagonal {
                 return Err(PipelineError::Input(format!(
-                    "--h {h}: the kernel support {:.4} m is more than twice the FEM's extent ({diagonal:.4} m across), so every MP would average every node; give an h near the node spacing l = {spacing:.4} m, or --h auto",
+                    "smoothing length h = {h} m: the kernel support {:.4} m is more than twice the FEM's extent ({diagonal:.4} m across), so every MP would average every node; give an h near the node spacing l = {spacing:.4} m, or calibrate h",
                     kernel.support() * h
                 )));
             }
@@ -95,7 +95,7 @@ pub fn choose_h(
         }
         SmoothingLength::Metres(h) => {
             return Err(PipelineError::Input(format!(
-                "--h {h}: the smoothing length must be a positive number of metres, or auto"
+                "smoothing length h = {h}: h must be a positive number of metres"
             )));
         }
         SmoothingLength::SpacingRule => {
