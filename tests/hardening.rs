@@ -458,6 +458,12 @@ fn a_smoothing_length_wider_than_the_fem_is_refused() {
         &["--h", "1000"],
     );
     assert_eq!(code, 2, "{text}");
-    assert_contains(&text, &["--h 1000", "more than twice the FEM's extent"]);
+    assert_contains(
+        &text,
+        &[
+            "smoothing length h = 1000 m",
+            "more than twice the FEM's extent",
+        ],
+    );
     assert!(!out.exists());
 }

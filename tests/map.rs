@@ -278,7 +278,7 @@ fn bad_inputs_exit_2_and_leave_no_output() {
         (
             "stress_fem_without_stress",
             &["--stress", "fem"],
-            "--stress fem: the FEM files have no total stress columns",
+            "stress source `fem`: the FEM files have no total stress columns",
         ),
     ];
     let cases: Vec<(&str, String, &[&str], &str)> = bad_files
@@ -380,7 +380,7 @@ fn real_geostudio_node_csv_with_mesh_ply() {
     assert_eq!(code, 2);
     assert_contains(
         &stderr,
-        &["no X and Y columns; give the GeoStudio mesh with --fem-mesh"],
+        &["no X and Y columns; give the GeoStudio mesh (Mesh.ply)"],
     );
 }
 

@@ -1,5 +1,6 @@
 //! The pipeline as a library (#16): load, map and write without the CLI, and
-//! check the MAPF that comes out.
+//! check the MAPF that comes out; the map's stages called one by one, and the
+//! material defaults the report names (#24).
 
 use std::path::Path;
 
@@ -12,17 +13,8 @@ use a3d_init::pipeline::{Project, write};
 
 #[test]
 fn library_map_writes_the_mapf_of_the_sample_slope() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
-    let project = Project::load(&root.join("anura3d/K0_phreaticSurf_Geom")).unwrap();
+    let (project, fem) = sample_slope();
     let n_points = project.points.len();
-    let fem = fem::load(&FemOptions {
-        paths: vec![root.join("geostudio-csv/k0-slope-hydrostatic.csv")],
-        csv: CsvOptions::default(),
-        mesh: None,
-        analysis: None,
-        step: StepChoice::Last,
-    })
-    .unwrap();
     let config = MapConfig {
         stress: StressSource::Geostatic,
         ..MapConfig::default()
@@ -51,4 +43,82 @@ fn library_map_writes_the_mapf_of_the_sample_slope() {
     }
     // The notes promised in the report reach it (one notes list, #16).
     assert!(mapped.report.notes.iter().any(|n| n.contains("overburden")));
+}
+
+fn sample_slope() -> (Project, fem::LoadedFem) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures");
+    let project = Project::load(&root.join("anura3d/K0_phreaticSurf_Geom")).unwrap();
+    let fem = fem::load(&FemOptions {
+        paths: vec![root.join("geostudio-csv/k0-slope-hydrostatic.csv")],
+        csv: CsvOptions::default(),
+        mesh: None,
+        analysis: None,
+        step: StepChoice::Last,
+    })
+    .unwrap();
+    (project, fem)
+}
+
+/// The stages of `map` called one by one, as a library caller would (#24),
+/// give the states `map` gives, bit for bit.
+#[test]
+fn map_stages_run_alone_give_what_map_gives() {
+    use a3d_init::kernel::Kernel;
+    use map::{inputs, interpolate, mixed, place, plausibility, smoothing, stress};
+    let config = MapConfig::default();
+    let (project, mut fem) = sample_slope();
+    inputs::check_fem(&project, &fem).unwrap();
+    let source = inputs::stress_source(config.stress, &fem).unwrap();
+    assert_eq!(source, StressSource::Geostatic);
+    let chosen = smoothing::choose_h(&fem.nodes, config.kernel, &config.h, source).unwrap();
+    let support = config.kernel.support() * chosen.h;
+    let placement = place::place(&project, &fem, None, source, config.outside, support).unwrap();
+    // The FEM fields are not needed afterwards: freed once copied.
+    let settings = config.settings(chosen.h);
+    let (l, keep_fields) = (chosen.spacing, false);
+    let cloud = interpolate::prepare(&mut fem.nodes, &placement, source, settings, l, keep_fields);
+    let mut result = interpolate::interpolate(&cloud, &placement, &fem.paths).unwrap();
+    assert_eq!(interpolate::null_points(&result), 0);
+    let values = std::mem::take(&mut result.values);
+    let mut states = stress::derive_stress(&project, source, &cloud.quantities, values).states;
+    let notes =
+        stress::geostatic_stress(&project, &placement.positions, &cloud, &mut states).unwrap();
+    assert!(notes[0].contains("overburden"));
+    stress::zero_skipped(&mut states, &result.status);
+    let collapse = mixed::collapse_mixed(&project, config.mixed_state, &mut states);
+    assert_eq!(collapse.applied, Some(map::MixedState::Mean));
+    plausibility::check_finite(&states).unwrap();
+
+    let (project, fem) = sample_slope();
+    let mapped = map::map(project, fem, &config).unwrap();
+    assert_eq!(states, mapped.states);
+}
+
+/// A material without ν or K0 in the GOM: the value assumed is named in the
+/// report, its notes and its `assumed_defaults` (#24).
+#[test]
+fn map_report_names_the_material_defaults_it_assumes() {
+    let (mut project, fem) = sample_slope();
+    let config = MapConfig::default();
+    let with_k0 = map::map(project, fem, &config).unwrap();
+    assert!(with_k0.report.assumed_defaults.is_empty());
+    let json = serde_json::to_string(&with_k0.report).unwrap();
+    assert!(!json.contains("assumed_defaults"));
+
+    (project, _) = sample_slope();
+    project.model.materials[0].k0 = None;
+    let (_, fem) = sample_slope();
+    let without = map::map(project, fem, &config).unwrap();
+    let [assumed] = &without.report.assumed_defaults[..] else {
+        panic!("{:?}", without.report.assumed_defaults)
+    };
+    assert_eq!(assumed.parameter, a3d_init::state::defaults::Parameter::K0);
+    assert_eq!((assumed.material, assumed.value), (1, 0.5));
+    assert!(without.report.notes.iter().any(|n| n.contains(
+        "material 1 `Sand` has no $$K0_VALUE_SOLID: K0 = 0.5 assumed for its geostatic horizontal stress"
+    )));
+    // K0 = 0.5 is the fixture's own value: the same states.
+    assert_eq!(without.states, with_k0.states);
+    let json = serde_json::to_value(&without.report).unwrap();
+    assert_eq!(json["assumed_defaults"][0]["parameter"], "k0");
 }

@@ -59,6 +59,9 @@ impl FemArgs {
 
     /// The library options these arguments describe.
     pub fn options(&self) -> anyhow::Result<FemOptions> {
+        if self.fem.is_empty() {
+            bail!("give the FEM node file(s) with --fem FILE");
+        }
         let columns = match &self.columns {
             Some(s) => {
                 fem_csv::parse_columns_option(s).map_err(|e| anyhow::anyhow!("--columns: {e}"))?

@@ -7,8 +7,60 @@ use std::time::Instant;
 
 use super::args::FemArgs;
 use crate::kernel::KernelKind;
-use crate::pipeline::map::{MapConfig, MixedState, Outside, SmoothingLength, StressSource};
+use crate::pipeline::map::{
+    MapConfig, MaterialMap, MixedState, Outside, SmoothingLength, StressSource,
+};
 use crate::pipeline::{self, mapping::MapJob};
+
+/// A clap mirror of one of the library's plain enums: the same variants, with
+/// their help, and the conversion into the library's type (the library does
+/// not depend on clap).
+macro_rules! value_enum_mirror {
+    ($(#[$meta:meta])* $arg:ident => $lib:ident { $($(#[$vmeta:meta])* $variant:ident),+ $(,)? }) => {
+        $(#[$meta])*
+        #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+        pub enum $arg {
+            $($(#[$vmeta])* $variant),+
+        }
+
+        impl From<$arg> for $lib {
+            fn from(arg: $arg) -> $lib {
+                match arg {
+                    $($arg::$variant => $lib::$variant),+
+                }
+            }
+        }
+    };
+}
+
+value_enum_mirror!(
+    /// `--outside`: [`Outside`].
+    OutsideArg => Outside { Error, Nearest, Skip }
+);
+
+value_enum_mirror!(
+    /// `--stress`: [`StressSource`].
+    StressArg => StressSource {
+        /// `fem` when the FEM file has total stresses, otherwise `geostatic`.
+        Auto,
+        /// Map the FEM total stresses.
+        Fem,
+        /// Overburden of the GOM materials along the vertical, σh = K0·σ'v + S·p.
+        Geostatic,
+        /// Zero total stress (warned).
+        Zero,
+    }
+);
+
+value_enum_mirror!(
+    /// `--mixed-state`: [`MixedState`].
+    MixedStateArg => MixedState {
+        /// Each fully filled element's volume-weighted mean state on all its MPs.
+        Mean,
+        /// Keep every MP's own mapped value (Anura3D MPM-MIXED keeps only MP 1's after the first step).
+        PerMp,
+    }
+);
 
 #[derive(Debug, clap::Args)]
 pub struct MapArgs {
@@ -27,22 +79,22 @@ pub struct MapArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// What to do with MPs that no FEM node reaches.
-    #[arg(long, value_enum, default_value_t = Outside::Error)]
-    pub outside: Outside,
+    #[arg(long, value_enum, default_value_t = OutsideArg::Error)]
+    pub outside: OutsideArg,
     /// Null-point threshold on the Shepard ratio Σw·l^dim (≈ 1 inside, 0.5 on an edge).
     #[arg(long, default_value_t = 0.02)]
     pub min_shepard: f64,
     /// Where total stresses come from.
-    #[arg(long, value_enum, default_value_t = StressSource::Auto)]
-    pub stress: StressSource,
+    #[arg(long, value_enum, default_value_t = StressArg::Auto)]
+    pub stress: StressArg,
     /// FEM region → GOM material, e.g. `sand=1,clay=Base` (default: by name or index).
     #[arg(long, value_name = "REGION=MATERIAL,…")]
-    pub material_map: Option<String>,
+    pub material_map: Option<MaterialMap>,
     /// MPM-MIXED models: what the MPs of a fully filled element carry. Anura3D
     /// integrates such an element at one point and, after its first step, gives
     /// every MP the state of the element's first MP.
-    #[arg(long, value_enum, default_value_t = MixedState::Mean)]
-    pub mixed_state: MixedState,
+    #[arg(long, value_enum, default_value_t = MixedStateArg::Mean)]
+    pub mixed_state: MixedStateArg,
     /// Output folder (default `<project>.a3d-init/` next to the model).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -59,10 +111,10 @@ pub struct MapArgs {
 }
 
 impl MapArgs {
-    /// The typed configuration these arguments describe (`dim` decides the
-    /// Wendland variant).
-    pub fn config(&self, dim: usize) -> anyhow::Result<MapConfig> {
-        let kernel = KernelKind::parse(&self.kernel, dim).ok_or_else(|| {
+    /// The typed configuration these arguments describe (the Wendland
+    /// kernel's variant follows the model's dimension when mapped).
+    pub fn config(&self) -> anyhow::Result<MapConfig> {
+        let kernel = KernelKind::parse(&self.kernel, 2).ok_or_else(|| {
             anyhow::anyhow!(
                 "--kernel {}: expected cubic, gaussian or wendland",
                 self.kernel
@@ -81,23 +133,21 @@ impl MapArgs {
         Ok(MapConfig {
             kernel,
             h,
-            outside: self.outside,
+            outside: self.outside.into(),
             min_shepard: self.min_shepard,
-            stress: self.stress,
+            stress: self.stress.into(),
             material_map: self.material_map.clone(),
-            mixed_state: self.mixed_state,
+            mixed_state: self.mixed_state.into(),
             keep_fem_fields: true,
         })
     }
-}
 
-impl MapArgs {
     /// The library's job these arguments describe.
     pub fn job(&self) -> anyhow::Result<MapJob> {
         Ok(MapJob {
             model: self.mpm.clone(),
             fem: self.fem.options()?,
-            config: self.config(2)?,
+            config: self.config()?,
             generate_cps: self.generate_cps,
             fem_vtu: self.fem_vtu,
         })
@@ -143,4 +193,29 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         started.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::ValueEnum;
+
+    /// Each mirror's command-line name is the library's name of the value it
+    /// converts into.
+    fn agrees<A: ValueEnum + Copy, L: From<A> + std::str::FromStr + PartialEq + std::fmt::Debug>()
+    where
+        L::Err: std::fmt::Debug,
+    {
+        for arg in A::value_variants() {
+            let name = arg.to_possible_value().unwrap().get_name().to_string();
+            assert_eq!(name.parse::<L>().unwrap(), L::from(*arg), "{name}");
+        }
+    }
+
+    #[test]
+    fn mirrors_agree_with_the_library_names() {
+        agrees::<OutsideArg, Outside>();
+        agrees::<StressArg, StressSource>();
+        agrees::<MixedStateArg, MixedState>();
+    }
 }

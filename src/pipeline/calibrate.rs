@@ -36,12 +36,12 @@ pub fn select_fields(fem: &FemNodes, field: &str) -> Result<Vec<Quantity>, Pipel
     }
     let q = Quantity::from_name(field).ok_or_else(|| {
         PipelineError::Input(format!(
-            "--field {field}: expected pwp, sxx, syy, szz, sxy, syz, sxz, esxx, … or all"
+            "field `{field}`: expected pwp, sxx, syy, szz, sxy, syz, sxz, esxx, … or all"
         ))
     })?;
     if fem.field(q).is_none() {
         return Err(PipelineError::Input(format!(
-            "--field {field}: the FEM file has no such column (it has: {})",
+            "field `{field}`: the FEM file has no such column (it has: {})",
             fem.fields
                 .iter()
                 .map(|(q, _)| q.name())

@@ -75,9 +75,7 @@ pub struct LoadedFem {
 /// Reads every file of `options` through its reader and joins them.
 pub fn load(options: &FemOptions) -> Result<LoadedFem, PipelineError> {
     if options.paths.is_empty() {
-        return Err(PipelineError::Input(
-            "give the FEM node file(s) with --fem FILE".into(),
-        ));
+        return Err(PipelineError::Input("no FEM node file given".into()));
     }
     let mut parts = Vec::new();
     let mut reports = Vec::new();
@@ -114,7 +112,7 @@ pub fn load(options: &FemOptions) -> Result<LoadedFem, PipelineError> {
                         )?),
                         None => {
                             return Err(PipelineError::Input(format!(
-                                "{}: no X and Y columns; give the GeoStudio mesh with --fem-mesh Mesh.ply",
+                                "{}: no X and Y columns; give the GeoStudio mesh (Mesh.ply) whose nodes its ids name",
                                 path.display()
                             )));
                         }

@@ -1,9 +1,10 @@
 //! Material separation: which GOM material each FEM node belongs to, from the
-//! FEM's region column, `--material-map region=material` and name or index
+//! FEM's region column, a material map (`region=material`) and name or index
 //! matching. MPs then take only nodes of their own material, so nothing is
 //! smoothed across a material boundary.
 
 use super::{PipelineError, Project};
+use crate::formats::material_map::MaterialMap;
 use crate::model::FemNodes;
 use crate::model::material::lookup;
 
@@ -16,12 +17,13 @@ macro_rules! input_err {
 pub(super) fn groups(
     project: &Project,
     fem: &FemNodes,
-    material_map: Option<&str>,
+    material_map: Option<&MaterialMap>,
 ) -> Result<(Option<Vec<u32>>, String), PipelineError> {
     let materials = &project.model.materials;
     let explicit = match material_map {
-        Some(spec) => crate::formats::material_map::parse(spec, materials, fem.region.as_deref())
-            .map_err(|e| input_err!("--material-map: {e}"))?,
+        Some(map) => map
+            .resolve(materials, fem.region.as_deref())
+            .map_err(|e| input_err!("material map: {e}"))?,
         None => Vec::new(),
     };
     let Some(regions) = &fem.region else {
@@ -50,7 +52,7 @@ pub(super) fn groups(
     }
     if !unknown.is_empty() {
         return Err(input_err!(
-            "FEM regions {} match no GOM material (materials: {}); map them with --material-map region=material",
+            "FEM regions {} match no GOM material (materials: {}); map them to materials in a material map (region=material)",
             unknown
                 .iter()
                 .map(|s| format!("`{s}`"))

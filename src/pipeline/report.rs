@@ -103,7 +103,7 @@ pub struct MapReport {
     pub smoothing: Smoothing,
     pub stress_source: String,
     pub computation_method: crate::model::ComputationMethod,
-    /// MPM-MIXED only: `mean` or `per-mp` (see `--mixed-state`).
+    /// MPM-MIXED only: the choice applied (`Mean` or `PerMp`).
     pub mixed_state: Option<MixedState>,
     pub calibration: Option<crate::pipeline::calibrate::Outcome>,
     pub material_separation: String,
@@ -116,6 +116,10 @@ pub struct MapReport {
     pub min_mp_spacing: f64,
     pub pwp_range: (f64, f64),
     pub sigma_yy_range: (f64, f64),
+    /// The material parameters assumed where the GOM gives none (also
+    /// among the notes); left out of report.json when there are none.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub assumed_defaults: Vec<crate::state::defaults::AssumedDefault>,
     pub notes: Vec<String>,
     pub warnings: Vec<String>,
     pub timings_ms: Vec<(String, f64)>,

@@ -4,8 +4,10 @@
 //! Pure computation, no I/O. [`geostatic`] builds total stresses from the
 //! overburden of the model's own materials when the FEM gives only pore
 //! pressures; [`bishop`] turns pwp and total stress into effective stress with the
-//! material's degree of saturation. The kernel mapping itself lives in `kernel`.
+//! material's degree of saturation; [`defaults`] holds the K0 and ν assumed
+//! where the GOM gives none. The kernel mapping itself lives in `kernel`.
 
+pub mod defaults;
 pub mod geostatic;
 pub mod mixed;
 pub mod plausibility;

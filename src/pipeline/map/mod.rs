@@ -1,0 +1,178 @@
+//! The mapping step as a library call: [`map`] takes a loaded [`Project`], the
+//! FEM nodes and a typed [`MapConfig`] and returns the state of every MP with
+//! its diagnostics and the report. Nothing is written here
+//! ([`super::write::write_project`] does that) and nothing is printed.
+//!
+//! [`map`] composes stages that a caller can also run alone, one file each:
+//! 1. [`inputs`] checks the FEM against the model and decides the stress source;
+//! 2. [`smoothing`] chooses h (spacing rule, given, or calibrated);
+//! 3. [`place`] finds the MPs' positions, the material separation and the
+//!    FEM's reach;
+//! 4. [`interpolate`] maps the FEM fields onto the MPs with the kernel;
+//! 5. [`stress`] derives the MPs' states (pwp, total stress from the FEM, the
+//!    overburden or zero);
+//! 6. [`mixed`] collapses MPM-MIXED elements to their mean state;
+//! 7. [`plausibility`] warns about implausible pwp and refuses non-finite values;
+//! 8. [`report`] builds report.json.
+//!
+//! Physics lives in [`crate::state`] (geostatic stress, Bishop, MPM-MIXED
+//! means, dry materials); the kernel interpolation in [`crate::kernel`].
+
+use std::time::Instant;
+
+use super::PipelineError;
+use super::Project;
+use super::fem::LoadedFem;
+use crate::formats::mps_table::MpDiagnostics;
+use crate::kernel::Kernel;
+use crate::model::MpState;
+
+pub mod config;
+pub mod inputs;
+pub mod interpolate;
+pub mod mixed;
+pub mod place;
+pub mod plausibility;
+pub mod report;
+pub mod smoothing;
+pub mod stress;
+
+pub use super::report::{InputFile, MapReport, MaterialCount, Smoothing};
+pub use crate::formats::material_map::{MaterialMap, MaterialRef};
+pub use config::{MapConfig, MixedState, Outside, SmoothingLength, StressSource};
+pub use interpolate::FemCloud;
+pub use place::Placement;
+pub use smoothing::ChosenH;
+
+/// Everything `map` computes before writing.
+pub struct Mapped {
+    /// The model, its files and its MPs.
+    pub project: Project,
+    /// The FEM nodes (their fields dropped unless `fem.vtu` is wanted).
+    pub fem: LoadedFem,
+    /// The state of each MP, in MP order.
+    pub states: Vec<MpState>,
+    /// How each MP was mapped.
+    pub diagnostics: Vec<MpDiagnostics>,
+    /// What report.json says, the exact-point MAPF's h among it.
+    pub report: MapReport,
+}
+
+/// Maps the FEM fields onto the project's MPs (no output written): the state
+/// per MP, the mapping diagnostics and the report.
+pub fn map(
+    project: Project,
+    mut fem: LoadedFem,
+    config: &MapConfig,
+) -> Result<Mapped, PipelineError> {
+    let hashing = report::Hashing::start(&project, &fem);
+    let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
+    let mut timings = Vec::new();
+    let mut notes: Vec<String> = fem.notes.clone();
+    let mut warnings = inputs::read_warnings(&project, &fem);
+    let dim = project.n_dim();
+
+    inputs::check_fem(&project, &fem)?;
+    let source = inputs::stress_source(config.stress, &fem)?;
+    let t = Instant::now();
+    let chosen = smoothing::choose_h(&fem.nodes, config.kernel, &config.h, source)?;
+    if let SmoothingLength::Calibrate { .. } = config.h {
+        timings.push(("calibration".to_string(), ms(t)));
+    }
+    let mut placement = place::place(
+        &project,
+        &fem,
+        config.material_map.as_ref(),
+        source,
+        config.outside,
+        config.kernel.support() * chosen.h,
+    )?;
+    notes.append(&mut placement.notes);
+    warnings.append(&mut placement.warnings);
+
+    let cloud = interpolate::prepare(
+        &mut fem.nodes,
+        &placement,
+        source,
+        config.settings(chosen.h),
+        chosen.spacing,
+        config.keep_fem_fields,
+    );
+    let quantities = cloud.quantities.clone();
+    let t = Instant::now();
+    // The geostatic stress maps the cloud a second time: it keeps its values;
+    // otherwise the mapper takes them and frees them once its grid has a copy.
+    let (mut result, sampler) = if source == StressSource::Geostatic {
+        let result = interpolate::interpolate(&cloud, &placement, &fem.paths)?;
+        (result, Some(cloud))
+    } else {
+        let result = interpolate::interpolate_taking(cloud, &placement, &fem.paths)?;
+        (result, None)
+    };
+    timings.push(("kernel mapping".to_string(), ms(t)));
+
+    let values = std::mem::take(&mut result.values);
+    let stress = stress::derive_stress(&project, source, &quantities, values);
+    let mut states = stress.states;
+    notes.extend(stress.notes);
+    if let Some(cloud) = &sampler {
+        let t = Instant::now();
+        notes.extend(stress::geostatic_stress(
+            &project,
+            &placement.positions,
+            cloud,
+            &mut states,
+        )?);
+        timings.push(("geostatic stress".to_string(), ms(t)));
+    }
+    // The FEM values' row-major copy is no longer needed.
+    drop(sampler);
+    let assumed = stress::assumed_defaults(&project, source, &quantities);
+    notes.extend(assumed.iter().map(stress::default_note));
+    warnings.extend(stress.warnings);
+    notes.push(report::mapf_note(dim).into());
+
+    let null_points = interpolate::null_points(&result);
+    warnings.extend(interpolate::null_point_warning(null_points, config.outside));
+    stress::zero_skipped(&mut states, &result.status);
+    let diagnostics = interpolate::diagnostics(&result);
+    drop(result);
+    if source != StressSource::Zero {
+        let g = stress::gravity(&project);
+        warnings.extend(plausibility::check_plausibility(
+            &placement.positions,
+            &states,
+            dim,
+            g,
+        ));
+    }
+    let collapse = mixed::collapse_mixed(&project, config.mixed_state, &mut states);
+    notes.extend(collapse.notes);
+    warnings.extend(collapse.warnings);
+    plausibility::check_finite(&states)?;
+
+    let report = report::build_report(report::ReportInputs {
+        project: &project,
+        fem: &fem,
+        files: hashing.join()?,
+        kernel: config.kernel,
+        smoothing: chosen,
+        stress_source: source,
+        placement: &placement,
+        outside: config.outside,
+        null_points,
+        mixed_state: collapse.applied,
+        states: &states,
+        assumed_defaults: assumed,
+        notes,
+        warnings,
+        timings_ms: timings,
+    });
+    Ok(Mapped {
+        project,
+        fem,
+        states,
+        diagnostics,
+        report,
+    })
+}
