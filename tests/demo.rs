@@ -75,3 +75,41 @@ fn demo_runs_the_whole_chain() {
     assert_eq!(o.status.code(), Some(0));
     assert!(text.contains("warnings   none"), "{text}");
 }
+
+/// The demo's figures the README quotes (h, h/l, MP count, the σ'zz defect's
+/// count and size) are what the demo measures (#24): a README edit that drifts
+/// from the code, or a code change that moves a figure, fails here.
+#[test]
+fn readme_figures_are_the_demos_measurements() {
+    let readme =
+        std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md"))
+            .unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("demo");
+    let o = Command::new(env!("CARGO_BIN_EXE_a3d-init"))
+        .args(["demo", "--no-fos", "--out", out.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(0), "{o:?}");
+    let json = |name: &str| -> serde_json::Value {
+        serde_json::from_str(&std::fs::read_to_string(out.join(name)).unwrap()).unwrap()
+    };
+    let report = json("report.json");
+    let verify = json("verify/verify.json");
+    let h = report["smoothing_length"].as_f64().unwrap();
+    let h_over_l = h / report["fem_spacing"].as_f64().unwrap();
+    let mps = report["material_points"].as_u64().unwrap();
+    let defect = &verify["anura3d"]["sigma_zz_defect"];
+    let outside = defect["outside_because_of_defect"].as_u64().unwrap();
+    let change_yy = defect["first_step_change"][1].as_f64().unwrap();
+    for quoted in [
+        format!("h = {h:.3} m, h/l = {h_over_l:.2}"),
+        format!("onto the {mps} material"),
+        format!("{outside} of {mps} MPs,\n  up to {change_yy:.1} kPa in σ'yy"),
+    ] {
+        assert!(
+            readme.contains(&quoted),
+            "README.md should quote the measured `{quoted}`"
+        );
+    }
+}
