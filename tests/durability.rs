@@ -15,7 +15,7 @@ use a3d_init::pipeline::map::MapConfig;
 use a3d_init::pipeline::mapping::{self, MapJob};
 use a3d_init::pipeline::output::trace::{self, Event};
 use a3d_init::pipeline::{ErrorKind, PipelineError};
-use common::{fixture, run, run_ok};
+use common::{fixture, run, run_map};
 
 fn slope_job() -> MapJob {
     MapJob {
@@ -151,24 +151,9 @@ fn map_outputs_are_synced_before_the_publishing_rename_and_a_failed_sync_keeps_t
 fn an_output_error_exits_2_and_names_the_path() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("out");
-    run_ok(&[
-        "map",
-        "--fem",
-        fixture("slope/sand-nodes.csv").to_str().unwrap(),
-        "--mpm",
-        fixture("slope").to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    let (code, text) = run(&[
-        "map",
-        "--fem",
-        fixture("slope/sand-nodes.csv").to_str().unwrap(),
-        "--mpm",
-        fixture("slope").to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let (fem, slope) = (fixture("slope/sand-nodes.csv"), fixture("slope"));
+    assert_eq!(run_map(&slope, &fem, &out, &[]).0, 0);
+    let (code, text) = run_map(&slope, &fem, &out, &[]);
     assert_eq!(code, 2, "{text}");
     assert!(
         text.contains(&format!("{} exists; pass --force", out.display())),
@@ -184,15 +169,13 @@ fn an_output_error_exits_2_and_names_the_path() {
 fn regression_fos_state_table_inside_the_output_folder_is_not_deleted() {
     let tmp = tempfile::tempdir().unwrap();
     let mapped = tmp.path().join("mapped");
-    run_ok(&[
-        "map",
-        "--fem",
-        fixture("slope/sand-nodes.csv").to_str().unwrap(),
-        "--mpm",
-        fixture("slope").to_str().unwrap(),
-        "--out",
-        mapped.to_str().unwrap(),
-    ]);
+    let (code, text) = run_map(
+        &fixture("slope"),
+        &fixture("slope/sand-nodes.csv"),
+        &mapped,
+        &[],
+    );
+    assert_eq!(code, 0, "{text}");
     let run1 = tmp.path().join("run1");
     std::fs::create_dir(&run1).unwrap();
     let state = run1.join("state.csv");

@@ -58,13 +58,5 @@ pub fn run(args: DiffArgs) -> anyhow::Result<()> {
             }
         }
     }
-    if report.equal {
-        Ok(())
-    } else {
-        Err(Verdict {
-            message: "differences found".into(),
-            code: 1,
-        }
-        .into())
-    }
+    Verdict::check(report.equal, "differences found")
 }

@@ -127,7 +127,8 @@ fn print_summary(out: &mut impl Write, s: &ProjectSummary) -> std::io::Result<()
         lo[0], hi[0], lo[1], hi[1], lo[2], hi[2]
     )?;
     writeln!(out, "materials")?;
-    for m in &s.materials {
+    for summary in &s.materials {
+        let m = &summary.material;
         writeln!(
             out,
             "  {} {:<14} {} / {}: {} elements, {} MPs",
@@ -135,8 +136,8 @@ fn print_summary(out: &mut impl Write, s: &ProjectSummary) -> std::io::Result<()
             m.name,
             m.material_type,
             m.model.as_deref().unwrap_or("-"),
-            m.elements,
-            m.mps
+            summary.elements,
+            summary.mps
         )?;
         let fmt = |v: Option<f64>| v.map_or("-".to_string(), |v| format!("{v}"));
         writeln!(
@@ -144,7 +145,7 @@ fn print_summary(out: &mut impl Write, s: &ProjectSummary) -> std::io::Result<()
             "      n = {}, ρs = {} kg/m³, γdry = {:.3} kN/m³, K0 = {}, E = {} kPa, ν = {}, φ' = {}°, c' = {} kPa, ψ = {}°",
             fmt(m.porosity),
             fmt(m.density_solid),
-            m.gamma_dry,
+            summary.gamma_dry,
             fmt(m.k0),
             fmt(m.young_modulus),
             fmt(m.poisson_ratio),

@@ -114,6 +114,20 @@ pub struct Verdict {
     pub code: u8,
 }
 
+impl Verdict {
+    /// `Ok` when `holds`, else a negative verdict (exit 1) saying `message`.
+    pub fn check(holds: bool, message: &str) -> anyhow::Result<()> {
+        if holds {
+            return Ok(());
+        }
+        Err(Verdict {
+            message: message.into(),
+            code: 1,
+        }
+        .into())
+    }
+}
+
 /// Entry point of the binary. Exit codes: 0 success, 1 a negative verdict
 /// (`diff` found differences, `verify` found no equilibrium), 2 bad input or any
 /// other error. Never panics on bad input.

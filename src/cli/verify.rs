@@ -66,15 +66,10 @@ pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
     let (outcome, target) =
         pipeline::check::verify(&source, &options, args.out.as_deref(), args.force)?;
     print::verify_outcome(&outcome, &target);
-    if outcome.equilibrium {
-        Ok(())
-    } else {
-        Err(ExitVerdict {
-            message: "not in equilibrium (see verify.json for where)".into(),
-            code: 1,
-        }
-        .into())
-    }
+    ExitVerdict::check(
+        outcome.equilibrium,
+        "not in equilibrium (see verify.json for where)",
+    )
 }
 
 /// `--snapshots 0.3,0.8`: every entry a number of seconds.

@@ -8,7 +8,7 @@
 use std::path::{Path, PathBuf};
 
 use super::PipelineError;
-use super::output::{OutputDir, ReadLog};
+use super::output::OutputDir;
 use super::runner::{self, history_plot, write_snapshot};
 use super::start::{Start, StateSource};
 use super::verify::KernelCheck;
@@ -216,9 +216,11 @@ pub fn verify(
     out: Option<&Path>,
     force: bool,
 ) -> Result<(VerifyOutcome, PathBuf), PipelineError> {
-    let reads = ReadLog::start();
-    let start = Start::load(source)?;
-    let target = runner::out_dir(out, &start.home, "verify");
+    let runner::Begun {
+        reads,
+        start,
+        target,
+    } = runner::begin(source, out, "verify")?;
     // Rerunning `verify DIR` replaces its own default subfolder.
     let own_folder = out.is_none() && matches!(source, StateSource::Folder(_));
     let force = force || (own_folder && target.join("verify.json").is_file());

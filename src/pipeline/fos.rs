@@ -227,14 +227,16 @@ pub fn fos(
     out: Option<&Path>,
     force: bool,
 ) -> Result<(FosReport, PathBuf), PipelineError> {
-    let reads = ReadLog::start();
-    let start = Start::load(source)?;
+    let runner::Begun {
+        reads,
+        start,
+        target,
+    } = runner::begin(source, out, "fos")?;
     let states = if options.zero_pwp {
         without_pore_pressure(&start.states)
     } else {
         start.states.clone()
     };
-    let target = runner::out_dir(out, &start.home, "fos");
     analyse_into(&start, &states, options, &target, force, &reads)
 }
 

@@ -19,54 +19,30 @@ use crate::formats::gsz::{self, GszProject, StepChoice};
 use crate::formats::project::{OutputNames, ProjectFiles};
 use crate::model::{FemNodes, Material};
 
-/// One material of a project: its parameters as read, where it is used and
-/// its dry unit weight.
+/// One material of a project: its record as read, where it is used and its
+/// dry unit weight.
 #[derive(Clone, Debug, Serialize)]
 pub struct MaterialSummary {
-    pub index: u32,
-    pub name: String,
-    pub material_type: String,
-    pub model: Option<String>,
+    #[serde(flatten)]
+    pub material: Material,
+    /// Elements of this material.
     pub elements: usize,
+    /// MPs of this material.
     pub mps: usize,
-    pub porosity: Option<f64>,
-    pub density_solid: Option<f64>,
-    pub k0: Option<f64>,
-    pub young_modulus: Option<f64>,
-    pub poisson_ratio: Option<f64>,
-    pub friction_angle: Option<f64>,
-    pub cohesion: Option<f64>,
-    pub dilatancy_angle: Option<f64>,
+    /// Dry unit weight γ_dry (kN/m³) at the project's gravity.
     pub gamma_dry: f64,
 }
 
 impl MaterialSummary {
     /// The summary of material `m` of `project`, its dry unit weight at gravity `g`.
     pub fn of(m: &Material, project: &Project, g: f64) -> MaterialSummary {
+        let count = |materials: &mut dyn Iterator<Item = u32>| {
+            materials.filter(|&index| index == m.index).count()
+        };
         MaterialSummary {
-            index: m.index,
-            name: m.name.clone(),
-            material_type: m.material_type.clone(),
-            model: m.model.clone(),
-            elements: project
-                .model
-                .element_material
-                .iter()
-                .filter(|&&e| e == m.index)
-                .count(),
-            mps: project
-                .points
-                .iter()
-                .filter(|mp| mp.material == m.index)
-                .count(),
-            porosity: m.porosity,
-            density_solid: m.density_solid,
-            k0: m.k0,
-            young_modulus: m.young_modulus,
-            poisson_ratio: m.poisson_ratio,
-            friction_angle: m.friction_angle,
-            cohesion: m.cohesion,
-            dilatancy_angle: m.dilatancy_angle,
+            material: m.clone(),
+            elements: count(&mut project.model.element_material.iter().copied()),
+            mps: count(&mut project.points.iter().map(|p| p.material)),
             gamma_dry: m.gamma_dry(g),
         }
     }

@@ -2,13 +2,14 @@
 //! ([`crate::mpm`]): its settings from the project's CPS, and the files it
 //! leaves (MP snapshots as VTU, the kinetic-energy and residual history as SVG).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use plotters::style::RGBColor;
 
 use super::PipelineError;
-use super::output::OutputDir;
+use super::output::{OutputDir, ReadLog};
 use super::plot::{self, Series};
+use super::start::{Start, StateSource};
 use crate::formats::cps::CpsDocument;
 use crate::formats::vtu;
 use crate::mpm::{self, RunSettings};
@@ -112,8 +113,28 @@ pub fn history_plot(path: &Path, report: &mpm::RunReport) -> Result<(), Pipeline
     )
 }
 
-/// Where a command writes: the folder asked for, else `default_name` in the
-/// start's home folder.
-pub fn out_dir(asked: Option<&Path>, home: &Path, default_name: &str) -> std::path::PathBuf {
-    asked.map_or_else(|| home.join(default_name), Path::to_path_buf)
+/// What a command on a mapped state begins with: the log of every file it
+/// reads (started before the first read), the loaded start, and the folder
+/// its outputs go to.
+pub struct Begun {
+    pub reads: ReadLog,
+    pub start: Start,
+    /// The folder asked for, else `default_name` in the start's home folder.
+    pub target: PathBuf,
+}
+
+/// Starts the read log and loads the start `source` names.
+pub fn begin(
+    source: &StateSource,
+    out: Option<&Path>,
+    default_name: &str,
+) -> Result<Begun, PipelineError> {
+    let reads = ReadLog::start();
+    let start = Start::load(source)?;
+    let target = out.map_or_else(|| start.home.join(default_name), Path::to_path_buf);
+    Ok(Begun {
+        reads,
+        start,
+        target,
+    })
 }

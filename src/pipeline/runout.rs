@@ -6,9 +6,9 @@
 use std::path::{Path, PathBuf};
 
 use super::PipelineError;
-use super::output::{OutputDir, ReadLog};
+use super::output::OutputDir;
 use super::runner::{self, history_plot, write_snapshot};
-use super::start::{Start, StateSource};
+use super::start::StateSource;
 use crate::mpm::{self, RunSettings};
 
 /// Local damping α of a run-out unless the caller gives one (the CPS's
@@ -74,10 +74,12 @@ pub fn run(
     out: Option<&Path>,
     force: bool,
 ) -> Result<RunOutcome, PipelineError> {
-    let reads = ReadLog::start();
-    let start = Start::load(source)?;
+    let runner::Begun {
+        reads,
+        start,
+        target,
+    } = runner::begin(source, out, "run")?;
     let settings = options.settings(start.project.cps.as_ref())?;
-    let target = runner::out_dir(out, &start.home, "run");
     let dir = OutputDir::create(&target, force, &reads)?;
     let output = mpm::run(
         &start.project.model,
