@@ -163,7 +163,7 @@ fn invert<const D: usize>(mut a: [[f64; D]; D]) -> Option<([[f64; D]; D], f64)> 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mpm::shape::{tet_old_local_to_global, tri3_local_to_global};
+    use crate::element::{Element, TetOld, Tri3};
     use proptest::prelude::*;
 
     fn tri() -> [[f64; 2]; 3] {
@@ -228,12 +228,12 @@ mod tests {
     fn local_mappings_follow_anura3d_node_order() {
         let c = tet();
         // ζ = 1 is corner 2, ξ = 1 corner 3, η = 1 corner 4.
-        assert_eq!(tet_old_local_to_global(&c, 0.0, 0.0, 1.0), c[1]);
-        assert_eq!(tet_old_local_to_global(&c, 1.0, 0.0, 0.0), c[2]);
-        assert_eq!(tet_old_local_to_global(&c, 0.0, 1.0, 0.0), c[3]);
+        assert_eq!(TetOld::global_position(&c, &[0.0, 0.0, 1.0]), c[1]);
+        assert_eq!(TetOld::global_position(&c, &[1.0, 0.0, 0.0]), c[2]);
+        assert_eq!(TetOld::global_position(&c, &[0.0, 1.0, 0.0]), c[3]);
         let t = tri();
-        assert_eq!(tri3_local_to_global(&t, 1.0, 0.0), t[1]);
-        assert_eq!(tri3_local_to_global(&t, 0.0, 1.0), t[2]);
+        assert_eq!(Tri3::global_position(&t, &[1.0, 0.0]), t[1]);
+        assert_eq!(Tri3::global_position(&t, &[0.0, 1.0]), t[2]);
     }
 
     proptest! {
@@ -268,7 +268,7 @@ mod tests {
         fn tet_old_local_coordinates_round_trip(xi in 0.0f64..0.33, eta in 0.0f64..0.33, zeta in 0.0f64..0.33) {
             let c = tet();
             let s = Simplex::<3, 4>::from_corners(&c).expect("valid tetrahedron");
-            let n = s.values(&tet_old_local_to_global(&c, xi, eta, zeta));
+            let n = s.values(&TetOld::global_position(&c, &[xi, eta, zeta]));
             let expected = [1.0 - xi - eta - zeta, zeta, xi, eta];
             for k in 0..4 {
                 prop_assert!((n[k] - expected[k]).abs() < 1e-12);
