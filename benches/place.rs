@@ -12,6 +12,8 @@ use criterion::{Criterion, SamplingMode, Throughput, criterion_group, criterion_
 
 fn bench_case(c: &mut Criterion, name: &str, model: &AnuraModel) {
     let n_points: usize = model.mp_counts.iter().map(|c| c.0 as usize).sum();
+    // Timed: the placement that succeeds, not an early error.
+    assert_eq!(place_material_points(model).map(|p| p.len()), Ok(n_points));
     let mut group = c.benchmark_group("place");
     group
         .sample_size(10)
