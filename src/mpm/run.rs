@@ -287,9 +287,12 @@ fn drive(
     let final_residual = last.map_or(0.0, |r| r.residual_ratio);
     let (max_displacement, _) = simulation.displacement_stats();
 
-    let flags = simulation.per_point(|p| (p.inadmissible, p.plastic && !p.inadmissible, p.lost));
-    let count = |pick: fn(&(bool, bool, bool)) -> bool| flags.iter().filter(|f| pick(f)).count();
-    let (inadmissible, plastic_points, lost) = (count(|f| f.0), count(|f| f.1), count(|f| f.2));
+    let (mut inadmissible, mut plastic_points, mut lost) = (0, 0, 0);
+    simulation.for_each_point(|p| {
+        inadmissible += p.inadmissible as usize;
+        plastic_points += (p.plastic && !p.inadmissible) as usize;
+        lost += p.lost as usize;
+    });
     let n_points = simulation.n_points();
     let thresholds = settings.thresholds.clone();
     let plastic_limit = (thresholds.plastic_fraction * n_points as f64).floor() as usize;
@@ -457,10 +460,10 @@ fn residual_elements(simulation: &Simulation, model: &AnuraModel) -> Vec<Element
 
 fn plastic_elements(simulation: &Simulation, model: &AnuraModel) -> Vec<ElementScore> {
     let mut scores = vec![0.0; model.mesh.n_elements()];
-    for (plastic, element) in simulation.per_point(|p| (p.plastic, p.element)) {
-        if plastic {
-            scores[element as usize] += 1.0;
+    simulation.for_each_point(|p| {
+        if p.plastic {
+            scores[p.element as usize] += 1.0;
         }
-    }
+    });
     top_ten(model, &scores)
 }

@@ -207,10 +207,15 @@ impl Simulation {
         self.inner.displacement_stats()
     }
 
+    /// Calls `f` on every MP in order.
+    pub(crate) fn for_each_point(&self, mut f: impl FnMut(&PointView)) {
+        self.inner.for_each_point(&mut |p| f(&p));
+    }
+
     /// One value per MP, in MP order.
-    pub(crate) fn per_point<T>(&self, f: impl Fn(&PointView) -> T) -> Vec<T> {
+    fn per_point<T>(&self, f: impl Fn(&PointView) -> T) -> Vec<T> {
         let mut out = Vec::with_capacity(self.n_points());
-        self.inner.for_each_point(&mut |p| out.push(f(&p)));
+        self.for_each_point(|p| out.push(f(p)));
         out
     }
 
