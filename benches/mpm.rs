@@ -4,10 +4,16 @@
 //! MPs is plastic) in 2D plane strain (TRI3) and in 3D (`tetrahedral_old`).
 //! Run with `RAYON_NUM_THREADS=1` or `=2` to compare thread counts; criterion
 //! reports the rate as elements/s, one element being one particle-step.
+//!
+//! The `affine_setup` group times the grid's per-element setup of the affine
+//! shape functions: the hand-written Gauss–Jordan inverse it keeps
+//! ([`Simplex::from_corners`]) against the same gradients and det J through
+//! [`Element`]'s nalgebra path (elements/s, one element being one setup).
 
 use std::time::Duration;
 
-use a3d_init::model::{AnuraModel, MaterialPoint, MpState};
+use a3d_init::element::{self, Element, Simplex, TetOld, Tri3};
+use a3d_init::model::{AnuraModel, MaterialPoint, Mesh, MpState};
 use a3d_init::mpm::{RunSettings, Simulation};
 use a3d_init::testkit::{
     column_tet, column_tri3, geostatic_states, mohr_coulomb_material, place_points,
@@ -79,5 +85,46 @@ fn mohr_coulomb_3d(c: &mut Criterion) {
     bench_case(c, "tet_3d", column_tet(6.0, 3.0, 1.0, 54, 27, 9, material));
 }
 
-criterion_group!(benches, mohr_coulomb_2d, mohr_coulomb_3d);
+/// Both setups of every element of `mesh`, of type `E`.
+fn bench_setup<const D: usize, const NC: usize, E: Element<D, NC>>(
+    c: &mut Criterion,
+    name: &str,
+    mesh: &Mesh,
+) {
+    let corners: Vec<[[f64; D]; NC]> = (0..mesh.n_elements())
+        .map(|e| element::corners(mesh, e))
+        .collect();
+    let mut group = c.benchmark_group("affine_setup");
+    group
+        .sample_size(10)
+        .warm_up_time(Duration::from_millis(500))
+        .measurement_time(Duration::from_secs(2))
+        .throughput(Throughput::Elements(corners.len() as u64));
+    group.bench_function(format!("{name}_gauss_jordan"), |b| {
+        b.iter(|| {
+            for c in &corners {
+                std::hint::black_box(Simplex::from_corners(c));
+            }
+        })
+    });
+    group.bench_function(format!("{name}_nalgebra"), |b| {
+        b.iter(|| {
+            for c in &corners {
+                let grad = E::global_gradients(c, &E::CENTROID);
+                std::hint::black_box((grad, E::det_jacobian(c, &E::CENTROID)));
+            }
+        })
+    });
+    group.finish();
+}
+
+fn affine_setup(c: &mut Criterion) {
+    let material = mohr_coulomb_material(1e4, 0.3, 2650.0, 0.3, 30.0, 0.0, 0.0);
+    let tri = column_tri3(6.0, 3.0, 300, 150, material.clone());
+    bench_setup::<2, 3, Tri3>(c, "tri3", &tri.mesh);
+    let tet = column_tet(6.0, 3.0, 1.0, 54, 27, 9, material);
+    bench_setup::<3, 4, TetOld>(c, "tet", &tet.mesh);
+}
+
+criterion_group!(benches, mohr_coulomb_2d, mohr_coulomb_3d, affine_setup);
 criterion_main!(benches);

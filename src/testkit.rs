@@ -24,9 +24,9 @@
 //!
 //! Nothing here reads files; it is plain data construction.
 
+use crate::element::{Element, Simplex, TetOld, Tri3};
 use crate::model::generate;
 use crate::model::{AnuraModel, Dimension, ElementType, Material, MaterialPoint, Mesh, MpState};
-use crate::mpm::shape::{Simplex, tet_old_local_to_global, tri3_local_to_global};
 
 /// A dry linear elastic material (ρs in kg/m³, E in kPa).
 pub fn elastic_material(young: f64, poisson: f64, density_solid: f64, porosity: f64) -> Material {
@@ -202,7 +202,7 @@ pub fn place_points(model: &AnuraModel) -> Vec<MaterialPoint> {
                     (1.0 / 6.0, 2.0 / 3.0),
                 ];
                 for (k, (xi, eta)) in table.into_iter().enumerate() {
-                    let x = tri3_local_to_global(&corners, xi, eta);
+                    let x = Tri3::global_position(&corners, &[xi, eta]);
                     push(k as u32 + 1, [x[0], x[1], 0.0], area / 3.0);
                 }
             }
@@ -211,7 +211,7 @@ pub fn place_points(model: &AnuraModel) -> Vec<MaterialPoint> {
                 let volume = Simplex::<3, 4>::from_corners(&corners).map_or(0.0, |s| s.measure());
                 let table = [(a, a, a), (a, a, b), (b, a, a), (a, b, a)];
                 for (k, (xi, eta, zeta)) in table.into_iter().enumerate() {
-                    let x = tet_old_local_to_global(&corners, xi, eta, zeta);
+                    let x = TetOld::global_position(&corners, &[xi, eta, zeta]);
                     push(k as u32 + 1, x, volume / 4.0);
                 }
             }

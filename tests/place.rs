@@ -6,12 +6,23 @@
 mod common;
 use common::*;
 
+use a3d_init::element::{LocalPoint, mesh_element};
 use a3d_init::formats::gom::GomDocument;
 use a3d_init::model::{AnuraModel, Dimension, ElementType, Mesh};
-use a3d_init::place::{
-    self, PlaceError, element_measure, local_points, place_material_points, point_in_element,
-};
+use a3d_init::place::{PlaceError, place_material_points};
 use proptest::prelude::*;
+
+fn point_in_element(mesh: &Mesh, e: usize, p: [f64; 3], tol: f64) -> bool {
+    mesh_element(mesh.element_type).contains(mesh, e, p, tol)
+}
+
+fn element_measure(mesh: &Mesh, e: usize) -> f64 {
+    mesh_element(mesh.element_type).measure(mesh, e)
+}
+
+fn local_points(et: ElementType, count: u32) -> Option<&'static [LocalPoint]> {
+    mesh_element(et).local_points(count)
+}
 
 fn model_of(rel: &str) -> AnuraModel {
     GomDocument::read(&fixture(rel)).unwrap().model().unwrap().0
@@ -164,12 +175,13 @@ fn tetrahedral_old_uses_the_permuted_shape_functions() {
     let a = (5.0 - 5f64.sqrt()) / 20.0;
     let b = (5.0 + 3.0 * 5f64.sqrt()) / 20.0;
     // Point 2 of the 4-point rule: ξ = A, η = A, ζ = B ⇒ x = x1(1−2A−B) + x2·B + x3·A + x4·A.
-    let p = place::global_position(&mesh, 0, [a, a, b]);
+    let tet = mesh_element(ElementType::TetOld);
+    let p = tet.global_position(&mesh, 0, [a, a, b]);
     let expected = [b, a, a];
     for k in 0..3 {
         assert!((p[k] - expected[k]).abs() < 1e-15);
     }
-    let centroid = place::global_position(
+    let centroid = tet.global_position(
         &mesh,
         0,
         local_points(ElementType::TetOld, 1).unwrap()[0].xi,
@@ -228,7 +240,7 @@ fn every_rule_has_the_reference_weight_and_points_inside() {
             let table = local_points(et, count).unwrap();
             assert_eq!(table.len(), count as usize, "{et:?} {count}");
             let sum: f64 = table.iter().map(|p| p.weight).sum();
-            let reference = place::tables::reference_measure(et);
+            let reference = mesh_element(et).reference_measure();
             assert!(
                 (sum - reference).abs() < 1e-12 * reference.max(1.0) * 10.0,
                 "{et:?} {count}: {sum}"

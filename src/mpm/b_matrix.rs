@@ -92,8 +92,8 @@ pub(super) fn strain_increment<const D: usize, const NC: usize>(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::element::Simplex;
     use crate::mpm::grid::GridElement;
-    use crate::mpm::shape::Simplex;
     use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 

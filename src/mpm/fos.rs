@@ -48,8 +48,8 @@
 //! result is bit-identical for any number of threads (the runner is). This
 //! file does no I/O and prints nothing.
 
+use super::Simulation;
 use super::run::model_height;
-use super::step::Simulation;
 use super::{MpmError, RunSettings};
 use crate::model::{AnuraModel, Material, MaterialPoint, MpState};
 

@@ -5,7 +5,8 @@
 //! mid-edge nodes of `tetrahedral_old` never enter the shape functions), so the
 //! grid renumbers the corner nodes compactly in order of first appearance and
 //! keeps the map back to mesh node indices. Per element it stores the compact
-//! corner indices, the affine shape functions ([`Simplex`]) and the neighbour
+//! corner indices, the affine shape functions its element type gives
+//! ([`Element::affine`], a [`Simplex`]) and the neighbour
 //! across each face; a uniform spatial hash over element bounding boxes backs
 //! up the neighbour walk when a material point has to be located from scratch.
 //! In 2D axisymmetry the axis nodes are fixed radially ([`Grid::fix_axis`]).
@@ -17,7 +18,7 @@
 use std::collections::HashMap;
 
 use super::MpmError;
-use super::shape::Simplex;
+use crate::element::{Element, Simplex};
 use crate::model::Mesh;
 
 /// Marker for "no neighbour" (a boundary face).
@@ -50,18 +51,22 @@ pub struct Grid<const D: usize, const NC: usize> {
 }
 
 impl<const D: usize, const NC: usize> Grid<D, NC> {
-    /// Builds the grid from a mesh whose elements have `NC` corners in `D`
-    /// dimensions. `fixity` is the per-mesh-node solid fixity.
-    pub fn new(mesh: &Mesh, fixity: &[[bool; 3]]) -> Result<Grid<D, NC>, MpmError> {
+    /// Builds the grid from a mesh of element type `E`, which must be
+    /// [`Element::AFFINE`]. `fixity` is the per-mesh-node solid fixity.
+    pub fn new<E: Element<D, NC>>(
+        mesh: &Mesh,
+        fixity: &[[bool; 3]],
+    ) -> Result<Grid<D, NC>, MpmError> {
         let n_elements = mesh.n_elements();
         let n_mesh_nodes = mesh.n_nodes();
         if n_elements == 0 {
             return Err(MpmError::InvalidMesh("the mesh has no elements".into()));
         }
-        if mesh.element_type.n_corners() != NC || mesh.element_type.n_dim() != D {
+        if mesh.element_type != E::TYPE || !E::AFFINE {
             return Err(MpmError::InvalidMesh(format!(
-                "element type {} does not have {NC} corners in {D}D",
-                mesh.element_type.gom_name()
+                "element type {} is not {} or has no affine shape functions",
+                mesh.element_type.gom_name(),
+                E::TYPE.gom_name()
             )));
         }
         if fixity.len() != n_mesh_nodes {
@@ -95,7 +100,7 @@ impl<const D: usize, const NC: usize> Grid<D, NC> {
                     coords[k][d] = mesh.nodes[node][d];
                 }
             }
-            let shape = Simplex::from_corners(&coords).ok_or(MpmError::DegenerateElement {
+            let shape = E::affine(&coords).ok_or(MpmError::DegenerateElement {
                 element: e as u64 + 1,
             })?;
             elements.push(GridElement { corners, shape });
@@ -438,6 +443,7 @@ impl<const D: usize> SpatialHash<D> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::element::{TetOld, Tri3};
     use crate::testkit::{column_tet, column_tri3, elastic_material};
     use rand::{RngExt, SeedableRng};
     use rand_chacha::ChaCha8Rng;
@@ -485,7 +491,7 @@ mod tests {
     #[test]
     fn locate_agrees_with_brute_force_2d() {
         let model = column_tri3(3.0, 2.0, 6, 4, elastic_material(1e4, 0.3, 2650.0, 0.3));
-        let grid = Grid::<2, 3>::new(&model.mesh, &model.solid_fixity).expect("valid mesh");
+        let grid = Grid::<2, 3>::new::<Tri3>(&model.mesh, &model.solid_fixity).expect("valid mesh");
         check_locate(&grid, [0.0, 0.0], [3.0, 2.0], 7);
     }
 
@@ -500,7 +506,8 @@ mod tests {
             3,
             elastic_material(1e4, 0.3, 2650.0, 0.3),
         );
-        let grid = Grid::<3, 4>::new(&model.mesh, &model.solid_fixity).expect("valid mesh");
+        let grid =
+            Grid::<3, 4>::new::<TetOld>(&model.mesh, &model.solid_fixity).expect("valid mesh");
         check_locate(&grid, [0.0, 0.0, 0.0], [1.0, 2.0, 1.5], 11);
         // Only the 4 corners of each 10-node element carry degrees of freedom.
         let corner_nodes = (3 * 5 * 4) as usize;
@@ -519,7 +526,8 @@ mod tests {
         for f in &mut model.solid_fixity {
             *f = [false; 3];
         }
-        let mut grid = Grid::<2, 3>::new(&model.mesh, &model.solid_fixity).expect("valid mesh");
+        let mut grid =
+            Grid::<2, 3>::new::<Tri3>(&model.mesh, &model.solid_fixity).expect("valid mesh");
         assert_eq!(grid.fix_axis(&model.mesh), 2);
         for (node, fixed) in grid.mesh_node.iter().zip(&grid.fixed) {
             let x = model.mesh.nodes[*node as usize][0];
@@ -534,12 +542,12 @@ mod tests {
         let mut model = column_tri3(1.0, 1.0, 1, 1, elastic_material(1e4, 0.3, 2650.0, 0.3));
         model.mesh.connectivity[2] = 99;
         assert!(matches!(
-            Grid::<2, 3>::new(&model.mesh, &model.solid_fixity),
+            Grid::<2, 3>::new::<Tri3>(&model.mesh, &model.solid_fixity),
             Err(MpmError::InvalidMesh(_))
         ));
         model.mesh.connectivity[2] = model.mesh.connectivity[1];
         assert!(matches!(
-            Grid::<2, 3>::new(&model.mesh, &model.solid_fixity),
+            Grid::<2, 3>::new::<Tri3>(&model.mesh, &model.solid_fixity),
             Err(MpmError::DegenerateElement { element: 1 })
         ));
     }

@@ -27,7 +27,7 @@ pub mod material;
 pub mod mohr_coulomb;
 mod principal;
 pub mod run;
-pub mod shape;
+mod simulation;
 pub mod step;
 
 pub use fos::{FosError, FosOutcome, FosReport, FosSettings, strength_reduction};
@@ -37,7 +37,8 @@ pub use run::{
     ElementScore, Reason, RunOutput, RunReport, Snapshot, StepRecord, StopReason, Verdict, run,
     verify,
 };
-pub use step::{Simulation, StepOutcome};
+pub use simulation::Simulation;
+pub use step::StepOutcome;
 
 /// Everything that can stop the MPM check before it runs.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]

@@ -19,7 +19,7 @@
 //!
 //! This file does no I/O; the report is plain data with `serde::Serialize`.
 
-use super::step::{Inner, Simulation, with_solver};
+use super::simulation::Simulation;
 use super::{MpmError, RunSettings, Thresholds};
 use crate::model::{AnuraModel, Dimension, MaterialPoint, MpState};
 
@@ -287,16 +287,11 @@ fn drive(
     let final_residual = last.map_or(0.0, |r| r.residual_ratio);
     let (max_displacement, _) = simulation.displacement_stats();
 
-    let (inadmissible, plastic_points, lost) = with_solver!(&simulation.inner, s => {
-        let inadmissible = s.inadmissible.iter().filter(|&&b| b).count();
-        let plastic = s
-            .particles
-            .iter()
-            .zip(&s.inadmissible)
-            .filter(|(p, bad)| p.plastic && !**bad)
-            .count();
-        let lost = s.particles.iter().filter(|p| p.lost).count();
-        (inadmissible, plastic, lost)
+    let (mut inadmissible, mut plastic_points, mut lost) = (0, 0, 0);
+    simulation.for_each_point(|p| {
+        inadmissible += p.inadmissible as usize;
+        plastic_points += (p.plastic && !p.inadmissible) as usize;
+        lost += p.lost as usize;
     });
     let n_points = simulation.n_points();
     let thresholds = settings.thresholds.clone();
@@ -460,19 +455,13 @@ fn top_ten(model: &AnuraModel, scores: &[f64]) -> Vec<ElementScore> {
 }
 
 fn residual_elements(simulation: &Simulation, model: &AnuraModel) -> Vec<ElementScore> {
-    let scores: Vec<f64> = with_solver!(&simulation.inner, s => s
-        .grid
-        .elements
-        .iter()
-        .map(|e| e.corners.iter().map(|&c| s.node_residual[c as usize]).sum())
-        .collect());
-    top_ten(model, &scores)
+    top_ten(model, &simulation.element_residuals())
 }
 
 fn plastic_elements(simulation: &Simulation, model: &AnuraModel) -> Vec<ElementScore> {
     let mut scores = vec![0.0; model.mesh.n_elements()];
-    with_solver!(&simulation.inner, s => {
-        for p in s.particles.iter().filter(|p| p.plastic) {
+    simulation.for_each_point(|p| {
+        if p.plastic {
             scores[p.element as usize] += 1.0;
         }
     });

@@ -1,5 +1,6 @@
 //! One explicit MPM time step (MUSL) on the fixed Anura3D background grid, and
-//! the [`Simulation`] that owns the state between steps.
+//! the solver that owns the state between steps (for `D` coordinates and `NC`
+//! corners; [`super::Simulation`] is its public handle).
 //!
 //! Scheme (Modified Update Stress Last, Sulsky et al. 1995):
 //!
@@ -38,7 +39,8 @@ use super::b_matrix::{corner_force, hoop_strain_increment, strain_increment};
 use super::grid::Grid;
 use super::material::SolidModel;
 use super::{MpmError, RunSettings};
-use crate::model::{AnuraModel, Dimension, ElementType, MaterialPoint, MpState};
+use crate::element::Element;
+use crate::model::{AnuraModel, Dimension, MaterialPoint, MpState};
 
 /// MPs per rayon task: large enough that scheduling costs stay negligible.
 const MIN_CHUNK: usize = 1024;
@@ -158,14 +160,16 @@ fn per_live_mp<const D: usize, const NC: usize, T: Copy + Send + Sync>(
 }
 
 impl<const D: usize, const NC: usize> Solver<D, NC> {
-    pub fn new(
+    /// Sets up the solver on the grid of element type `E` (see
+    /// [`super::Simulation::new`]).
+    pub fn new<E: Element<D, NC>>(
         model: &AnuraModel,
         points: &[MaterialPoint],
         states: &[MpState],
         settings: &RunSettings,
     ) -> Result<Self, MpmError> {
         let axisymmetric = D == 2 && model.mesh.dimension == Dimension::Axisymmetric;
-        let mut grid = Grid::<D, NC>::new(&model.mesh, &model.solid_fixity)?;
+        let mut grid = Grid::<D, NC>::new::<E>(&model.mesh, &model.solid_fixity)?;
         if axisymmetric {
             grid.fix_axis(&model.mesh);
         }
@@ -529,163 +533,4 @@ pub(crate) fn ratio(a: f64, b: f64) -> f64 {
     } else {
         f64::INFINITY
     }
-}
-
-/// A running explicit MPM simulation of an Anura3D model: the state between
-/// steps, for a plane-strain or axisymmetric TRI3 model or a 3D
-/// `tetrahedral_old` one.
-pub struct Simulation {
-    pub(crate) inner: Inner,
-}
-
-pub(crate) enum Inner {
-    /// TRI3 in plane strain or 2D axisymmetry.
-    Plane(Box<Solver<2, 3>>),
-    Solid(Box<Solver<3, 4>>),
-}
-
-/// Runs `$body` with `$s` bound to the solver of either dimension.
-macro_rules! with_solver {
-    ($sim:expr, $s:ident => $body:expr) => {
-        match $sim {
-            Inner::Plane($s) => $body,
-            Inner::Solid($s) => $body,
-        }
-    };
-}
-pub(crate) use with_solver;
-
-impl Simulation {
-    /// Sets up the solver: checks the model, locates every MP, builds masses,
-    /// effective stresses and the time step. Fails on unsupported dimensions or
-    /// element types, unknown material models, MPs outside the mesh and
-    /// inconsistent inputs.
-    pub fn new(
-        model: &AnuraModel,
-        points: &[MaterialPoint],
-        states: &[MpState],
-        settings: &RunSettings,
-    ) -> Result<Simulation, MpmError> {
-        settings.validate()?;
-        if points.len() != states.len() {
-            return Err(MpmError::LengthMismatch {
-                points: points.len(),
-                states: states.len(),
-            });
-        }
-        if points.is_empty() {
-            return Err(MpmError::NoMaterialPoints);
-        }
-        let mesh = &model.mesh;
-        let inner = match (mesh.dimension, mesh.element_type) {
-            (Dimension::PlaneStrain | Dimension::Axisymmetric, ElementType::Tri3) => {
-                Inner::Plane(Box::new(Solver::new(model, points, states, settings)?))
-            }
-            (Dimension::Cartesian3D, ElementType::TetOld) => {
-                Inner::Solid(Box::new(Solver::new(model, points, states, settings)?))
-            }
-            (dimension, element_type) => {
-                return Err(MpmError::Unsupported(format!(
-                    "{} with {} elements (supported: 2D-plane_strain and 2D-axisymmetric with \
-                     triangular_3-noded, 3D-cartesian with tetrahedral_old)",
-                    dimension.gom_name(),
-                    element_type.gom_name()
-                )));
-            }
-        };
-        Ok(Simulation { inner })
-    }
-
-    /// Advances by one explicit time step.
-    pub fn step(&mut self) -> StepOutcome {
-        with_solver!(&mut self.inner, s => s.step())
-    }
-
-    /// The time step Δt (s).
-    pub fn time_step(&self) -> f64 {
-        with_solver!(&self.inner, s => s.dt)
-    }
-
-    /// Simulated time so far (s).
-    pub fn time(&self) -> f64 {
-        with_solver!(&self.inner, s => s.time)
-    }
-
-    /// Steps taken so far.
-    pub fn steps(&self) -> usize {
-        with_solver!(&self.inner, s => s.steps)
-    }
-
-    /// Number of material points.
-    pub fn n_points(&self) -> usize {
-        with_solver!(&self.inner, s => s.particles.len())
-    }
-
-    /// Largest P-wave speed √((K + 4G/3)/ρ) over the MPs (m/s).
-    pub fn wave_speed(&self) -> f64 {
-        with_solver!(&self.inner, s => s.wave_speed)
-    }
-
-    /// Smallest element altitude (m), the length behind the time step.
-    pub fn min_element_size(&self) -> f64 {
-        with_solver!(&self.inner, s => s.min_altitude)
-    }
-
-    /// Largest and mean MP displacement magnitude (m).
-    pub fn displacement_stats(&self) -> (f64, f64) {
-        with_solver!(&self.inner, s => s.displacement_stats())
-    }
-
-    /// MP positions (z = 0 in 2D).
-    pub fn positions(&self) -> Vec<[f64; 3]> {
-        with_solver!(&self.inner, s => s.particles.iter().map(|p| widen(&p.position)).collect())
-    }
-
-    /// MP displacements (z = 0 in 2D).
-    pub fn displacements(&self) -> Vec<[f64; 3]> {
-        with_solver!(&self.inner, s => s.particles.iter().map(|p| widen(&p.displacement)).collect())
-    }
-
-    /// MP effective stresses σ′ (xx, yy, zz, xy, yz, xz; kPa).
-    pub fn effective_stresses(&self) -> Vec<[f64; 6]> {
-        with_solver!(&self.inner, s => s.particles.iter().map(|p| p.stress).collect())
-    }
-
-    /// MP velocities (m/s; z = 0 in 2D).
-    pub fn velocities(&self) -> Vec<[f64; 3]> {
-        with_solver!(&self.inner, s => s.particles.iter().map(|p| widen(&p.velocity)).collect())
-    }
-
-    /// Number of MPs that left the mesh.
-    pub fn lost_points(&self) -> usize {
-        with_solver!(&self.inner, s => s.particles.iter().filter(|p| p.lost).count())
-    }
-
-    /// Ties pairs of mesh nodes (0-based: primary, secondary) so that they
-    /// share their degrees of freedom, e.g. the two ends of a periodic layer;
-    /// see [`super::grid::Grid::tie`]. Call it before the first step.
-    pub fn tie_nodes(&mut self, pairs: &[(u32, u32)]) -> Result<(), MpmError> {
-        if self.steps() > 0 {
-            return Err(MpmError::InvalidSettings(
-                "nodes can only be tied before the first step".into(),
-            ));
-        }
-        with_solver!(&mut self.inner, s => s.grid.tie(pairs))
-    }
-
-    /// Per MP: yielded in any step so far.
-    pub fn plastic_flags(&self) -> Vec<bool> {
-        with_solver!(&self.inner, s => s.particles.iter().map(|p| p.plastic).collect())
-    }
-
-    /// Per MP: the 0-based element it is in now.
-    pub fn elements(&self) -> Vec<u32> {
-        with_solver!(&self.inner, s => s.particles.iter().map(|p| p.element).collect())
-    }
-}
-
-fn widen<const D: usize>(v: &[f64; D]) -> [f64; 3] {
-    let mut out = [0.0; 3];
-    out[..D].copy_from_slice(v);
-    out
 }

@@ -1,19 +1,18 @@
 //! Where Anura3D creates material points, reproduced exactly
 //! (`formats-notes/anura3d.md` §3): elements in file order, elements with
 //! material 0 skipped, `nSolid` points per element from Anura3D's own local
-//! tables ([`tables`]), ids numbered 1, 2, 3, … in creation order, positions
-//! x = Σ Nᵢ(ξ)·xᵢ with Anura3D's shape functions, volume = weight × det J(ξ),
-//! times the MP's radius x in 2D-axisymmetric models (per radian; verified on
-//! the running kernel, `formats-notes/anura3d.md` §3.1 step 5 and §8).
+//! tables ([`Element::local_points`]), ids numbered 1, 2, 3, … in creation
+//! order, positions x = Σ Nᵢ(ξ)·xᵢ with Anura3D's shape functions, volume =
+//! weight × det J(ξ), times the MP's radius x in 2D-axisymmetric models (per
+//! radian; verified on the running kernel, `formats-notes/anura3d.md` §3.1
+//! step 5 and §8). The geometry is the element type's [`Element`]
+//! implementation, chosen once per model by [`with_element`].
 //!
 //! Pure computation. Element orientation is checked here (a clockwise triangle or
 //! an inverted tetrahedron would get a negative volume in Anura3D); errors carry
 //! the 0-based element index and the caller attaches the file line.
 
-pub use crate::element::tables::{self, LocalPoint, local_points};
-pub use crate::element::{
-    det_jacobian, element_measure, global_position, point_in_element, shape_values,
-};
+use crate::element::{self, Element, ElementVisitor, mesh_element, with_element};
 use crate::model::{AnuraModel, ComputationMethod, Dimension, ElementType, MaterialPoint, Mesh};
 
 /// A problem with one element.
@@ -40,11 +39,7 @@ pub enum PlaceError {
 }
 
 fn orientation_hint(et: ElementType) -> &'static str {
-    match et {
-        ElementType::Tri3 => "clockwise or degenerate triangle",
-        ElementType::TetOld => "inverted or degenerate tetrahedron",
-        ElementType::Quad4 => "clockwise, non-convex or degenerate quadrilateral",
-    }
+    mesh_element(et).orientation()
 }
 
 impl PlaceError {
@@ -65,24 +60,27 @@ impl PlaceError {
 pub struct PlaceErrors(pub Vec<PlaceError>);
 
 /// Orientation check of the elements for which `active(e)` holds: det J > 0 at
-/// every corner-region sample (the element's own MP points, or its centroid).
+/// the element's centroid.
 pub fn check_elements(mesh: &Mesh, active: impl Fn(usize) -> bool) -> Vec<PlaceError> {
-    let centre = match mesh.element_type {
-        ElementType::Tri3 => [1.0 / 3.0, 1.0 / 3.0, 0.0],
-        ElementType::TetOld => [0.25; 3],
-        ElementType::Quad4 => [0.0; 3],
-    };
-    (0..mesh.n_elements())
-        .filter(|&e| active(e))
-        .filter_map(|e| {
-            let det = det_jacobian(mesh, e, centre);
-            (det.is_nan() || det <= 0.0).then_some(PlaceError::NonPositiveJacobian {
-                element: e,
-                element_type: mesh.element_type,
-                det,
-            })
-        })
-        .collect()
+    struct Check<'a, F>(&'a Mesh, F);
+    impl<F: Fn(usize) -> bool> ElementVisitor for Check<'_, F> {
+        type Output = Vec<PlaceError>;
+        fn visit<const D: usize, const NC: usize, E: Element<D, NC>>(self) -> Self::Output {
+            let Check(mesh, active) = self;
+            (0..mesh.n_elements())
+                .filter(|&e| active(e))
+                .filter_map(|e| {
+                    let det = E::det_jacobian(&element::corners(mesh, e), &E::CENTROID);
+                    (det.is_nan() || det <= 0.0).then_some(PlaceError::NonPositiveJacobian {
+                        element: e,
+                        element_type: E::TYPE,
+                        det,
+                    })
+                })
+                .collect()
+        }
+    }
+    with_element(mesh.element_type, Check(mesh, active))
 }
 
 /// Integration weight of a material point: `weight` × det J, times the radius
@@ -109,9 +107,24 @@ pub fn place_material_points_for(
     model: &AnuraModel,
     method: ComputationMethod,
 ) -> Result<Vec<MaterialPoint>, PlaceErrors> {
+    struct Place<'a>(&'a AnuraModel, ComputationMethod);
+    impl ElementVisitor for Place<'_> {
+        type Output = Result<Vec<MaterialPoint>, PlaceErrors>;
+        fn visit<const D: usize, const NC: usize, E: Element<D, NC>>(self) -> Self::Output {
+            place::<D, NC, E>(self.0, self.1)
+        }
+    }
+    with_element(model.mesh.element_type, Place(model, method))
+}
+
+/// [`place_material_points_for`] with the element type's implementation `E`.
+fn place<const D: usize, const NC: usize, E: Element<D, NC>>(
+    model: &AnuraModel,
+    method: ComputationMethod,
+) -> Result<Vec<MaterialPoint>, PlaceErrors> {
     let one_point = method.one_point_per_element();
     let mesh = &model.mesh;
-    let et = mesh.element_type;
+    let et = E::TYPE;
     let mut errors = Vec::new();
     let total: usize = model
         .mp_counts
@@ -138,7 +151,7 @@ pub fn place_material_points_for(
             });
             continue;
         }
-        let Some(table) = local_points(et, count) else {
+        let Some(table) = E::local_points(count) else {
             errors.push(PlaceError::UnsupportedCount {
                 element: e,
                 element_type: et,
@@ -148,9 +161,11 @@ pub fn place_material_points_for(
             continue;
         };
         let first_new = points.len();
+        let corners = element::corners::<D, NC>(mesh, e);
         let mut bad = None;
         for (k, lp) in table.iter().enumerate() {
-            let det = det_jacobian(mesh, e, lp.xi);
+            let xi = lp.coords::<D>();
+            let det = E::det_jacobian(&corners, &xi);
             if det.is_nan() || det <= 0.0 {
                 bad = Some(PlaceError::NonPositiveJacobian {
                     element: e,
@@ -159,7 +174,7 @@ pub fn place_material_points_for(
                 });
                 break;
             }
-            let position = global_position(mesh, e, lp.xi);
+            let position = element::widen(&E::global_position(&corners, &xi));
             if mesh.dimension == Dimension::Axisymmetric
                 && (position[0].is_nan() || position[0] <= 0.0)
             {

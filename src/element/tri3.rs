@@ -1,24 +1,75 @@
-//! Anura3D's local material-point tables, transcribed from the format notes
-//! (`formats-notes/anura3d.md` §3.2, which cite `ElemCalcTRI.FOR`,
-//! `ElemCalcTETRA.FOR` and `ElemCalcQUAD.FOR`). The decimal constants are kept
-//! exactly as Anura3D writes them (e.g. 0.16666666666667, not 1/6), because the
-//! positions must match Anura3D's to the last bits a double can carry.
-//!
-//! Reference elements: the unit right triangle (weights sum to 0.5), the unit
-//! tetrahedron (weights sum to 1/6) and the square [−1, 1]² (weights sum to 4).
+//! The 3-noded triangle `triangular_3-noded`: N1 = 1−ξ−η, N2 = ξ, N3 = η on the
+//! unit right triangle (counter-clockwise corners give det J > 0), and
+//! Anura3D's local MP tables for it, transcribed from the format notes
+//! (`formats-notes/anura3d.md` §3.2, which cite `ElemCalcTRI.FOR`; weights sum
+//! to 0.5). The decimal constants are kept exactly as Anura3D writes them (e.g.
+//! 0.16666666666667, not 1/6), because the positions must match Anura3D's to
+//! the last bits a double can carry.
 
 // The tables keep every digit Anura3D writes, beyond what an f64 holds.
 #![allow(clippy::excessive_precision)]
 
 use std::sync::LazyLock;
 
+use nalgebra::Matrix2;
+
+use super::{Element, LocalPoint};
 use crate::model::ElementType;
 
-/// One local point: reference coordinates (unused ones 0) and reference weight.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct LocalPoint {
-    pub xi: [f64; 3],
-    pub weight: f64,
+/// `triangular_3-noded`.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct Tri3;
+
+impl Element<2, 3> for Tri3 {
+    const TYPE: ElementType = ElementType::Tri3;
+    const CORNERS: [[f64; 2]; 3] = [[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]];
+    const CENTROID: [f64; 2] = [1.0 / 3.0, 1.0 / 3.0];
+    const REFERENCE_MEASURE: f64 = 0.5;
+    const ORIENTATION: &'static str = "clockwise or degenerate triangle";
+
+    #[inline]
+    fn shape_values(&[x, y]: &[f64; 2]) -> [f64; 3] {
+        [1.0 - x - y, x, y]
+    }
+
+    fn local_gradients(_: &[f64; 2]) -> [[f64; 2]; 3] {
+        [[-1.0, -1.0], [1.0, 0.0], [0.0, 1.0]]
+    }
+
+    /// Constant: the columns are x2 − x1 and x3 − x1.
+    #[inline]
+    fn jacobian(c: &[[f64; 2]; 3], _: &[f64; 2]) -> Matrix2<f64> {
+        let d = |a: usize, k: usize| c[a][k] - c[0][k];
+        Matrix2::new(d(1, 0), d(2, 0), d(1, 1), d(2, 1))
+    }
+
+    #[inline]
+    fn det_jacobian(corners: &[[f64; 2]; 3], xi: &[f64; 2]) -> f64 {
+        Self::jacobian(corners, xi).determinant()
+    }
+
+    fn measure(corners: &[[f64; 2]; 3]) -> f64 {
+        Self::det_jacobian(corners, &Self::CENTROID) / 2.0
+    }
+
+    fn inside_reference(&[x, y]: &[f64; 2], tol: f64) -> bool {
+        x >= -tol && y >= -tol && 1.0 - x - y >= -tol
+    }
+
+    fn local_points(count: u32) -> Option<&'static [LocalPoint]> {
+        let small = &*TRI_SMALL;
+        match count {
+            1 => Some(&small[0]),
+            3 => Some(&small[1]),
+            6 => Some(&small[2]),
+            12 => Some(&small[3]),
+            16 => Some(&small[4]),
+            25 => Some(&small[5]),
+            46 => Some(&TRI46),
+            88 => Some(&TRI88),
+            _ => None,
+        }
+    }
 }
 
 const fn tri(xi: f64, eta: f64, weight: f64) -> LocalPoint {
@@ -361,165 +412,3 @@ static TRI_SMALL: LazyLock<[Vec<LocalPoint>; 6]> = LazyLock::new(|| {
         tri_table(&TRI25),
     ]
 });
-
-/// Tetrahedron rule constants, evaluated in double precision as Anura3D does.
-struct TetConstants {
-    a: f64,
-    b: f64,
-    c: f64,
-    d: f64,
-    e: f64,
-}
-
-fn tet_constants() -> TetConstants {
-    let sqrt5 = 5.0f64.sqrt();
-    let a = (5.0 - sqrt5) / 20.0;
-    let b = (5.0 + 3.0 * sqrt5) / 20.0;
-    TetConstants {
-        a,
-        b,
-        c: (a + b) / 2.0,
-        d: (3.0 * a + b) / 4.0,
-        e: (a + 3.0 * b) / 4.0,
-    }
-}
-
-fn tet(xi: f64, eta: f64, zeta: f64, weight: f64) -> LocalPoint {
-    LocalPoint {
-        xi: [xi, eta, zeta],
-        weight,
-    }
-}
-
-static TET: LazyLock<Vec<(u32, Vec<LocalPoint>)>> = LazyLock::new(|| {
-    let TetConstants { a, b, c, d, e } = tet_constants();
-    let base4 = |w: f64| {
-        vec![
-            tet(a, a, a, w),
-            tet(a, a, b, w),
-            tet(b, a, a, w),
-            tet(a, b, a, w),
-        ]
-    };
-    let with7 = |w: f64| {
-        let mut v = base4(w);
-        v.extend([tet(a, a, c, w), tet(c, a, a, w), tet(a, c, a, w)]);
-        v
-    };
-    let p10 = {
-        let w = 1.0 / 60.0;
-        let mut v = with7(w);
-        v.extend([tet(c, a, c, w), tet(a, c, c, w), tet(c, c, a, w)]);
-        v
-    };
-    let p13 = {
-        let w = 1.0 / 78.0;
-        let mut v = with7(w);
-        v.extend([
-            tet(a, a, e, w),
-            tet(e, a, a, w),
-            tet(a, e, a, w),
-            tet(a, a, d, w),
-            tet(d, a, a, w),
-            tet(a, d, a, w),
-        ]);
-        v
-    };
-    let w8 = 1.0 / 48.0;
-    let p8 = vec![
-        tet(0.125, 0.125, 0.125, w8),
-        tet(0.125, 0.125, 0.625, w8),
-        tet(0.625, 0.125, 0.125, w8),
-        tet(0.125, 0.625, 0.125, w8),
-        tet(0.25, 0.125, 0.25, w8),
-        tet(0.25, 0.375, 0.25, w8),
-        tet(0.125, 0.25, 0.375, w8),
-        tet(0.375, 0.25, 0.125, w8),
-    ];
-    let w20 = 1.0 / 120.0;
-    let p20 = [
-        (0.05, 0.075, 0.075),
-        (0.3, 0.1, 0.05),
-        (0.55, 0.1, 0.075),
-        (0.775, 0.1, 0.05),
-        (0.075, 0.35, 0.05),
-        (0.35, 0.35, 0.075),
-        (0.525, 0.35, 0.05),
-        (0.05, 0.6, 0.075),
-        (0.25, 0.6, 0.1),
-        (0.075, 0.8, 0.1),
-        (0.075, 0.1, 0.325),
-        (0.25, 0.1, 0.35),
-        (0.4, 0.1, 0.325),
-        (0.1, 0.3, 0.35),
-        (0.2, 0.3, 0.35),
-        (0.075, 0.45, 0.325),
-        (0.075, 0.075, 0.525),
-        (0.175, 0.075, 0.55),
-        (0.075, 0.175, 0.55),
-        (0.075, 0.075, 0.75),
-    ]
-    .iter()
-    .map(|&(x, y, z)| tet(x, y, z, w20))
-    .collect();
-    vec![
-        (1, vec![tet(d, d, d, 1.0 / 6.0)]),
-        (4, base4(1.0 / 24.0)),
-        (7, with7(1.0 / 42.0)),
-        (8, p8),
-        (10, p10),
-        (13, p13),
-        (20, p20),
-    ]
-});
-
-static QUAD: LazyLock<[Vec<LocalPoint>; 2]> = LazyLock::new(|| {
-    let a = 0.57735026918962576450914878050196;
-    let q = |x: f64, y: f64, w: f64| LocalPoint {
-        xi: [x, y, 0.0],
-        weight: w,
-    };
-    [
-        vec![q(0.0, 0.0, 4.0)],
-        vec![q(-a, -a, 1.0), q(a, -a, 1.0), q(a, a, 1.0), q(-a, a, 1.0)],
-    ]
-});
-
-/// The local points Anura3D uses for `count` MPs in an element of type `et`, or
-/// `None` when Anura3D does not accept that count.
-pub fn local_points(et: ElementType, count: u32) -> Option<&'static [LocalPoint]> {
-    match et {
-        ElementType::Tri3 => {
-            let small = &*TRI_SMALL;
-            match count {
-                1 => Some(&small[0]),
-                3 => Some(&small[1]),
-                6 => Some(&small[2]),
-                12 => Some(&small[3]),
-                16 => Some(&small[4]),
-                25 => Some(&small[5]),
-                46 => Some(&TRI46),
-                88 => Some(&TRI88),
-                _ => None,
-            }
-        }
-        ElementType::TetOld => TET
-            .iter()
-            .find(|(n, _)| *n == count)
-            .map(|(_, v)| v.as_slice()),
-        ElementType::Quad4 => match count {
-            1 => Some(&QUAD[0]),
-            4 => Some(&QUAD[1]),
-            _ => None,
-        },
-    }
-}
-
-/// Sum of the reference weights of every rule of a type: 0.5, 1/6 or 4.
-pub fn reference_measure(et: ElementType) -> f64 {
-    match et {
-        ElementType::Tri3 => 0.5,
-        ElementType::TetOld => 1.0 / 6.0,
-        ElementType::Quad4 => 4.0,
-    }
-}
