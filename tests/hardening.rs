@@ -4,6 +4,7 @@
 //! inconsistent counts, data after the end marker, non-finite values and garbage
 //! options end as exit 2 with a positioned message, never a panic or a hang.
 //! Every run is killed after 30 s, so a hang fails instead of blocking CI.
+//! At the foot, the input defects of #24 and #30, one test per bug.
 
 mod common;
 use common::{assert_contains, fixture, mini_regions_csv, run_map, run_within};
@@ -463,4 +464,41 @@ fn a_smoothing_length_wider_than_the_fem_is_refused() {
     assert_eq!(code, 2, "{text}");
     assert_contains(&text, &["--h 1000", "more than twice the FEM's extent"]);
     assert!(!out.exists());
+}
+
+// ---- Input defects (#24, #30) ----
+
+/// #24: `calibrate --field all` on a table with only X and Y panicked in the
+/// leave-one-out code (index out of bounds); `map` on it must stay a clear error.
+#[test]
+fn calibrate_field_all_on_a_table_without_fields_is_exit_2_not_a_panic() {
+    let tmp = tempfile::tempdir().unwrap();
+    let fem = tmp.path().join("xy.csv");
+    std::fs::write(&fem, "X,Y\n0,0\n1,0\n0,1\n1,1\n2,2\n").unwrap();
+    let out = tmp.path().join("c");
+    for field in ["all", "pwp"] {
+        let (code, text) = run(&[
+            &"calibrate",
+            &"--fem",
+            &fem,
+            &"--field",
+            &field,
+            &"--out",
+            &out,
+        ]);
+        assert_eq!(code, 2, "{field}: {text}");
+        assert_contains(&text, &["xy.csv", "no field to calibrate on"]);
+        assert!(!out.exists());
+    }
+    let (code, text) = run_map(
+        &fixture("anura3d/K0_phreaticSurf_Geom"),
+        &fem,
+        &tmp.path().join("m"),
+        &["--h", "auto"],
+    );
+    assert_eq!(code, 2, "{text}");
+    assert_contains(
+        &text,
+        &["xy.csv", "no pore-water pressure or total stress columns"],
+    );
 }

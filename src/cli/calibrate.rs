@@ -108,7 +108,8 @@ struct Check {
 
 pub fn run(args: CalibrateArgs) -> anyhow::Result<()> {
     let fem = args.fem.load()?;
-    let fields = select_fields(&fem.nodes, &args.field)?;
+    let files = crate::diagnose::file_list(&fem.paths);
+    let fields = select_fields(&fem.nodes, &args.field, &files)?;
     let kernel = KernelKind::parse(&args.kernel, fem.nodes.dim).ok_or_else(|| {
         anyhow::anyhow!(
             "--kernel {}: expected cubic, gaussian or wendland",
