@@ -502,3 +502,25 @@ fn calibrate_field_all_on_a_table_without_fields_is_exit_2_not_a_panic() {
         &["xy.csv", "no pore-water pressure or total stress columns"],
     );
 }
+
+/// #24: a `node.csv` row with an empty `Node` cell took its row number as id,
+/// so with `--fem-mesh` its pore pressure landed on another mesh node.
+#[test]
+fn empty_node_id_with_fem_mesh_is_exit_2_at_its_cell() {
+    let tmp = tempfile::tempdir().unwrap();
+    let rd = fixture("geostudio-gsz-internal/rapid-drawdown");
+    let text = std::fs::read_to_string(rd.join("1-initial-steady-state_001_node.csv")).unwrap();
+    let node = tmp.path().join("node.csv");
+    std::fs::write(&node, text.replacen("\r\n4,", "\r\n,", 1)).unwrap();
+    let mesh = rd.join("1-initial-steady-state_Mesh.ply");
+    let out = tmp.path().join("out");
+    let (code, text) = map(
+        &node,
+        &fixture("anura3d-rapid-drawdown/rapid_drawdown.GOM"),
+        &out,
+        &["--fem-mesh", mesh.to_str().unwrap(), "--generate-cps"],
+    );
+    assert_eq!(code, 2, "{text}");
+    assert_contains(&text, &["node.csv:5:1: empty node id in `Node`"]);
+    assert!(!out.exists());
+}

@@ -271,6 +271,7 @@ pub(super) fn parse_csv_chunked(
         lines: lines_of,
         has_value,
         first_short,
+        first_empty_id,
         ..
     } = merged.rows;
     nodes.positions = positions;
@@ -310,6 +311,42 @@ pub(super) fn parse_csv_chunked(
     // Columns absent from every row (ragged GeoStudio rows) are dropped, not zeroed;
     // partly present columns are an error at the first row without a value.
     let mut warnings = Vec::new();
+    // The id column likewise: a row without an id would silently take its row
+    // number, and with --fem-mesh another node's coordinates (#24).
+    let ids_given = has_value[value_cols.len()];
+    if let Some(c) = cnode {
+        match first_empty_id {
+            Some((line, col)) if ids_given => {
+                return Err(ParseError::at(
+                    path,
+                    line,
+                    col,
+                    format!(
+                        "empty node id in `{}`: other rows have ids, so every row needs one",
+                        headers[c].1
+                    ),
+                )
+                .into());
+            }
+            _ if !ids_given && cx.is_some() && cy.is_some() => warnings.push(format!(
+                "column `{}` has no values in any row: nodes are numbered by row",
+                headers[c].1
+            )),
+            _ if !ids_given => {
+                return Err(ParseError::at(
+                    path,
+                    header_idx + 1,
+                    headers[c].0,
+                    format!(
+                        "column `{}` has no node ids and the table has no X and Y columns: its rows cannot be joined to mesh nodes",
+                        headers[c].1
+                    ),
+                )
+                .into());
+            }
+            _ => {}
+        }
+    }
     for (slot, &(c, q)) in value_cols.iter().enumerate() {
         let n_missing = values[slot].iter().filter(|v| v.is_nan()).count();
         if n_missing == 0 {

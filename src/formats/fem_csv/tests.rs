@@ -222,3 +222,80 @@ fn duplicate_column_assignments_are_errors() {
         "{e}"
     );
 }
+
+/// #24: an empty or blank `Node` cell silently took the row number as its id
+/// (with `--fem-mesh`, another node's coordinates). A partly empty id column
+/// is an error at the empty cell, from the fast and the field-by-field row
+/// paths alike and for any chunking; a wholly empty one numbers rows, with a
+/// warning, where the table has coordinates.
+#[test]
+fn empty_node_id_is_a_positioned_error_not_the_row_number() {
+    for (table, expected) in [
+        // Fast-path rows around the empty cell.
+        (
+            "X,Y,Node,PWP\n0,0,1,5\n1,0,,6\n0,1,3,7\n",
+            "t.csv:3:5: empty node id in `Node`: other rows have ids",
+        ),
+        ("X,Y,Node,PWP\n0,0,1,5\n1,0,  ,6\n0,1,3,7\n", "t.csv:3:5: "),
+        (
+            "X,Y,Node,PWP\n0,0,1,5\n1,0,\"\",6\n0,1,3,7\n",
+            "t.csv:3:5: ",
+        ),
+        // Rows only the field-by-field path reads (non-ASCII, CRLF).
+        (
+            "X,Y,Node,Region\n0,0,1,sand\n1,0,,argile é\n0,1,3,clay\n",
+            "t.csv:3:5: ",
+        ),
+        ("Node,PWP\r\n1,1\r\n ,2\r\n3,3\r\n", "t.csv:3:1: "),
+        // The first row without an id, later rows with.
+        ("Node;PWP\n;1\n2;2\n", "t.csv:2:1: "),
+    ] {
+        for chunk in [1, 4, 1 << 20] {
+            let e = parse(table, chunk).unwrap_err();
+            assert!(e.starts_with(expected), "{table:?} chunk {chunk}: {e}");
+        }
+    }
+    // Each path on its own: the fast path hands the row over, the slow path
+    // records the cell.
+    let values = [(3, Quantity::Pwp)];
+    let factors = [1.0; 4];
+    let schema = Schema {
+        path: Path::new("t.csv"),
+        delim: Delimiter::Byte(b','),
+        decimal_comma: false,
+        coords: [Some(0), Some(1), None],
+        node: Some(2),
+        region: None,
+        value_cols: &values,
+        factors: &factors,
+    };
+    for line in ["1,0,,6", "1,0, ,6"] {
+        let mut rows = Rows::new(&schema, 0);
+        let (mut ranges, mut scratch) = (Vec::new(), Vec::new());
+        assert!(!fast_row(
+            &schema,
+            line,
+            3,
+            &mut ranges,
+            &mut scratch,
+            &mut rows
+        ));
+        assert!(rows.ids.is_empty());
+        slow_row(&schema, line, 3, &mut rows);
+        assert_eq!(rows.first_empty_id, Some((3, 5)), "{line:?}");
+    }
+    // No id in any row: rows are numbered, with a warning, when coordinates
+    // place them; without coordinates the rows cannot be joined to a mesh.
+    let (nodes, report) = parse("X,Y,Node,PWP\n0,0,,1\n1,0,,2\n0,1,,3\n", 4).unwrap();
+    assert_eq!(nodes.ids, [1, 2, 3]);
+    assert!(
+        report.warnings[0].contains("`Node` has no values in any row"),
+        "{:?}",
+        report.warnings
+    );
+    let e = parse("Node,PWP\n,1\n,2\n", 4).unwrap_err();
+    assert!(
+        e.starts_with("t.csv:1:1: column `Node` has no node ids"),
+        "{e}"
+    );
+}
