@@ -266,10 +266,15 @@ impl std::str::FromStr for StepChoice {
             return Ok(StepChoice::Last);
         }
         if let Some(t) = s.strip_prefix("time=") {
-            return t
-                .parse()
-                .map(StepChoice::Time)
-                .map_err(|_| format!("`{s}`: expected time=<seconds>"));
+            // NaN, infinities and overflowing numbers (`1e400`) are refused:
+            // no saved step is at such a time (#24).
+            return match t.parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(StepChoice::Time(v)),
+                Ok(_) => Err(format!(
+                    "`{s}`: the time must be a finite number of seconds"
+                )),
+                Err(_) => Err(format!("`{s}`: expected time=<seconds>")),
+            };
         }
         s.parse()
             .map(StepChoice::Number)
@@ -285,6 +290,14 @@ pub fn read_step(
     step: &StepChoice,
     options: &CsvOptions,
 ) -> Result<(FemNodes, FemReadReport, String), FormatError> {
+    if let StepChoice::Time(t) = step
+        && !t.is_finite()
+    {
+        return Err(FormatError::file(
+            path,
+            format!("step time {t}: the time must be a finite number of seconds"),
+        ));
+    }
     let project = read_project(path)?;
     // `1 `name`, 2 `name``: the analyses to choose from, for the errors.
     let analysis_list = || {
