@@ -524,3 +524,75 @@ fn empty_node_id_with_fem_mesh_is_exit_2_at_its_cell() {
     assert_contains(&text, &["node.csv:5:1: empty node id in `Node`"]);
     assert!(!out.exists());
 }
+
+/// #24: a PLY whose header declares more nodes than the data holds (`element
+/// node 554` over 553 rows) was read when only nodes were needed: node 554
+/// took its numbers from the element block. Every declared count is checked
+/// against the data, in every read path (`--fem-mesh`, the mesh of a `.gsz`).
+#[test]
+fn ply_node_count_larger_than_the_data_is_refused() {
+    use a3d_init::formats::ply;
+    let rd = fixture("geostudio-gsz-internal/rapid-drawdown");
+    let good = std::fs::read(rd.join("1-initial-steady-state_Mesh.ply")).unwrap();
+    let header_end = good.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+    let header = String::from_utf8_lossy(&good[..header_end]).into_owned();
+    let with_header = |from: &str, to: &str| {
+        [header.replacen(from, to, 1).as_bytes(), &good[header_end..]].concat()
+    };
+    let p = Path::new("Mesh.ply");
+    assert_eq!(ply::parse_ply_nodes(p, &good).unwrap().len(), 553);
+    for (name, bytes, expected) in [
+        (
+            "554 nodes",
+            with_header("element node 553", "element node 554"),
+            "truncated PLY",
+        ),
+        (
+            "552 nodes",
+            with_header("element node 553", "element node 552"),
+            "Mesh.ply: byte ",
+        ),
+        (
+            "682 elements",
+            with_header("element element 681", "element element 682"),
+            "truncated PLY",
+        ),
+        (
+            "trailing bytes",
+            [&good[..], &[0u8; 7]].concat(),
+            "7 bytes after the last element `node_pair`",
+        ),
+    ] {
+        // Nodes only (what --fem-mesh and a .gsz read); nodes and elements.
+        let e = ply::parse_ply_nodes(p, &bytes).unwrap_err().to_string();
+        assert!(
+            e.starts_with("Mesh.ply: byte ") && e.contains(expected),
+            "{name}: {e}"
+        );
+        let e = ply::parse_ply_mesh(p, &bytes).unwrap_err().to_string();
+        assert!(e.starts_with("Mesh.ply: byte "), "{name}: {e}");
+    }
+    // Through the binary: `--fem-mesh`, and the mesh inside a `.gsz`.
+    let tmp = tempfile::tempdir().unwrap();
+    let bad = with_header("element node 553", "element node 554");
+    let mesh = tmp.path().join("Mesh.ply");
+    std::fs::write(&mesh, &bad).unwrap();
+    let node = rd.join("1-initial-steady-state_001_node.csv");
+    let (code, text) = run(&[&"inspect", &"--fem", &node, &"--fem-mesh", &mesh]);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(&text, &["Mesh.ply: byte ", "truncated PLY"]);
+    let gsz = tmp.path().join("p.gsz");
+    let mut zip = zip::ZipWriter::new(std::fs::File::create(&gsz).unwrap());
+    let options = zip::write::SimpleFileOptions::default();
+    zip.start_file("project.xml", options).unwrap();
+    zip.write_all(b"<GSIData><Analyses><Analysis><Name>A</Name></Analysis></Analyses></GSIData>")
+        .unwrap();
+    zip.start_file("A/001/node.csv", options).unwrap();
+    zip.write_all(&std::fs::read(&node).unwrap()).unwrap();
+    zip.start_file("A/Mesh.ply", options).unwrap();
+    zip.write_all(&bad).unwrap();
+    zip.finish().unwrap();
+    let (code, text) = run(&[&"inspect", &"--fem", &gsz]);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(&text, &["A/Mesh.ply: byte ", "truncated PLY"]);
+}
