@@ -596,3 +596,45 @@ fn ply_node_count_larger_than_the_data_is_refused() {
     assert_eq!(code, 2, "{text}");
     assert_contains(&text, &["A/Mesh.ply: byte ", "truncated PLY"]);
 }
+
+/// #24: two mesh nodes at one point in a `Mesh.ply` (two pore pressures at
+/// one place) were accepted, while the same data as an X, Y table was
+/// refused. Both are refused, naming both lines.
+#[test]
+fn coincident_mesh_nodes_are_refused_like_coincident_table_rows() {
+    let rd = fixture("geostudio-gsz-internal/rapid-drawdown");
+    let good = std::fs::read(rd.join("1-initial-steady-state_Mesh.ply")).unwrap();
+    let header_end = good.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+    // Node 11 moved onto node 10 (the version element takes 4 bytes).
+    let node = |k: usize| header_end + 4 + 24 * (k - 1);
+    let mut bad = good.clone();
+    bad.copy_within(node(10)..node(10) + 24, node(11));
+    let tmp = tempfile::tempdir().unwrap();
+    let mesh = tmp.path().join("Mesh.ply");
+    std::fs::write(&mesh, &bad).unwrap();
+    let csv = rd.join("1-initial-steady-state_001_node.csv");
+    let (code, text) = run(&[&"inspect", &"--fem", &csv, &"--fem-mesh", &mesh]);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(
+        &text,
+        &[
+            "1-initial-steady-state_001_node.csv:12:1: duplicate node: mesh node 11 of ",
+            "Mesh.ply is at the same point as mesh node 10 (",
+            "1-initial-steady-state_001_node.csv:11)",
+        ],
+    );
+    // The same nodes as an X, Y table: the check and its message of before.
+    let nodes = a3d_init::formats::ply::parse_ply_nodes(&mesh, &bad).unwrap();
+    let mut table = String::from("X,Y,PWP\n");
+    for p in &nodes {
+        table.push_str(&format!("{},{},1\n", p[0], p[1]));
+    }
+    let xy = tmp.path().join("xy.csv");
+    std::fs::write(&xy, table).unwrap();
+    let (code, text) = run(&[&"inspect", &"--fem", &xy]);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(
+        &text,
+        &["xy.csv:12:1: duplicate node: same coordinates as line 11"],
+    );
+}

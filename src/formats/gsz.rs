@@ -533,6 +533,27 @@ pub fn join_mesh(
     for (i, &k) in nodes.ids.iter().enumerate() {
         nodes.positions[i] = mesh[k as usize - 1];
     }
+    // Two rows at one mesh point would give it two values: refused as the
+    // same rows with X and Y columns are (#24).
+    if let Some((first, second)) = fem_csv::first_coincident(&nodes.positions) {
+        let p = nodes.positions[first];
+        return Err(ParseError::at(
+            csv_path,
+            line_of(second),
+            1,
+            format!(
+                "duplicate node: mesh node {} of {mesh_name} is at the same point as mesh node {} ({}:{}): ({}, {}, {})",
+                nodes.ids[second],
+                nodes.ids[first],
+                csv_path.display(),
+                line_of(first),
+                p[0],
+                p[1],
+                p[2]
+            ),
+        )
+        .into());
+    }
     nodes.dim = if nodes.positions.iter().all(|p| p[2] == 0.0) {
         2
     } else {

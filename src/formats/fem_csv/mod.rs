@@ -35,6 +35,7 @@ pub use headers::{Field, normalise, synonym};
 pub use options::{
     CsvOptions, SignConvention, UnitOverride, parse_columns_option, parse_units_option,
 };
+pub use table::first_coincident;
 
 /// How one column was understood.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -103,6 +104,18 @@ pub fn attach_mesh(
             ));
         }
         nodes.positions[i] = mesh[k as usize - 1];
+    }
+    if let Some((a, b)) = first_coincident(&nodes.positions) {
+        return Err(FormatError::file(
+            csv_path,
+            format!(
+                "duplicate node: node {} (row {}) is at the same mesh point as node {} (row {})",
+                nodes.ids[b],
+                b + 1,
+                nodes.ids[a],
+                a + 1
+            ),
+        ));
     }
     nodes.dim = if nodes.positions.iter().all(|p| p[2] == 0.0) {
         2

@@ -430,43 +430,82 @@ fn check_duplicates(path: &Path, nodes: &FemNodes, lines: &[usize]) -> Result<()
             .into());
         }
     }
+    if let Some((first, second)) = first_coincident(&nodes.positions) {
+        let p = nodes.positions[first];
+        return Err(ParseError::at(
+            path,
+            lines[second],
+            1,
+            format!(
+                "duplicate node: same coordinates as line {} ({}, {}, {})",
+                lines[first], p[0], p[1], p[2]
+            ),
+        )
+        .into());
+    }
+    Ok(())
+}
+
+/// A pair of coincident points, within 1e-9 of the bounding-box diagonal on
+/// every axis, as (earlier, later) indices; `None` when all points are apart.
+/// Used for node tables and for the mesh nodes a `node.csv` is joined to.
+///
+/// The points are swept in the order of a skew coordinate x + φy + ψz (φ, ψ
+/// irrational), so that the rows and columns of a structured mesh, which
+/// share an x, do not all fall in one band of the sweep; the pair returned is
+/// the first found in that order. Any finite coordinates work (the diagonal
+/// and the sweep coordinate are computed without overflow).
+pub fn first_coincident(positions: &[[f64; 3]]) -> Option<(usize, usize)> {
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for p in &nodes.positions {
+    for p in positions {
         for k in 0..3 {
             lo[k] = lo[k].min(p[k]);
             hi[k] = hi[k].max(p[k]);
         }
     }
-    let diag = ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2))
-        .sqrt()
-        .max(1e-300);
-    let tol = 1e-9 * diag;
-    let mut order: Vec<usize> = (0..nodes.len()).collect();
-    order.par_sort_unstable_by(|&a, &b| {
-        nodes.positions[a][0]
-            .total_cmp(&nodes.positions[b][0])
-            .then(a.cmp(&b))
-    });
-    for (k, &a) in order.iter().enumerate() {
-        for &b in &order[k + 1..] {
-            let (pa, pb) = (nodes.positions[a], nodes.positions[b]);
-            if pb[0] - pa[0] > tol {
+    if positions.len() < 2 {
+        return None;
+    }
+    let extent = [0, 1, 2].map(|k| (hi[k] - lo[k]).min(f64::MAX));
+    let mut diag = (extent[0].powi(2) + extent[1].powi(2) + extent[2].powi(2)).sqrt();
+    if !diag.is_finite() {
+        // Scaled by the largest extent, so the squares cannot overflow.
+        let m = extent[0].max(extent[1]).max(extent[2]);
+        diag = (m * extent.iter().map(|e| (e / m).powi(2)).sum::<f64>().sqrt()).min(f64::MAX);
+    }
+    let tol = 1e-9 * diag.max(1e-300);
+    const PHI: f64 = 0.754_877_666_246_692_7;
+    const PSI: f64 = 0.569_840_290_998_053_2;
+    // Eighths, so that neither the differences nor their sum can overflow.
+    let skew = |p: &[f64; 3]| {
+        (p[0] / 8.0 - lo[0] / 8.0)
+            + PHI * (p[1] / 8.0 - lo[1] / 8.0)
+            + PSI * (p[2] / 8.0 - lo[2] / 8.0)
+    };
+    let mut order: Vec<(f64, u32)> = positions
+        .par_iter()
+        .enumerate()
+        .map(|(i, p)| (skew(p), i as u32))
+        .collect();
+    order.par_sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    // Coincident points differ by at most `band` in the skew coordinate
+    // (widened for the rounding of the sums, a few ulps of the extent).
+    let band = tol / 8.0 * (1.0 + PHI + PSI) + 4.0 * f64::EPSILON * diag;
+    for (k, &(sa, a)) in order.iter().enumerate() {
+        let pa = positions[a as usize];
+        for &(sb, b) in &order[k + 1..] {
+            if !(sb - sa <= band) {
                 break;
             }
-            if (pa[1] - pb[1]).abs() <= tol && (pa[2] - pb[2]).abs() <= tol {
-                let (first, second) = (a.min(b), a.max(b));
-                return Err(ParseError::at(
-                    path,
-                    lines[second],
-                    1,
-                    format!(
-                        "duplicate node: same coordinates as line {} ({}, {}, {})",
-                        lines[first], pa[0], pa[1], pa[2]
-                    ),
-                )
-                .into());
+            let pb = positions[b as usize];
+            if (pa[0] - pb[0]).abs() <= tol
+                && (pa[1] - pb[1]).abs() <= tol
+                && (pa[2] - pb[2]).abs() <= tol
+            {
+                let (a, b) = (a as usize, b as usize);
+                return Some((a.min(b), a.max(b)));
             }
         }
     }
-    Ok(())
+    None
 }

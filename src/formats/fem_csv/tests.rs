@@ -299,3 +299,28 @@ fn empty_node_id_is_a_positioned_error_not_the_row_number() {
         "{e}"
     );
 }
+
+/// #24 (coincident mesh nodes): the duplicate check shared by tables and
+/// meshes finds a pair within 1e-9 of the diagonal on every axis and never a
+/// false pair on a structured grid (whose columns share an x).
+#[test]
+fn first_coincident_finds_pairs_and_only_pairs() {
+    let mut grid: Vec<[f64; 3]> = Vec::new();
+    for j in 0..300 {
+        for i in 0..300 {
+            grid.push([i as f64 * 0.5, j as f64 * 0.5, 0.0]);
+        }
+    }
+    assert_eq!(first_coincident(&grid), None);
+    // Beside far outliers (whose squares overflowed the old diagonal) the
+    // check still runs, but every pair is within 1e-9 of such a diagonal.
+    let mut with_outlier = grid.clone();
+    with_outlier.push([1e308, 0.0, 0.0]);
+    with_outlier.push([-1e308, -1e308, 1e308]);
+    assert_eq!(first_coincident(&with_outlier), Some((0, 1)));
+    let mut dup = grid.clone();
+    dup.push([10.0 + 1e-12, 20.0, 0.0]);
+    assert_eq!(first_coincident(&dup), Some((40 * 300 + 20, grid.len())));
+    assert_eq!(first_coincident(&[[1.0; 3]; 2]), Some((0, 1)));
+    assert_eq!(first_coincident(&[[1.0; 3]]), None);
+}
