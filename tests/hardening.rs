@@ -638,3 +638,49 @@ fn coincident_mesh_nodes_are_refused_like_coincident_table_rows() {
         &["xy.csv:12:1: duplicate node: same coordinates as line 11"],
     );
 }
+
+/// #24: `$$GRAVITY_VECTOR 1.0 0.0` (or `0.0 0.0`) was accepted: `map` computed
+/// geostatic stress for −y gravity and `verify` ran with −y gravity. Every
+/// command that reads the CPS for gravity refuses it at its line and column.
+#[test]
+fn gravity_vector_not_along_minus_y_is_refused_by_every_command() {
+    let (tmp, gom, fem) = mini_project();
+    let out = tmp.path().join("mapped");
+    let (code, text) = map(&fem, &gom, &out, &["--stress", "geostatic"]);
+    assert_eq!(code, 0, "{text}");
+    let cps = gom.with_extension("CPS_001");
+    let good = std::fs::read_to_string(&cps).unwrap();
+    let mapped_cps = out.join("TwoMat.CPS_001");
+    let mapped = std::fs::read_to_string(&mapped_cps).unwrap();
+    for (vector, column) in [("1.0 0.0", 1), ("0.0 0.0", 5), ("0.0 -9.81", 5)] {
+        let line = |text: &str| text.lines().position(|l| l == "$$GRAVITY_VECTOR").unwrap() + 2;
+        let at = format!("TwoMat.CPS_001:{}:{column}: $$GRAVITY_VECTOR", line(&good));
+        std::fs::write(&cps, good.replacen("0.0 -1.0\n", &format!("{vector}\n"), 1)).unwrap();
+        let (code, text) = map(&fem, &gom, &tmp.path().join("o"), &[]);
+        assert_eq!(code, 2, "{vector}: {text}");
+        assert_contains(&text, &[&at]);
+        assert!(!tmp.path().join("o").exists());
+        let (code, text) = run(&[&"inspect", &gom]);
+        assert_eq!(code, 2, "{vector}: {text}");
+        assert_contains(&text, &[&at]);
+        // A mapped folder whose CPS was edited afterwards.
+        let at = format!(
+            "TwoMat.CPS_001:{}:{column}: $$GRAVITY_VECTOR",
+            line(&mapped)
+        );
+        std::fs::write(
+            &mapped_cps,
+            mapped.replacen("0.0 -1.0\n", &format!("{vector}\n"), 1),
+        )
+        .unwrap();
+        for command in ["verify", "run", "fos"] {
+            let (code, text) = run(&[&command, &out, &"--out", &tmp.path().join("v")]);
+            assert_eq!(code, 2, "{command} {vector}: {text}");
+            assert_contains(&text, &[&at]);
+        }
+        let (code, text) = verify_state(&gom, &out.join("mps.csv"), &tmp.path().join("v"), &[]);
+        assert_eq!(code, 2, "{vector}: {text}");
+        assert_contains(&text, &["$$GRAVITY_VECTOR: component"]);
+    }
+    assert!(!tmp.path().join("v").exists());
+}
