@@ -684,3 +684,33 @@ fn gravity_vector_not_along_minus_y_is_refused_by_every_command() {
     }
     assert!(!tmp.path().join("v").exists());
 }
+
+/// #24: `--h 1e-300` (far below the node spacing) overflowed the neighbour
+/// grid's cell count and aborted on a 3 GB allocation; it is refused like an
+/// h wider than the FEM, whatever `--outside` says.
+#[test]
+fn h_far_below_the_node_spacing_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    for extra in [
+        &["--h", "1e-300"][..],
+        &["--h", "0.0001", "--outside", "nearest"],
+    ] {
+        let (code, text) = run_map(
+            &fixture("anura3d/K0_phreaticSurf_Geom"),
+            &fixture("geostudio-csv/k0-slope-hydrostatic.csv"),
+            &out,
+            extra,
+        );
+        assert_eq!(code, 2, "{extra:?}: {text}");
+        assert_contains(
+            &text,
+            &[
+                &format!("--h {}: the kernel support", extra[1]),
+                "below a thousandth of the node spacing l = 0.5000 m",
+            ],
+        );
+        assert!(!text.contains("panicked"), "{text}");
+        assert!(!out.exists());
+    }
+}
