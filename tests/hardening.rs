@@ -714,3 +714,94 @@ fn h_far_below_the_node_spacing_is_refused() {
         assert!(!out.exists());
     }
 }
+
+/// #30: one mesh node at x = 1e308 in a PLY aborted `map` on a 6 GB
+/// allocation (the neighbour grid sized by the extent). A node that far from
+/// the others cannot be meant: refused at its row, naming the coordinate, in
+/// a `node.csv` joined to a mesh and in a table with X and Y alike.
+#[test]
+fn a_mesh_node_at_1e308_is_refused_not_a_6_gb_allocation() {
+    let rd = fixture("geostudio-gsz-internal/rapid-drawdown");
+    let mut ply = std::fs::read(rd.join("1-initial-steady-state_Mesh.ply")).unwrap();
+    let header_end = ply.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+    let x10 = header_end + 4 + 24 * 9;
+    ply[x10..x10 + 8].copy_from_slice(&1e308f64.to_le_bytes());
+    let tmp = tempfile::tempdir().unwrap();
+    let mesh = tmp.path().join("Mesh.ply");
+    std::fs::write(&mesh, &ply).unwrap();
+    let out = tmp.path().join("out");
+    let (code, text) = map(
+        &rd.join("1-initial-steady-state_001_node.csv"),
+        &fixture("anura3d-rapid-drawdown/rapid_drawdown.GOM"),
+        &out,
+        &["--fem-mesh", mesh.to_str().unwrap(), "--generate-cps"],
+    );
+    assert_eq!(code, 2, "{text}");
+    assert_contains(
+        &text,
+        &[
+            "1-initial-steady-state_001_node.csv:11:1: mesh node 10 of ",
+            "Mesh.ply: x = 1e308 lies more than 10^6 times the spread of the nodes",
+        ],
+    );
+    assert!(!out.exists());
+    let csv = std::fs::read_to_string(fixture("geostudio-csv/k0-slope-hydrostatic.csv")).unwrap();
+    let lines = csv.lines().count();
+    let fem = tmp.path().join("far.csv");
+    std::fs::write(&fem, format!("{csv}9999,1e308,0.0,5.0\n")).unwrap();
+    let (code, text) = map(&fem, &fixture("anura3d/K0_phreaticSurf_Geom"), &out, &[]);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(
+        &text,
+        &[&format!("far.csv:{}:1: x = 1e308 lies", lines + 1)],
+    );
+}
+
+/// #30: z = 1e308 on one node of a 3D GOM made `map` panic with "capacity
+/// overflow" (the geostatic stress's vertical index sized by the extent;
+/// bounded now whatever the mesh, see `state::geostatic`). A node that far
+/// from the others cannot be meant: the GOM reader refuses it at its
+/// coordinate, whatever `--outside` says.
+#[test]
+fn a_3d_gom_node_at_z_1e308_is_refused_not_a_capacity_overflow() {
+    let tmp = tempfile::tempdir().unwrap();
+    let src = fixture("anura3d/test-1005_3D");
+    let dir = tmp.path().join("model");
+    std::fs::create_dir(&dir).unwrap();
+    let gom = std::fs::read_to_string(src.join("test-1005_3D.GOM")).unwrap();
+    let lines: Vec<&str> = gom.lines().collect();
+    let start = lines.iter().position(|l| *l == "$$STARTNODES").unwrap() + 1;
+    let mut csv = String::from("X,Y,Z,PWP\n");
+    for l in &lines[start..start + 207] {
+        let v: Vec<f64> = l.split_whitespace().map(|t| t.parse().unwrap()).collect();
+        csv.push_str(&format!("{},{},{},{}\n", v[0], v[1], v[2], -10.0 * v[2]));
+    }
+    let fem = tmp.path().join("fem.csv");
+    std::fs::write(&fem, csv).unwrap();
+    // Node 9, (0, 0, 0), a corner of the first elements.
+    assert_eq!(
+        lines[start + 8].split_whitespace().collect::<Vec<_>>(),
+        ["0", "0", "0"]
+    );
+    let far = gom.replacen(
+        lines[start + 8],
+        "           0            0        1e308",
+        1,
+    );
+    std::fs::write(dir.join("test-1005_3D.GOM"), far).unwrap();
+    std::fs::copy(
+        src.join("test-1005_3D.CPS_001"),
+        dir.join("test-1005_3D.CPS_001"),
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    for extra in [&[][..], &["--outside", "nearest"]] {
+        let (code, text) = map(&fem, &dir, &out, extra);
+        assert_eq!(code, 2, "{text}");
+        assert_contains(
+            &text,
+            &["test-1005_3D.GOM:19:34: node 9: z = 1e308 lies more than 10^6 times the spread"],
+        );
+        assert!(!out.exists());
+    }
+}

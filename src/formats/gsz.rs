@@ -533,9 +533,19 @@ pub fn join_mesh(
     for (i, &k) in nodes.ids.iter().enumerate() {
         nodes.positions[i] = mesh[k as usize - 1];
     }
+    // A listed node far outside the others cannot be meant (#30).
+    if let Some(far) = super::extent::far_outlier(&nodes.positions) {
+        return Err(ParseError::at(
+            csv_path,
+            line_of(far.index),
+            1,
+            format!("mesh node {} of {mesh_name}: {far}", nodes.ids[far.index]),
+        )
+        .into());
+    }
     // Two rows at one mesh point would give it two values: refused as the
     // same rows with X and Y columns are (#24).
-    if let Some((first, second)) = fem_csv::first_coincident(&nodes.positions) {
+    if let Some((first, second)) = super::extent::first_coincident(&nodes.positions) {
         let p = nodes.positions[first];
         return Err(ParseError::at(
             csv_path,

@@ -35,7 +35,6 @@ pub use headers::{Field, normalise, synonym};
 pub use options::{
     CsvOptions, SignConvention, UnitOverride, parse_columns_option, parse_units_option,
 };
-pub use table::first_coincident;
 
 /// How one column was understood.
 #[derive(Clone, Debug, serde::Serialize)]
@@ -105,7 +104,7 @@ pub fn attach_mesh(
         }
         nodes.positions[i] = mesh[k as usize - 1];
     }
-    if let Some((a, b)) = first_coincident(&nodes.positions) {
+    if let Some((a, b)) = super::extent::first_coincident(&nodes.positions) {
         return Err(FormatError::file(
             csv_path,
             format!(

@@ -13,6 +13,7 @@ use super::options::{CsvOptions, SignConvention, check_columns_option};
 use super::rows::{Rows, Schema, merge_rows, nth_line_start, parse_chunk, split_chunks};
 use super::{ColumnReport, FemReadReport};
 use crate::formats::error::{FormatError, ParseError};
+use crate::formats::extent::{far_outlier, first_coincident};
 use crate::model::{FemNodes, Quantity};
 
 /// [`parse_csv`](super::parse_csv) with data-row chunks of about `chunk_bytes`
@@ -430,6 +431,9 @@ fn check_duplicates(path: &Path, nodes: &FemNodes, lines: &[usize]) -> Result<()
             .into());
         }
     }
+    if let Some(far) = far_outlier(&nodes.positions) {
+        return Err(ParseError::at(path, lines[far.index], 1, far.to_string()).into());
+    }
     if let Some((first, second)) = first_coincident(&nodes.positions) {
         let p = nodes.positions[first];
         return Err(ParseError::at(
@@ -444,68 +448,4 @@ fn check_duplicates(path: &Path, nodes: &FemNodes, lines: &[usize]) -> Result<()
         .into());
     }
     Ok(())
-}
-
-/// A pair of coincident points, within 1e-9 of the bounding-box diagonal on
-/// every axis, as (earlier, later) indices; `None` when all points are apart.
-/// Used for node tables and for the mesh nodes a `node.csv` is joined to.
-///
-/// The points are swept in the order of a skew coordinate x + φy + ψz (φ, ψ
-/// irrational), so that the rows and columns of a structured mesh, which
-/// share an x, do not all fall in one band of the sweep; the pair returned is
-/// the first found in that order. Any finite coordinates work (the diagonal
-/// and the sweep coordinate are computed without overflow).
-pub fn first_coincident(positions: &[[f64; 3]]) -> Option<(usize, usize)> {
-    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for p in positions {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    if positions.len() < 2 {
-        return None;
-    }
-    let extent = [0, 1, 2].map(|k| (hi[k] - lo[k]).min(f64::MAX));
-    let mut diag = (extent[0].powi(2) + extent[1].powi(2) + extent[2].powi(2)).sqrt();
-    if !diag.is_finite() {
-        // Scaled by the largest extent, so the squares cannot overflow.
-        let m = extent[0].max(extent[1]).max(extent[2]);
-        diag = (m * extent.iter().map(|e| (e / m).powi(2)).sum::<f64>().sqrt()).min(f64::MAX);
-    }
-    let tol = 1e-9 * diag.max(1e-300);
-    const PHI: f64 = 0.754_877_666_246_692_7;
-    const PSI: f64 = 0.569_840_290_998_053_2;
-    // Eighths, so that neither the differences nor their sum can overflow.
-    let skew = |p: &[f64; 3]| {
-        (p[0] / 8.0 - lo[0] / 8.0)
-            + PHI * (p[1] / 8.0 - lo[1] / 8.0)
-            + PSI * (p[2] / 8.0 - lo[2] / 8.0)
-    };
-    let mut order: Vec<(f64, u32)> = positions
-        .par_iter()
-        .enumerate()
-        .map(|(i, p)| (skew(p), i as u32))
-        .collect();
-    order.par_sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    // Coincident points differ by at most `band` in the skew coordinate
-    // (widened for the rounding of the sums, a few ulps of the extent).
-    let band = tol / 8.0 * (1.0 + PHI + PSI) + 4.0 * f64::EPSILON * diag;
-    for (k, &(sa, a)) in order.iter().enumerate() {
-        let pa = positions[a as usize];
-        for &(sb, b) in &order[k + 1..] {
-            if !(sb - sa <= band) {
-                break;
-            }
-            let pb = positions[b as usize];
-            if (pa[0] - pb[0]).abs() <= tol
-                && (pa[1] - pb[1]).abs() <= tol
-                && (pa[2] - pb[2]).abs() <= tol
-            {
-                let (a, b) = (a as usize, b as usize);
-                return Some((a.min(b), a.max(b)));
-            }
-        }
-    }
-    None
 }

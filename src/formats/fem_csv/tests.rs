@@ -9,6 +9,7 @@ use super::headers::strip_unit_suffix;
 use super::rows::{Rows, Schema, slow_row};
 use super::table::parse_csv_chunked;
 use super::*;
+use crate::formats::extent::{far_outlier, first_coincident};
 use crate::model::{Quantity, StressComponent};
 
 #[test]
@@ -302,7 +303,8 @@ fn empty_node_id_is_a_positioned_error_not_the_row_number() {
 
 /// #24 (coincident mesh nodes): the duplicate check shared by tables and
 /// meshes finds a pair within 1e-9 of the diagonal on every axis and never a
-/// false pair on a structured grid (whose columns share an x).
+/// false pair on a structured grid (whose columns share an x); #30: a node
+/// 10^6 spreads away from the others is found by `far_outlier`.
 #[test]
 fn first_coincident_finds_pairs_and_only_pairs() {
     let mut grid: Vec<[f64; 3]> = Vec::new();
@@ -312,12 +314,15 @@ fn first_coincident_finds_pairs_and_only_pairs() {
         }
     }
     assert_eq!(first_coincident(&grid), None);
-    // Beside far outliers (whose squares overflowed the old diagonal) the
-    // check still runs, but every pair is within 1e-9 of such a diagonal.
+    // Beside far outliers the pairs are found still (no overflow), but every
+    // pair is within 1e-9 of such a diagonal: `far_outlier` refuses these first.
     let mut with_outlier = grid.clone();
     with_outlier.push([1e308, 0.0, 0.0]);
     with_outlier.push([-1e308, -1e308, 1e308]);
     assert_eq!(first_coincident(&with_outlier), Some((0, 1)));
+    let far = far_outlier(&with_outlier).unwrap();
+    assert_eq!((far.index, far.axis, far.value), (grid.len(), 0, 1e308));
+    assert_eq!(far_outlier(&grid), None);
     let mut dup = grid.clone();
     dup.push([10.0 + 1e-12, 20.0, 0.0]);
     assert_eq!(first_coincident(&dup), Some((40 * 300 + 20, grid.len())));
