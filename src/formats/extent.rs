@@ -55,7 +55,8 @@ pub fn first_coincident(positions: &[[f64; 3]]) -> Option<(usize, usize)> {
     for (k, &(sa, a)) in order.iter().enumerate() {
         let pa = positions[a as usize];
         for &(sb, b) in &order[k + 1..] {
-            if !(sb - sa <= band) {
+            let gap = sb - sa;
+            if gap.is_nan() || gap > band {
                 break;
             }
             let pb = positions[b as usize];
