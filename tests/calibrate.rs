@@ -140,6 +140,17 @@ fn bad_inputs_are_typed_errors() {
     assert!(constant.is_constant());
 }
 
+/// #24: an objective over no field at all (a table of coordinates only)
+/// panicked with "index out of bounds" when evaluated; it is a typed error.
+#[test]
+fn loo_objective_without_fields_is_an_error_not_a_panic() {
+    let pos = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]];
+    assert_eq!(
+        LooObjective::new(&pos, 2, &[], 0, KernelKind::Cubic, 1.0).err(),
+        Some(LooError::NoFields)
+    );
+}
+
 /// The paper's block (§2.1): 50 × 50 m, hydrostatic pwp, an unstructured 5 m
 /// triangle layout. Pins our own computed values so regressions show.
 #[test]

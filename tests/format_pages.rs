@@ -116,7 +116,11 @@ fn read(reader: &str, path: &Path) -> Result<(), String> {
             a3d_init::place::place_material_points(&model).map_err(|x| e(&x))?;
             Ok(())
         }
-        "cps" => CpsDocument::read(path).map(drop).map_err(|x| e(&x)),
+        // As a 2D project loads it: the gravity vector checked too.
+        "cps" => {
+            let cps = CpsDocument::read(path).map_err(|x| e(&x))?;
+            cps.check_gravity_vector(2).map_err(|x| e(&x))
+        }
         "mapf" => mapf::read(path).map(drop).map_err(|x| e(&x)),
         "mps-csv" => mps_table::read_table(path).map(drop).map_err(|x| e(&x)),
         "fem-csv" => a3d_init::pipeline::fem::load(&FemOptions::files(vec![path.to_path_buf()]))

@@ -249,3 +249,33 @@ fn corrupted_archives_exit_2() {
     assert_eq!(code, 2, "{stderr}");
     assert_contains(&stderr, &["not a readable .gsz (zip) archive"]);
 }
+
+/// #24: `--step time=NaN` (or `inf`, `1e400`) mapped step 0 at t = 0 with exit
+/// 0; a non-finite time is refused by the option parser and by `read_step`.
+#[test]
+fn step_time_nan_or_infinite_is_refused() {
+    for text in [
+        "time=NaN",
+        "time=nan",
+        "time=inf",
+        "time=-inf",
+        "time=1e400",
+    ] {
+        let e = text.parse::<StepChoice>().unwrap_err();
+        assert!(e.contains("finite number of seconds"), "{text}: {e}");
+    }
+    assert_eq!("time=12960".parse(), Ok(StepChoice::Time(12960.0)));
+    let gsz = fixture("geostudio-gsz-internal/1d-unsaturated-column/1D_unsaturated_column.gsz");
+    for t in [f64::NAN, f64::INFINITY] {
+        let e = read_step(&gsz, None, &StepChoice::Time(t), &CsvOptions::default())
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("finite number of seconds"), "{e}");
+    }
+    for step in ["time=NaN", "time=1e400"] {
+        let (code, text) =
+            common::run(&["inspect", "--fem", gsz.to_str().unwrap(), "--step", step]);
+        assert_eq!(code, 2, "{step}: {text}");
+        assert_contains(&text, &["--step", step, "finite number of seconds"]);
+    }
+}

@@ -4,6 +4,7 @@
 //! inconsistent counts, data after the end marker, non-finite values and garbage
 //! options end as exit 2 with a positioned message, never a panic or a hang.
 //! Every run is killed after 30 s, so a hang fails instead of blocking CI.
+//! At the foot, the input defects of #24 and #30, one test per bug.
 
 mod common;
 use common::{Watchdog, assert_contains, fixture, mini_regions_csv, run_map, run_watched};
@@ -466,4 +467,344 @@ fn a_smoothing_length_wider_than_the_fem_is_refused() {
         ],
     );
     assert!(!out.exists());
+}
+
+// ---- Input defects (#24, #30) ----
+
+/// #24: `calibrate --field all` on a table with only X and Y panicked in the
+/// leave-one-out code (index out of bounds); `map` on it must stay a clear error.
+#[test]
+fn calibrate_field_all_on_a_table_without_fields_is_exit_2_not_a_panic() {
+    let tmp = tempfile::tempdir().unwrap();
+    let fem = tmp.path().join("xy.csv");
+    std::fs::write(&fem, "X,Y\n0,0\n1,0\n0,1\n1,1\n2,2\n").unwrap();
+    let out = tmp.path().join("c");
+    for field in ["all", "pwp"] {
+        let (code, text) = run(&[
+            &"calibrate",
+            &"--fem",
+            &fem,
+            &"--field",
+            &field,
+            &"--out",
+            &out,
+        ]);
+        assert_eq!(code, 2, "{field}: {text}");
+        assert_contains(&text, &["xy.csv", "no field to calibrate on"]);
+        assert!(!out.exists());
+    }
+    let (code, text) = run_map(
+        &fixture("anura3d/K0_phreaticSurf_Geom"),
+        &fem,
+        &tmp.path().join("m"),
+        &["--h", "auto"],
+    );
+    assert_eq!(code, 2, "{text}");
+    assert_contains(
+        &text,
+        &["xy.csv", "no pore-water pressure or total stress columns"],
+    );
+}
+
+/// #24: a `node.csv` row with an empty `Node` cell took its row number as id,
+/// so with `--fem-mesh` its pore pressure landed on another mesh node.
+#[test]
+fn empty_node_id_with_fem_mesh_is_exit_2_at_its_cell() {
+    let tmp = tempfile::tempdir().unwrap();
+    let rd = fixture("geostudio-gsz-internal/rapid-drawdown");
+    let text = std::fs::read_to_string(rd.join("1-initial-steady-state_001_node.csv")).unwrap();
+    let node = tmp.path().join("node.csv");
+    std::fs::write(&node, text.replacen("\r\n4,", "\r\n,", 1)).unwrap();
+    let mesh = rd.join("1-initial-steady-state_Mesh.ply");
+    let out = tmp.path().join("out");
+    let (code, text) = map(
+        &node,
+        &fixture("anura3d-rapid-drawdown/rapid_drawdown.GOM"),
+        &out,
+        &["--fem-mesh", mesh.to_str().unwrap(), "--generate-cps"],
+    );
+    assert_eq!(code, 2, "{text}");
+    assert_contains(&text, &["node.csv:5:1: empty node id in `Node`"]);
+    assert!(!out.exists());
+}
+
+/// #24: a PLY whose header declares more nodes than the data holds (`element
+/// node 554` over 553 rows) was read when only nodes were needed: node 554
+/// took its numbers from the element block. Every declared count is checked
+/// against the data, in every read path (`--fem-mesh`, the mesh of a `.gsz`).
+#[test]
+fn ply_node_count_larger_than_the_data_is_refused() {
+    use a3d_init::formats::ply;
+    let rd = fixture("geostudio-gsz-internal/rapid-drawdown");
+    let good = std::fs::read(rd.join("1-initial-steady-state_Mesh.ply")).unwrap();
+    let header_end = good.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+    let header = String::from_utf8_lossy(&good[..header_end]).into_owned();
+    let with_header = |from: &str, to: &str| {
+        [header.replacen(from, to, 1).as_bytes(), &good[header_end..]].concat()
+    };
+    let p = Path::new("Mesh.ply");
+    assert_eq!(ply::parse_ply_nodes(p, &good).unwrap().len(), 553);
+    for (name, bytes, expected) in [
+        (
+            "554 nodes",
+            with_header("element node 553", "element node 554"),
+            "truncated PLY",
+        ),
+        (
+            "552 nodes",
+            with_header("element node 553", "element node 552"),
+            "Mesh.ply: byte ",
+        ),
+        (
+            "682 elements",
+            with_header("element element 681", "element element 682"),
+            "truncated PLY",
+        ),
+        (
+            "trailing bytes",
+            [&good[..], &[0u8; 7]].concat(),
+            "7 bytes after the last element `node_pair`",
+        ),
+    ] {
+        // Nodes only (what --fem-mesh and a .gsz read); nodes and elements.
+        let e = ply::parse_ply_nodes(p, &bytes).unwrap_err().to_string();
+        assert!(
+            e.starts_with("Mesh.ply: byte ") && e.contains(expected),
+            "{name}: {e}"
+        );
+        let e = ply::parse_ply_mesh(p, &bytes).unwrap_err().to_string();
+        assert!(e.starts_with("Mesh.ply: byte "), "{name}: {e}");
+    }
+    // Through the binary: `--fem-mesh`, and the mesh inside a `.gsz`.
+    let tmp = tempfile::tempdir().unwrap();
+    let bad = with_header("element node 553", "element node 554");
+    let mesh = tmp.path().join("Mesh.ply");
+    std::fs::write(&mesh, &bad).unwrap();
+    let node = rd.join("1-initial-steady-state_001_node.csv");
+    let (code, text) = run(&[&"inspect", &"--fem", &node, &"--fem-mesh", &mesh]);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(&text, &["Mesh.ply: byte ", "truncated PLY"]);
+    let gsz = tmp.path().join("p.gsz");
+    let mut zip = zip::ZipWriter::new(std::fs::File::create(&gsz).unwrap());
+    let options = zip::write::SimpleFileOptions::default();
+    zip.start_file("project.xml", options).unwrap();
+    zip.write_all(b"<GSIData><Analyses><Analysis><Name>A</Name></Analysis></Analyses></GSIData>")
+        .unwrap();
+    zip.start_file("A/001/node.csv", options).unwrap();
+    zip.write_all(&std::fs::read(&node).unwrap()).unwrap();
+    zip.start_file("A/Mesh.ply", options).unwrap();
+    zip.write_all(&bad).unwrap();
+    zip.finish().unwrap();
+    let (code, text) = run(&[&"inspect", &"--fem", &gsz]);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(&text, &["A/Mesh.ply: byte ", "truncated PLY"]);
+}
+
+/// #24: two mesh nodes at one point in a `Mesh.ply` (two pore pressures at
+/// one place) were accepted, while the same data as an X, Y table was
+/// refused. Both are refused, naming both lines.
+#[test]
+fn coincident_mesh_nodes_are_refused_like_coincident_table_rows() {
+    let rd = fixture("geostudio-gsz-internal/rapid-drawdown");
+    let good = std::fs::read(rd.join("1-initial-steady-state_Mesh.ply")).unwrap();
+    let header_end = good.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+    // Node 11 moved onto node 10 (the version element takes 4 bytes).
+    let node = |k: usize| header_end + 4 + 24 * (k - 1);
+    let mut bad = good.clone();
+    bad.copy_within(node(10)..node(10) + 24, node(11));
+    let tmp = tempfile::tempdir().unwrap();
+    let mesh = tmp.path().join("Mesh.ply");
+    std::fs::write(&mesh, &bad).unwrap();
+    let csv = rd.join("1-initial-steady-state_001_node.csv");
+    let (code, text) = run(&[&"inspect", &"--fem", &csv, &"--fem-mesh", &mesh]);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(
+        &text,
+        &[
+            "1-initial-steady-state_001_node.csv:12:1: duplicate node: mesh node 11 of ",
+            "Mesh.ply is at the same point as mesh node 10 (",
+            "1-initial-steady-state_001_node.csv:11)",
+        ],
+    );
+    // The same nodes as an X, Y table: the check and its message of before.
+    let nodes = a3d_init::formats::ply::parse_ply_nodes(&mesh, &bad).unwrap();
+    let mut table = String::from("X,Y,PWP\n");
+    for p in &nodes {
+        table.push_str(&format!("{},{},1\n", p[0], p[1]));
+    }
+    let xy = tmp.path().join("xy.csv");
+    std::fs::write(&xy, table).unwrap();
+    let (code, text) = run(&[&"inspect", &"--fem", &xy]);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(
+        &text,
+        &["xy.csv:12:1: duplicate node: same coordinates as line 11"],
+    );
+}
+
+/// #24: `$$GRAVITY_VECTOR 1.0 0.0` (or `0.0 0.0`) was accepted: `map` computed
+/// geostatic stress for −y gravity and `verify` ran with −y gravity. Every
+/// command that reads the CPS for gravity refuses it at its line and column.
+#[test]
+fn gravity_vector_not_along_minus_y_is_refused_by_every_command() {
+    let (tmp, gom, fem) = mini_project();
+    let out = tmp.path().join("mapped");
+    let (code, text) = map(&fem, &gom, &out, &["--stress", "geostatic"]);
+    assert_eq!(code, 0, "{text}");
+    let cps = gom.with_extension("CPS_001");
+    let good = std::fs::read_to_string(&cps).unwrap();
+    let mapped_cps = out.join("TwoMat.CPS_001");
+    let mapped = std::fs::read_to_string(&mapped_cps).unwrap();
+    for (vector, column) in [("1.0 0.0", 1), ("0.0 0.0", 5), ("0.0 -9.81", 5)] {
+        let line = |text: &str| text.lines().position(|l| l == "$$GRAVITY_VECTOR").unwrap() + 2;
+        let at = format!("TwoMat.CPS_001:{}:{column}: $$GRAVITY_VECTOR", line(&good));
+        std::fs::write(&cps, good.replacen("0.0 -1.0\n", &format!("{vector}\n"), 1)).unwrap();
+        let (code, text) = map(&fem, &gom, &tmp.path().join("o"), &[]);
+        assert_eq!(code, 2, "{vector}: {text}");
+        assert_contains(&text, &[&at]);
+        assert!(!tmp.path().join("o").exists());
+        let (code, text) = run(&[&"inspect", &gom]);
+        assert_eq!(code, 2, "{vector}: {text}");
+        assert_contains(&text, &[&at]);
+        // A mapped folder whose CPS was edited afterwards.
+        let at = format!(
+            "TwoMat.CPS_001:{}:{column}: $$GRAVITY_VECTOR",
+            line(&mapped)
+        );
+        std::fs::write(
+            &mapped_cps,
+            mapped.replacen("0.0 -1.0\n", &format!("{vector}\n"), 1),
+        )
+        .unwrap();
+        for command in ["verify", "run", "fos"] {
+            let (code, text) = run(&[&command, &out, &"--out", &tmp.path().join("v")]);
+            assert_eq!(code, 2, "{command} {vector}: {text}");
+            assert_contains(&text, &[&at]);
+        }
+        let (code, text) = verify_state(&gom, &out.join("mps.csv"), &tmp.path().join("v"), &[]);
+        assert_eq!(code, 2, "{vector}: {text}");
+        assert_contains(&text, &["$$GRAVITY_VECTOR: component"]);
+    }
+    assert!(!tmp.path().join("v").exists());
+}
+
+/// #24: `--h 1e-300` (far below the node spacing) overflowed the neighbour
+/// grid's cell count and aborted on a 3 GB allocation; it is refused like an
+/// h wider than the FEM, whatever `--outside` says.
+#[test]
+fn h_far_below_the_node_spacing_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    for extra in [
+        &["--h", "1e-300"][..],
+        &["--h", "0.0001", "--outside", "nearest"],
+    ] {
+        let (code, text) = run_map(
+            &fixture("anura3d/K0_phreaticSurf_Geom"),
+            &fixture("geostudio-csv/k0-slope-hydrostatic.csv"),
+            &out,
+            extra,
+        );
+        assert_eq!(code, 2, "{extra:?}: {text}");
+        assert_contains(
+            &text,
+            &[
+                &format!("--h {}: the kernel support", extra[1]),
+                "below a thousandth of the node spacing l = 0.5000 m",
+            ],
+        );
+        assert!(!text.contains("panicked"), "{text}");
+        assert!(!out.exists());
+    }
+}
+
+/// #30: one mesh node at x = 1e308 in a PLY aborted `map` on a 6 GB
+/// allocation (the neighbour grid sized by the extent). A node that far from
+/// the others cannot be meant: refused at its row, naming the coordinate, in
+/// a `node.csv` joined to a mesh and in a table with X and Y alike.
+#[test]
+fn a_mesh_node_at_1e308_is_refused_not_a_6_gb_allocation() {
+    let rd = fixture("geostudio-gsz-internal/rapid-drawdown");
+    let mut ply = std::fs::read(rd.join("1-initial-steady-state_Mesh.ply")).unwrap();
+    let header_end = ply.windows(11).position(|w| w == b"end_header\n").unwrap() + 11;
+    let x10 = header_end + 4 + 24 * 9;
+    ply[x10..x10 + 8].copy_from_slice(&1e308f64.to_le_bytes());
+    let tmp = tempfile::tempdir().unwrap();
+    let mesh = tmp.path().join("Mesh.ply");
+    std::fs::write(&mesh, &ply).unwrap();
+    let out = tmp.path().join("out");
+    let (code, text) = map(
+        &rd.join("1-initial-steady-state_001_node.csv"),
+        &fixture("anura3d-rapid-drawdown/rapid_drawdown.GOM"),
+        &out,
+        &["--fem-mesh", mesh.to_str().unwrap(), "--generate-cps"],
+    );
+    assert_eq!(code, 2, "{text}");
+    assert_contains(
+        &text,
+        &[
+            "1-initial-steady-state_001_node.csv:11:1: mesh node 10 of ",
+            "Mesh.ply: x = 1e308 lies more than 10^6 times the spread of the nodes",
+        ],
+    );
+    assert!(!out.exists());
+    let csv = std::fs::read_to_string(fixture("geostudio-csv/k0-slope-hydrostatic.csv")).unwrap();
+    let lines = csv.lines().count();
+    let fem = tmp.path().join("far.csv");
+    std::fs::write(&fem, format!("{csv}9999,1e308,0.0,5.0\n")).unwrap();
+    let (code, text) = map(&fem, &fixture("anura3d/K0_phreaticSurf_Geom"), &out, &[]);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(
+        &text,
+        &[&format!("far.csv:{}:1: x = 1e308 lies", lines + 1)],
+    );
+}
+
+/// #30: z = 1e308 on one node of a 3D GOM made `map` panic with "capacity
+/// overflow" (the geostatic stress's vertical index sized by the extent;
+/// bounded now whatever the mesh, see `state::geostatic`). A node that far
+/// from the others cannot be meant: the GOM reader refuses it at its
+/// coordinate, whatever `--outside` says.
+#[test]
+fn a_3d_gom_node_at_z_1e308_is_refused_not_a_capacity_overflow() {
+    let tmp = tempfile::tempdir().unwrap();
+    let src = fixture("anura3d/test-1005_3D");
+    let dir = tmp.path().join("model");
+    std::fs::create_dir(&dir).unwrap();
+    let gom = std::fs::read_to_string(src.join("test-1005_3D.GOM")).unwrap();
+    let lines: Vec<&str> = gom.lines().collect();
+    let start = lines.iter().position(|l| *l == "$$STARTNODES").unwrap() + 1;
+    let mut csv = String::from("X,Y,Z,PWP\n");
+    for l in &lines[start..start + 207] {
+        let v: Vec<f64> = l.split_whitespace().map(|t| t.parse().unwrap()).collect();
+        csv.push_str(&format!("{},{},{},{}\n", v[0], v[1], v[2], -10.0 * v[2]));
+    }
+    let fem = tmp.path().join("fem.csv");
+    std::fs::write(&fem, csv).unwrap();
+    // Node 9, (0, 0, 0), a corner of the first elements.
+    assert_eq!(
+        lines[start + 8].split_whitespace().collect::<Vec<_>>(),
+        ["0", "0", "0"]
+    );
+    let far = gom.replacen(
+        lines[start + 8],
+        "           0            0        1e308",
+        1,
+    );
+    std::fs::write(dir.join("test-1005_3D.GOM"), far).unwrap();
+    std::fs::copy(
+        src.join("test-1005_3D.CPS_001"),
+        dir.join("test-1005_3D.CPS_001"),
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    for extra in [&[][..], &["--outside", "nearest"]] {
+        let (code, text) = map(&fem, &dir, &out, extra);
+        assert_eq!(code, 2, "{text}");
+        assert_contains(
+            &text,
+            &["test-1005_3D.GOM:19:34: node 9: z = 1e308 lies more than 10^6 times the spread"],
+        );
+        assert!(!out.exists());
+    }
 }

@@ -606,3 +606,85 @@ fn grid_keeps_points_on_the_far_face() {
         }
     }
 }
+
+/// #30: one node at x = 1e308 (or z = 1e308, or nodes at ±1e308 on every
+/// axis), or a radius of 1e-300, made the grid's stencil ask for about 10^9
+/// rows of cells (a 3–6 GB allocation, then an abort). Whatever the
+/// coordinates and the radius, the grid's cells and stencil stay proportional
+/// to the points, its searches equal the brute force, the mapper gives the
+/// k-d tree's bits and the spacing the brute force's.
+#[test]
+fn a_grid_no_input_can_blow_up() {
+    let mut rng = ChaCha8Rng::seed_from_u64(31);
+    let bits = |v: &[(u32, f64)]| -> Vec<(u32, u64)> {
+        v.iter().map(|&(i, d)| (i, d.to_bits())).collect()
+    };
+    for dim in [2usize, 3] {
+        let base = random_points(&mut rng, dim, 2000, -5.0..5.0);
+        let z = |v: f64| if dim == 3 { v } else { 0.0 };
+        let mut outliers = vec![
+            vec![],
+            vec![[1e308, 0.0, 0.0]],
+            vec![[1e308, 1e308, z(1e308)], [-1e308, -1e308, z(-1e308)]],
+        ];
+        if dim == 3 {
+            outliers.push(vec![[0.0, 0.0, 1e308]]);
+        }
+        for far in outliers {
+            let pts: Vec<[f64; 3]> = base.iter().chain(&far).copied().collect();
+            let n = pts.len() as u64;
+            for (radius, per_radius) in [(1e-300, 2), (0.7, 2), (0.7, 1), (1e150, 2)] {
+                let grid = Grid::with_cells(&pts, dim, radius, per_radius);
+                assert!(grid.cell_keys() <= 125 * (4 * n + 64), "{far:?} r {radius}");
+                let stencil = grid.stencil(radius);
+                assert!(
+                    stencil.len() as u64 <= 49 * grid.cell_keys(),
+                    "{far:?} r {radius}"
+                );
+                let mut got = Vec::new();
+                for _ in 0..50 {
+                    let q = random_point(&mut rng, dim, -6.0..6.0);
+                    grid.within(q, radius, &mut got);
+                    let want = within_brute_force(&pts, dim, q, radius);
+                    assert_eq!(bits(&got), bits(&want), "{far:?} r {radius} q {q:?}");
+                }
+            }
+            let values: Vec<f64> = pts.iter().map(|p| p[0].sin() + p[1].cos()).collect();
+            let cloud = NodeCloud {
+                positions: &pts,
+                dim,
+                values: &values,
+                n_fields: 1,
+                group: None,
+                node_volume: 0.05,
+            };
+            let points = random_points(&mut rng, dim, 500, -6.0..6.0);
+            for (h, outside) in [(0.3, OutsidePolicy::Nearest), (1e-300, OutsidePolicy::Skip)] {
+                let settings = map_settings(KernelKind::Cubic, h, 0.01, outside);
+                let grid = mapper::map_points(&cloud, &points, None, &settings).unwrap();
+                let tree = mapper::map_points_with(
+                    &cloud,
+                    &points,
+                    None,
+                    &settings,
+                    Search::KdTree,
+                    false,
+                )
+                .unwrap();
+                let vbits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(vbits(&grid.values), vbits(&tree.values), "{far:?} h {h}");
+                assert_eq!(grid.status, tree.status);
+            }
+            // The nearest other point of every point of the base cloud.
+            let got = mapper::nearest_other_distances(&pts, dim);
+            for i in 0..base.len() {
+                let want = within_brute_force(&pts, dim, pts[i], 20.0)
+                    .into_iter()
+                    .find(|&(j, _)| j as usize != i)
+                    .map(|(_, d)| d)
+                    .unwrap();
+                assert_eq!(got[i].to_bits(), want.to_bits(), "{far:?} point {i}");
+            }
+        }
+    }
+}

@@ -119,6 +119,56 @@ impl CpsDocument {
         }
     }
 
+    /// `$$GRAVITY_VECTOR`, when present, must be (0, −1) in 2D (a third value
+    /// is ignored, as Anura3D reads only `n_dim` values) or (0, −1, 0) in 3D,
+    /// each component within 1e-6. Anura3D multiplies the vector by
+    /// `$$GRAVITY_ACCELERATION` as written (it refuses components outside
+    /// [−1, 1] and a length above 1.01, so `0 -9.81` is not a vector it reads,
+    /// and `0 -0.5` would halve the body forces while the unit weights keep
+    /// g); a3d-init's geostatic stress and runner take gravity as −g·ŷ. Every
+    /// other vector is an error at its value's line and column (#24).
+    pub fn check_gravity_vector(&self, n_dim: usize) -> Result<(), FormatError> {
+        const KEYWORD: &str = "$$GRAVITY_VECTOR";
+        let Some(b) = self.doc.find(KEYWORD, true) else {
+            return Ok(());
+        };
+        let block = &self.doc.blocks()[b];
+        let expected = [0.0, -1.0, 0.0];
+        let wanted = if n_dim == 3 { "0 -1 0" } else { "0 -1" };
+        let mut tokens = block
+            .data
+            .clone()
+            .flat_map(|i| lex::tokens(self.doc.line(i)).map(move |(o, t)| (i, o, t)));
+        let mut errors = Vec::new();
+        for (k, want) in expected.iter().enumerate().take(n_dim) {
+            match tokens.next() {
+                Some((i, o, tok)) => match lex::parse_real(tok) {
+                    Some(v) if (v - want).abs() <= 1e-6 => {}
+                    _ => errors.push(self.doc.error_at(
+                        i,
+                        o,
+                        format!(
+                            "{KEYWORD}: component {} is {tok}, but a3d-init needs gravity along −y, `{wanted}` (its geostatic stress and runner take gravity as −g·ŷ; Anura3D scales this vector by $$GRAVITY_ACCELERATION as written)",
+                            k + 1
+                        ),
+                    )),
+                },
+                None => errors.push(self.doc.error_at(
+                    block.line,
+                    0,
+                    format!(
+                        "{KEYWORD}: value {} is missing ({n_dim}D needs `{wanted}`)",
+                        k + 1
+                    ),
+                )),
+            }
+        }
+        match FormatError::from_list(errors) {
+            Some(e) => Err(e),
+            None => Ok(()),
+        }
+    }
+
     pub fn document(&self) -> &KeywordDocument {
         &self.doc
     }
@@ -285,5 +335,59 @@ mod tests {
             cps.to_text(),
             "### Anura3D_2021 ###\n$$k0_procedure\n0\n$$GRAVITY_ACCELERATION\n9.80665\n$$HOMOGENEOUS_LOCAL_DAMPING\n1 0.75\n$$MP_STRESS_INITIALIZATION_FROMFILE\n1\n$$END\n"
         );
+    }
+    /// #24: a `$$GRAVITY_VECTOR` not along −y was accepted (map computed −y
+    /// geostatic stress, verify ran with −y gravity): refused at its value.
+    #[test]
+    fn gravity_vector_not_along_minus_y_is_refused_at_its_value() {
+        let cps = |v: &str| {
+            CpsDocument::parse(
+                Path::new("a.CPS_001"),
+                format!("### Anura3D_2021 ###\n$$GRAVITY_VECTOR\n{v}\n$$END\n"),
+            )
+            .unwrap()
+        };
+        for (v, dim) in [
+            ("0.0 -1.0", 2),
+            ("0 -1", 2),
+            ("0.0 -1.0 0.0", 2),
+            ("0 -1 0.5", 2),
+            ("0.000000000000000E+000  -1.00000000000000", 2),
+            ("0.0 -1.0 0.0", 3),
+        ] {
+            assert!(cps(v).check_gravity_vector(dim).is_ok(), "{v} {dim}D");
+        }
+        assert!(cps("x").check_gravity_vector(2).is_err());
+        for (v, dim, expected) in [
+            (
+                "1.0 0.0",
+                2,
+                "a.CPS_001:3:1: $$GRAVITY_VECTOR: component 1 is 1.0",
+            ),
+            (
+                "0.0 0.0",
+                2,
+                "a.CPS_001:3:5: $$GRAVITY_VECTOR: component 2 is 0.0",
+            ),
+            (
+                "0 -9.81",
+                2,
+                "a.CPS_001:3:3: $$GRAVITY_VECTOR: component 2 is -9.81",
+            ),
+            ("0 -0.5", 2, "a.CPS_001:3:3: "),
+            (
+                "0 -1 0.5",
+                3,
+                "a.CPS_001:3:6: $$GRAVITY_VECTOR: component 3 is 0.5",
+            ),
+            (
+                "0 -1",
+                3,
+                "a.CPS_001:2:1: $$GRAVITY_VECTOR: value 3 is missing (3D needs `0 -1 0`)",
+            ),
+        ] {
+            let e = cps(v).check_gravity_vector(dim).unwrap_err().to_string();
+            assert!(e.starts_with(expected), "{v} {dim}D: {e}");
+        }
     }
 }

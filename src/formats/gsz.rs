@@ -266,10 +266,15 @@ impl std::str::FromStr for StepChoice {
             return Ok(StepChoice::Last);
         }
         if let Some(t) = s.strip_prefix("time=") {
-            return t
-                .parse()
-                .map(StepChoice::Time)
-                .map_err(|_| format!("`{s}`: expected time=<seconds>"));
+            // NaN, infinities and overflowing numbers (`1e400`) are refused:
+            // no saved step is at such a time (#24).
+            return match t.parse::<f64>() {
+                Ok(v) if v.is_finite() => Ok(StepChoice::Time(v)),
+                Ok(_) => Err(format!(
+                    "`{s}`: the time must be a finite number of seconds"
+                )),
+                Err(_) => Err(format!("`{s}`: expected time=<seconds>")),
+            };
         }
         s.parse()
             .map(StepChoice::Number)
@@ -285,6 +290,14 @@ pub fn read_step(
     step: &StepChoice,
     options: &CsvOptions,
 ) -> Result<(FemNodes, FemReadReport, String), FormatError> {
+    if let StepChoice::Time(t) = step
+        && !t.is_finite()
+    {
+        return Err(FormatError::file(
+            path,
+            format!("step time {t}: the time must be a finite number of seconds"),
+        ));
+    }
     let project = read_project(path)?;
     // `1 `name`, 2 `name``: the analyses to choose from, for the errors.
     let analysis_list = || {
@@ -519,6 +532,37 @@ pub fn join_mesh(
     }
     for (i, &k) in nodes.ids.iter().enumerate() {
         nodes.positions[i] = mesh[k as usize - 1];
+    }
+    // A listed node far outside the others cannot be meant (#30).
+    if let Some(far) = super::extent::far_outlier(&nodes.positions) {
+        return Err(ParseError::at(
+            csv_path,
+            line_of(far.index),
+            1,
+            format!("mesh node {} of {mesh_name}: {far}", nodes.ids[far.index]),
+        )
+        .into());
+    }
+    // Two rows at one mesh point would give it two values: refused as the
+    // same rows with X and Y columns are (#24).
+    if let Some((first, second)) = super::extent::first_coincident(&nodes.positions) {
+        let p = nodes.positions[first];
+        return Err(ParseError::at(
+            csv_path,
+            line_of(second),
+            1,
+            format!(
+                "duplicate node: mesh node {} of {mesh_name} is at the same point as mesh node {} ({}:{}): ({}, {}, {})",
+                nodes.ids[second],
+                nodes.ids[first],
+                csv_path.display(),
+                line_of(first),
+                p[0],
+                p[1],
+                p[2]
+            ),
+        )
+        .into());
     }
     nodes.dim = if nodes.positions.iter().all(|p| p[2] == 0.0) {
         2

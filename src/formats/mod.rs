@@ -7,6 +7,7 @@ pub mod error;
 pub use error::{FormatError, ParseError, Position};
 pub mod cps;
 pub mod cps_template;
+pub mod extent;
 pub mod fem_csv;
 pub mod gom;
 pub mod gsz;

@@ -100,6 +100,77 @@ fn skip_element(bytes: &[u8], mut offset: usize, el: &Element) -> Option<usize> 
     Some(offset)
 }
 
+/// Reads the `id` lists of the `el` rows starting at `offset` into `cells`
+/// (0-based node indices, from GeoStudio's 1-based ids, each checked against
+/// the `n_nodes` nodes); returns the offset after the rows.
+fn read_cells(
+    path: &Path,
+    bytes: &[u8],
+    mut offset: usize,
+    el: &Element,
+    n_nodes: usize,
+    cells: &mut Vec<Vec<u32>>,
+) -> Result<usize, FormatError> {
+    let truncated = |offset: usize| -> FormatError {
+        ParseError::new(
+            path,
+            Position::in_binary(offset),
+            format!(
+                "truncated PLY: the data ends at byte {} inside {}",
+                bytes.len(),
+                el.name
+            ),
+        )
+        .into()
+    };
+    if el.count > bytes.len().saturating_sub(offset) / min_row_size(el).max(1) {
+        return Err(truncated(offset));
+    }
+    for _ in 0..el.count {
+        for p in &el.properties {
+            match p.kind {
+                PropKind::Scalar(sz) => {
+                    offset = offset.saturating_add(sz);
+                    if offset > bytes.len() {
+                        return Err(truncated(offset));
+                    }
+                }
+                PropKind::List(c, t) => {
+                    if offset.saturating_add(c) > bytes.len() {
+                        return Err(truncated(offset));
+                    }
+                    let n = usize::try_from(read_uint(&bytes[offset..], c)).unwrap_or(usize::MAX);
+                    offset += c;
+                    if n.saturating_mul(t) > bytes.len() - offset {
+                        return Err(truncated(offset));
+                    }
+                    if p.name == "id" {
+                        // GeoStudio numbers element nodes from 1.
+                        let ids: Vec<u32> = (0..n)
+                            .map(|k| read_uint(&bytes[offset + k * t..], t) as u32)
+                            .collect();
+                        if let Some(bad) = ids.iter().find(|&&id| id == 0 || id as usize > n_nodes)
+                        {
+                            return Err(ParseError::new(
+                                path,
+                                Position::in_binary(offset),
+                                format!(
+                                    "element {} refers to node {bad}, outside 1..={n_nodes}",
+                                    cells.len() + 1,
+                                ),
+                            )
+                            .into());
+                        }
+                        cells.push(ids.into_iter().map(|id| id - 1).collect());
+                    }
+                    offset += n * t;
+                }
+            }
+        }
+    }
+    Ok(offset)
+}
+
 /// Reads the node coordinates of a GeoStudio PLY mesh.
 pub fn read_ply_nodes(path: &Path) -> Result<Vec<[f64; 3]>, FormatError> {
     let bytes = super::input::read_bytes(path)?;
@@ -115,7 +186,12 @@ pub fn parse_ply_nodes(path: &Path, bytes: &[u8]) -> Result<Vec<[f64; 3]>, Forma
 /// GeoStudio's 1-based ids to 0-based indices).
 pub fn read_ply_mesh(path: &Path) -> Result<PlyMesh, FormatError> {
     let bytes = super::input::read_bytes(path)?;
-    parse_ply(path, &bytes, true)
+    parse_ply_mesh(path, &bytes)
+}
+
+/// Parses PLY bytes (see [`read_ply_mesh`]).
+pub fn parse_ply_mesh(path: &Path, bytes: &[u8]) -> Result<PlyMesh, FormatError> {
+    parse_ply(path, bytes, true)
 }
 
 fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, FormatError> {
@@ -283,60 +359,32 @@ fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, 
         }
         nodes.push(p);
     }
+    // Every element after `node` is walked, read or skipped, and the data
+    // must end with the last one: a count that does not match the data (a
+    // `node` count one too large reads a node from the element block) is an
+    // error whatever is asked for (#24).
+    let mut offset = offset + need;
     let mut cells = Vec::new();
-    if with_elements {
-        let mut offset = offset + need;
-        let after = &elements[node_index + 1..];
-        if let Some(k) = after.iter().position(|e| e.name == "element") {
-            for skipped in &after[..k] {
-                offset = skip_element(bytes, offset, skipped)
-                    .ok_or_else(|| truncated(offset, &skipped.name))?;
-            }
-            let el = &after[k];
-            if el.count > bytes.len().saturating_sub(offset) / min_row_size(el).max(1) {
-                return Err(truncated(offset, "element"));
-            }
-            for _ in 0..el.count {
-                for p in &el.properties {
-                    match p.kind {
-                        PropKind::Scalar(sz) => offset = offset.saturating_add(sz),
-                        PropKind::List(c, t) => {
-                            if offset.saturating_add(c) > bytes.len() {
-                                return Err(truncated(offset, "element"));
-                            }
-                            let n = usize::try_from(read_uint(&bytes[offset..], c))
-                                .unwrap_or(usize::MAX);
-                            offset += c;
-                            if n.saturating_mul(t) > bytes.len() - offset {
-                                return Err(truncated(offset, "element"));
-                            }
-                            if p.name == "id" {
-                                // GeoStudio numbers element nodes from 1.
-                                let ids: Vec<u32> = (0..n)
-                                    .map(|k| read_uint(&bytes[offset + k * t..], t) as u32)
-                                    .collect();
-                                if let Some(bad) =
-                                    ids.iter().find(|&&id| id == 0 || id as usize > nodes.len())
-                                {
-                                    return Err(ParseError::new(
-                                        path,
-                                        Position::in_binary(offset),
-                                        format!(
-                                            "element {} refers to node {bad}, outside 1..={}",
-                                            cells.len() + 1,
-                                            nodes.len()
-                                        ),
-                                    )
-                                    .into());
-                                }
-                                cells.push(ids.into_iter().map(|id| id - 1).collect());
-                            }
-                            offset += n * t;
-                        }
-                    }
-                }
-            }
+    let mut cells_read = false;
+    for el in &elements[node_index + 1..] {
+        if with_elements && !cells_read && el.name == "element" {
+            offset = read_cells(path, bytes, offset, el, nodes.len(), &mut cells)?;
+            cells_read = true;
+        } else {
+            offset = skip_element(bytes, offset, el).ok_or_else(|| truncated(offset, &el.name))?;
         }
+    }
+    if offset != bytes.len() {
+        return Err(ParseError::new(
+            path,
+            Position::in_binary(offset),
+            format!(
+                "{} bytes after the last element `{}`: the header's counts do not match the data",
+                bytes.len() - offset,
+                elements.last().map_or("node", |e| e.name.as_str())
+            ),
+        )
+        .into());
     }
     Ok((nodes, cells))
 }

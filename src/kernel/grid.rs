@@ -28,6 +28,10 @@ pub struct Grid {
     slack: f64,
     /// Cells per axis (1 along z in 2D).
     dims: [i64; 3],
+    /// The cells are coarser than asked, or the slack spans cells, so that
+    /// searches here test far more points than the radius holds (a tiny radius
+    /// in a wide cloud, one point far from the rest): see [`Grid::is_coarse`].
+    coarse: bool,
     /// Start of each cell's points in the sorted columns (length cells + 1).
     start: Vec<u32>,
     xs: Vec<f64>,
@@ -44,6 +48,17 @@ pub type Cell = [i64; 3];
 /// order) that a search radius reaches, from [`Grid::stencil`].
 pub struct Stencil {
     rows: Vec<[i64; 3]>,
+}
+
+impl Stencil {
+    /// The number of rows.
+    pub fn len(&self) -> usize {
+        self.rows.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.rows.is_empty()
+    }
 }
 
 /// The blocks of LANES points that the queries of one cell test, from
@@ -88,32 +103,46 @@ impl Grid {
         if !(cell.is_finite() && cell > 0.0) {
             cell = 1.0;
         }
-        // Keep the cell count near the point count (a tiny radius in a wide cloud).
+        let asked = cell;
+        // The extent per axis, at most the largest double (two points at
+        // ±1e308 are 2e308 apart, which is infinite).
+        let extent = [0, 1, 2].map(|k| (hi[k] - lo[k]).min(f64::MAX));
+        // Keep the cell count near the point count (a tiny radius in a wide
+        // cloud, one point far from the rest): memory proportional to the
+        // points whatever the coordinates and the radius (#30).
         let max_cells = (4 * n + 64) as f64;
         loop {
-            let count: f64 = (0..dim)
-                .map(|k| ((hi[k] - lo[k]) / cell).floor() + 1.0)
-                .product();
+            let count: f64 = (0..dim).map(|k| (extent[k] / cell).floor() + 1.0).product();
             if count <= max_cells {
                 break;
+            }
+            if !count.is_finite() {
+                // Too many cells to count: start from cells of the widest
+                // extent over max_cells^(1/dim), a finite count.
+                let widest = extent[..dim].iter().copied().fold(0.0, f64::max);
+                cell = cell.max(widest / max_cells.powf(1.0 / dim as f64));
+                continue;
             }
             cell *= (count / max_cells).powf(1.0 / dim as f64).max(1.01);
         }
         let mut dims = [1i64; 3];
         for k in 0..dim {
-            dims[k] = ((hi[k] - lo[k]) / cell).floor() as i64 + 1;
+            dims[k] = (extent[k] / cell).floor() as i64 + 1;
         }
         let mag = (0..dim)
             .map(|k| lo[k].abs() + hi[k].abs())
-            .fold(0.0, f64::max);
+            .fold(0.0, f64::max)
+            .min(f64::MAX);
+        let slack = (8.0 * f64::EPSILON * (mag + 4.0 * cell + radius) + 1e-9 * cell).min(f64::MAX);
         let mut grid = Grid {
             dim,
             origin: lo,
             cell,
             inv_cell: 1.0 / cell,
             radius,
-            slack: 8.0 * f64::EPSILON * (mag + 4.0 * cell + radius) + 1e-9 * cell,
+            slack,
             dims,
+            coarse: cell > 4.0 * asked || slack > cell,
             start: Vec::new(),
             xs: Vec::with_capacity(n + LANES),
             ys: Vec::with_capacity(n + LANES),
@@ -159,6 +188,27 @@ impl Grid {
         grid.ids = order;
         grid.start = start;
         grid
+    }
+
+    /// True when the cells came out more than 4 times wider than asked (the
+    /// cell count is kept near the point count: a radius tiny against the
+    /// cloud, or one point far from the rest) or the rounding slack spans a
+    /// cell (coordinates huge against the cells). A search of the grid's
+    /// radius then tests far more points than it finds; the mapper searches
+    /// such a group with the k-d tree instead, which gives the same lists.
+    pub fn is_coarse(&self) -> bool {
+        self.coarse
+    }
+
+    /// Σ over the cells of (points in the cell)²: a few times the point count
+    /// for radius-wide cells over an even cloud, up to its square where most
+    /// points share a few cells (one point far from the rest), which is what
+    /// [`Grid::nearest_others`] costs.
+    pub fn crowding(&self) -> u64 {
+        self.start
+            .windows(2)
+            .map(|w| u64::from(w[1] - w[0]).pow(2))
+            .sum()
     }
 
     /// The cell of `q`, clamped to one cell outside the grid (those see the border).
@@ -212,9 +262,21 @@ impl Grid {
         let s2 = 2.0 * self.slack;
         // The gap between the boxes of two cells `d` apart along an axis.
         let gap = |d: i64| ((d.abs() - 1) as f64 * c - s2).max(0.0);
-        let reach = |room: f64| 1 + ((room + s2) / c).min(1e9) as i64;
+        // No row or run reaches past the grid from a query cell, which
+        // [`Grid::cell`] clamps to two cells outside: the reach is bounded by
+        // the grid's size, so the stencil's rows are at most about nine per
+        // cell, whatever the radius, slack and cell (#30).
+        let span = self.dims[0].max(self.dims[1]).max(self.dims[2]) + 2;
+        let reach = |room: f64| 1 + ((room + s2) / c).min(span as f64) as i64;
         let most = reach(r);
-        let (zs, ys) = (if self.dim == 3 { most } else { 0 }, most);
+        let (zs, ys) = (
+            if self.dim == 3 {
+                most.min(self.dims[2] + 2)
+            } else {
+                0
+            },
+            most.min(self.dims[1] + 2),
+        );
         let mut rows = Vec::new();
         for dz in -zs..=zs {
             for dy in -ys..=ys {

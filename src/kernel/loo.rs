@@ -30,6 +30,8 @@ pub enum Norm {
 /// Why an objective cannot be built.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum LooError {
+    #[error("no field to calibrate on: the node table has coordinates but no values")]
+    NoFields,
     #[error("at least 3 nodes are needed to calibrate h, found {0}")]
     TooFewNodes(usize),
     #[error("all nodes are at the same place: no spacing to calibrate against")]
@@ -82,6 +84,9 @@ impl LooObjective {
         h_max: f64,
     ) -> Result<LooObjective, LooError> {
         let n = positions.len();
+        if n_fields == 0 {
+            return Err(LooError::NoFields);
+        }
         if n < 3 {
             return Err(LooError::TooFewNodes(n));
         }

@@ -151,7 +151,10 @@ fn build_indices(nodes: &NodeCloud<'_>, search: Search, radius: f64) -> Vec<Inde
             let at = node(local) * nf;
             values.extend_from_slice(&nodes.values[at..at + nf]);
         }
-        let tree = (search == Search::KdTree).then(|| {
+        // A coarse grid (a radius tiny against the cloud, a node far from the
+        // rest) would test most nodes for every point: its group is searched
+        // with the k-d tree, which gives the same lists (#30).
+        let tree = (search == Search::KdTree || grid.is_coarse()).then(|| {
             let mut rank = vec![0u32; positions.len()];
             for (pos, &local) in grid.order().iter().enumerate() {
                 rank[local as usize] = pos as u32;
@@ -501,10 +504,13 @@ pub fn nearest_other_distances(positions: &[[f64; 3]], dim: usize) -> Vec<f64> {
     let (lo, hi) = bounds(positions);
     let volume: f64 = (0..dim).map(|k| (hi[k] - lo[k]).max(1e-300)).product();
     let cell = (2.0 * volume / positions.len() as f64).powf(1.0 / dim as f64);
-    let mut found = if cell.is_finite() && cell > 0.0 {
-        Grid::new(positions, dim, cell).nearest_others(cell)
-    } else {
-        vec![None; positions.len()]
+    // A grid whose cells hold most points (one point far from the rest)
+    // would compare them all pairwise: the k-d tree answers then (#30).
+    let n = positions.len() as u64;
+    let grid = (cell.is_finite() && cell > 0.0).then(|| Grid::new(positions, dim, cell));
+    let mut found = match grid {
+        Some(g) if !g.is_coarse() && g.crowding() <= 64 * n + 4096 => g.nearest_others(cell),
+        _ => vec![None; positions.len()],
     };
     if found.iter().any(Option::is_none) {
         let index = NeighbourIndex::new(positions, dim);

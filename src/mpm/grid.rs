@@ -346,15 +346,54 @@ impl<const D: usize> SpatialHash<D> {
             extent *= (high[d] - low[d]).max(f64::MIN_POSITIVE);
         }
         let mut cell_size = (extent / elements.len() as f64).powf(1.0 / D as f64);
-        let largest_side = (0..D).map(|d| high[d] - low[d]).fold(0.0, f64::max);
+        // At most the largest double (nodes at ±1e308 are an infinite side apart).
+        let side = |d: usize| (high[d] - low[d]).min(f64::MAX);
+        let largest_side = (0..D).map(side).fold(0.0, f64::max);
         if !(cell_size > 0.0 && cell_size.is_finite()) {
             cell_size = largest_side.max(1.0);
         }
         // Guard against very flat boxes: never more than 8·n cells along an axis.
         cell_size = cell_size.max(largest_side / (8.0 * elements.len() as f64));
-        let mut cells = [1usize; D];
-        for d in 0..D {
-            cells[d] = (((high[d] - low[d]) / cell_size).floor() as usize + 1).max(1);
+        // Element boxes in cells, and the cells per axis for a cell size.
+        let sized = |cell_size: f64| {
+            let mut cells = [1usize; D];
+            for d in 0..D {
+                cells[d] = ((side(d) / cell_size).floor() as usize + 1).max(1);
+            }
+            cells
+        };
+        let boxes = |cell_size: f64, cells: [usize; D], element: &GridElement<D, NC>| {
+            let mut lo = [usize::MAX; D];
+            let mut hi = [0usize; D];
+            for &c in &element.corners {
+                let p = mesh.nodes[mesh_node[c as usize] as usize];
+                for d in 0..D {
+                    let i =
+                        (((p[d] - low[d]) / cell_size).floor().max(0.0) as usize).min(cells[d] - 1);
+                    lo[d] = lo[d].min(i);
+                    hi[d] = hi[d].max(i);
+                }
+            }
+            (lo, hi)
+        };
+        // No more entries than a budget proportional to the elements (elements
+        // that span many cells: one node far from the rest): memory O(elements)
+        // whatever the coordinates (#30). An ordinary mesh stays well below.
+        let budget = 32 * elements.len() as u64 + 1024;
+        let mut cells = sized(cell_size);
+        loop {
+            let entries: u64 = elements
+                .iter()
+                .map(|e| {
+                    let (lo, hi) = boxes(cell_size, cells, e);
+                    (0..D).fold(1u64, |a, d| a.saturating_mul((hi[d] - lo[d] + 1) as u64))
+                })
+                .fold(0u64, u64::saturating_add);
+            if entries <= budget || cells.iter().all(|&c| c == 1) {
+                break;
+            }
+            cell_size *= 2.0;
+            cells = sized(cell_size);
         }
         let n_cells: usize = cells.iter().product();
         let bounds = |element: &GridElement<D, NC>| {
@@ -550,5 +589,41 @@ mod tests {
             Grid::<2, 3>::new::<Tri3>(&model.mesh, &model.solid_fixity),
             Err(MpmError::DegenerateElement { element: 1 })
         ));
+    }
+
+    /// #30: a fan of triangles sharing one apex far from the rest spans every
+    /// cell of the spatial hash along x; its entries (were elements × 8·
+    /// elements, 32 million here) stay within a budget proportional to the
+    /// elements, and location still agrees with the brute force.
+    #[test]
+    fn spatial_hash_memory_is_bounded_by_the_elements() {
+        let n = 2000usize;
+        let mut nodes = vec![[1e6, 0.5, 0.0]];
+        nodes.extend((0..=n).map(|k| [0.0, k as f64 / n as f64, 0.0]));
+        let mut connectivity = Vec::new();
+        for k in 0..n as u32 {
+            // Counter-clockwise: the base edge upwards on x = 0, apex at +x.
+            connectivity.extend_from_slice(&[k + 1, 0, k + 2]);
+        }
+        let mesh = Mesh {
+            dimension: crate::model::Dimension::PlaneStrain,
+            element_type: crate::model::ElementType::Tri3,
+            nodes,
+            connectivity,
+        };
+        let fixity = vec![[false; 3]; mesh.n_nodes()];
+        let grid = Grid::<2, 3>::new::<Tri3>(&mesh, &fixity).expect("valid mesh");
+        assert!(
+            grid.hash.items.len() <= 32 * n + 1024,
+            "{}",
+            grid.hash.items.len()
+        );
+        for x in [[1.0, 0.5], [5e5, 0.5], [-1.0, 0.5], [1.0, 0.25]] {
+            let truth = containing(&grid, &x);
+            match grid.search(&x) {
+                Some(e) => assert!(truth.contains(&e), "{x:?}"),
+                None => assert!(truth.is_empty(), "{x:?}"),
+            }
+        }
     }
 }

@@ -29,8 +29,23 @@ pub struct Outcome {
     pub curve: Vec<(f64, f64)>,
 }
 
-/// Field selection: one quantity or every field of the file.
-pub fn select_fields(fem: &FemNodes, field: &str) -> Result<Vec<Quantity>, PipelineError> {
+/// Field selection: one quantity or every field of the file. `files` names
+/// the FEM file(s) in errors; a table without any field is an error.
+pub fn select_fields(
+    fem: &FemNodes,
+    field: &str,
+    files: &str,
+) -> Result<Vec<Quantity>, PipelineError> {
+    if fem.fields.is_empty() {
+        return Err(PipelineError::Input(format!(
+            "{files}: no field to calibrate on: the table has no pore-water pressure or stress column (only coordinates{})",
+            if fem.region.is_some() {
+                " and regions"
+            } else {
+                ""
+            }
+        )));
+    }
     if field == "all" {
         return Ok(fem.fields.iter().map(|(q, _)| *q).collect());
     }
@@ -41,7 +56,7 @@ pub fn select_fields(fem: &FemNodes, field: &str) -> Result<Vec<Quantity>, Pipel
     })?;
     if fem.field(q).is_none() {
         return Err(PipelineError::Input(format!(
-            "field `{field}`: the FEM file has no such column (it has: {})",
+            "field `{field}`: {files} has no such column (it has: {})",
             fem.fields
                 .iter()
                 .map(|(q, _)| q.name())
@@ -268,7 +283,8 @@ pub fn calibrate(
 ) -> Result<(Calibrated, std::path::PathBuf), PipelineError> {
     let reads = super::output::ReadLog::start();
     let fem = super::fem::load(&options.fem)?;
-    let fields = select_fields(&fem.nodes, &options.field)?;
+    let files = crate::diagnose::file_list(&fem.paths);
+    let fields = select_fields(&fem.nodes, &options.field, &files)?;
     let kernel = options.kernel.for_dim(fem.nodes.dim);
     let outcome = calibrate_h(&fem.nodes, &fields, kernel, options.seed, options.norm)?;
     let check = match &options.check {

@@ -60,37 +60,78 @@ impl<'m> VerticalIndex<'m> {
         let lo = horizontal(&lo3, three_d);
         let hi = horizontal(&hi3, three_d);
         let n_el = mesh.n_elements().max(1);
-        let span = [(hi[0] - lo[0]).max(1e-12), (hi[1] - lo[1]).max(1e-12)];
-        let cell = if three_d {
-            (span[0] * span[1] / n_el as f64).sqrt().max(1e-12) * 2.0
+        // Spans at most the largest double (±1e308 apart is infinite).
+        let span = [
+            (hi[0] - lo[0]).clamp(1e-12, f64::MAX),
+            (hi[1] - lo[1]).clamp(1e-12, f64::MAX),
+        ];
+        let mut cell = if three_d {
+            let area = span[0] * span[1];
+            if area.is_finite() {
+                (area / n_el as f64).sqrt().max(1e-12) * 2.0
+            } else {
+                // Square roots of each span: their product cannot overflow.
+                span[0].sqrt() * span[1].sqrt() / (n_el as f64).sqrt() * 2.0
+            }
         } else {
             span[0] / (n_el as f64).sqrt().max(1.0)
         };
-        let n = [
-            ((span[0] / cell).ceil() as usize).max(1),
-            if three_d {
-                ((span[1] / cell).ceil() as usize).max(1)
-            } else {
-                1
-            },
-        ];
+        // Never more than 4 bins per element along an axis (a stretched box,
+        // one node far from the rest), and no more bin entries than a budget
+        // proportional to the elements: memory O(elements) whatever the
+        // coordinates (#30). Neither binds on an ordinary mesh.
+        cell = cell.max(span[0].max(span[1]) / (4.0 * n_el as f64));
+        let boxes: Vec<Option<([f64; 2], [f64; 2])>> = (0..mesh.n_elements())
+            .map(|e| {
+                active(e).then(|| {
+                    let mut emin = [f64::INFINITY; 2];
+                    let mut emax = [f64::NEG_INFINITY; 2];
+                    for c in mesh
+                        .corner_coords(e)
+                        .iter()
+                        .take(mesh.element_type.n_corners())
+                    {
+                        let h = horizontal(c, three_d);
+                        for k in 0..2 {
+                            emin[k] = emin[k].min(h[k]);
+                            emax[k] = emax[k].max(h[k]);
+                        }
+                    }
+                    (emin, emax)
+                })
+            })
+            .collect();
+        let budget = 32 * n_el as u64 + 1024;
+        let (n, clamp) = loop {
+            let n = [
+                ((span[0] / cell).ceil() as usize).max(1),
+                if three_d {
+                    ((span[1] / cell).ceil() as usize).max(1)
+                } else {
+                    1
+                },
+            ];
+            let clamp = move |v: f64, k: usize| {
+                (((v - lo[k]) / cell).floor().max(0.0) as usize).min(n[k] - 1)
+            };
+            let entries: u64 = boxes
+                .iter()
+                .flatten()
+                .map(|(a, b)| {
+                    let w = |k: usize| (clamp(b[k], k) - clamp(a[k], k) + 1) as u64;
+                    w(0).saturating_mul(w(1))
+                })
+                .fold(0u64, u64::saturating_add);
+            if entries <= budget || n == [1, 1] {
+                break (n, clamp);
+            }
+            cell *= 2.0;
+        };
         let mut bins = vec![Vec::new(); n[0] * n[1]];
-        let clamp =
-            |v: f64, k: usize| (((v - lo[k]) / cell).floor().max(0.0) as usize).min(n[k] - 1);
-        for e in 0..mesh.n_elements() {
-            if !active(e) {
+        for (e, b) in boxes.iter().enumerate() {
+            let Some((emin, emax)) = b else {
                 continue;
-            }
-            let corners = mesh.corner_coords(e);
-            let mut emin = [f64::INFINITY; 2];
-            let mut emax = [f64::NEG_INFINITY; 2];
-            for c in corners.iter().take(mesh.element_type.n_corners()) {
-                let h = horizontal(c, three_d);
-                for k in 0..2 {
-                    emin[k] = emin[k].min(h[k]);
-                    emax[k] = emax[k].max(h[k]);
-                }
-            }
+            };
             for i in clamp(emin[0], 0)..=clamp(emax[0], 0) {
                 for j in clamp(emin[1], 1)..=clamp(emax[1], 1) {
                     bins[j * n[0] + i].push(e as u32);
@@ -630,5 +671,38 @@ mod tests {
             geostatic_tensor(-100.0, 0.5, -40.0, 1.0),
             [-70.0, -100.0, -70.0, 0.0, 0.0, 0.0]
         );
+    }
+
+    /// #30: one node of a 3D mesh at z = 1e308 made the vertical index ask
+    /// for 10^155 bins ("capacity overflow"); its bins and entries stay
+    /// proportional to the elements. (The GOM reader refuses such a node
+    /// first; the index must not depend on that.)
+    #[test]
+    fn vertical_index_is_bounded_with_a_node_at_z_1e308() {
+        let model = crate::testkit::column_tet(
+            1.0,
+            2.0,
+            1.0,
+            4,
+            8,
+            4,
+            crate::testkit::elastic_material(1e4, 0.3, 2650.0, 0.3),
+        );
+        let mut mesh = model.mesh.clone();
+        let n_el = mesh.n_elements();
+        let far = mesh.nodes.iter().position(|p| p[1] == 0.0).unwrap();
+        mesh.nodes[far][2] = 1e308;
+        let index = VerticalIndex::new(&mesh, |_| true);
+        let entries: usize = index.bins.iter().map(Vec::len).sum();
+        assert!(index.bins.len() <= 16 * n_el + 64, "{}", index.bins.len());
+        assert!(entries <= 32 * n_el + 1024, "{entries}");
+        let gamma = vec![20.0; n_el];
+        let sigma = overburden(
+            &mesh,
+            |_| true,
+            &gamma,
+            &[[0.5, 1.5, 0.5], [0.5, 1.0, 1e307]],
+        );
+        assert_eq!(sigma.len(), 2);
     }
 }

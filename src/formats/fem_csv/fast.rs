@@ -153,7 +153,9 @@ pub(super) fn fast_row(
                 Ok(v) => id = Some(v),
                 Err(_) => return false,
             },
-            Cell::Empty | Cell::Short => {}
+            // An empty id is recorded (with its column) by the slow path.
+            Cell::Empty => return false,
+            Cell::Short => {}
         }
     }
     scratch.clear();

@@ -104,6 +104,18 @@ pub fn attach_mesh(
         }
         nodes.positions[i] = mesh[k as usize - 1];
     }
+    if let Some((a, b)) = super::extent::first_coincident(&nodes.positions) {
+        return Err(FormatError::file(
+            csv_path,
+            format!(
+                "duplicate node: node {} (row {}) is at the same mesh point as node {} (row {})",
+                nodes.ids[b],
+                b + 1,
+                nodes.ids[a],
+                a + 1
+            ),
+        ));
+    }
     nodes.dim = if nodes.positions.iter().all(|p| p[2] == 0.0) {
         2
     } else {

@@ -56,6 +56,8 @@ pub(super) struct Rows {
     /// Per tracked column: the first row that lacks the field, as (line,
     /// column past its end, fields in the row).
     pub(super) first_short: Vec<Option<(usize, usize, usize)>>,
+    /// The first row whose id cell is present but empty, as (line, column).
+    pub(super) first_empty_id: Option<(usize, usize)>,
     pub(super) errors: Vec<ParseError>,
 }
 
@@ -123,6 +125,9 @@ pub(super) fn merge_rows(parts: Vec<Rows>, n_values: usize) -> Merged {
             if rows.first_short[t].is_none() {
                 rows.first_short[t] = part.first_short[t];
             }
+        }
+        if rows.first_empty_id.is_none() {
+            rows.first_empty_id = part.first_empty_id;
         }
         for e in part.errors {
             if full {
@@ -263,8 +268,14 @@ pub(super) fn slow_row(schema: &Schema<'_>, line: &str, line_no: usize, rows: &m
                 }
             },
             None => {
-                if c >= n_fields {
-                    rows.short(n_values, line_no, end_col, n_fields);
+                match fields.get(c) {
+                    // Present but empty: an error when other rows have ids (#24).
+                    Some((col, _)) => {
+                        if rows.first_empty_id.is_none() {
+                            rows.first_empty_id = Some((line_no, *col));
+                        }
+                    }
+                    None => rows.short(n_values, line_no, end_col, n_fields),
                 }
                 None
             }

@@ -13,6 +13,7 @@ use super::options::{CsvOptions, SignConvention, check_columns_option};
 use super::rows::{Rows, Schema, merge_rows, nth_line_start, parse_chunk, split_chunks};
 use super::{ColumnReport, FemReadReport};
 use crate::formats::error::{FormatError, ParseError};
+use crate::formats::extent::{far_outlier, first_coincident};
 use crate::model::{FemNodes, Quantity};
 
 /// [`parse_csv`](super::parse_csv) with data-row chunks of about `chunk_bytes`
@@ -271,6 +272,7 @@ pub(super) fn parse_csv_chunked(
         lines: lines_of,
         has_value,
         first_short,
+        first_empty_id,
         ..
     } = merged.rows;
     nodes.positions = positions;
@@ -310,6 +312,42 @@ pub(super) fn parse_csv_chunked(
     // Columns absent from every row (ragged GeoStudio rows) are dropped, not zeroed;
     // partly present columns are an error at the first row without a value.
     let mut warnings = Vec::new();
+    // The id column likewise: a row without an id would silently take its row
+    // number, and with --fem-mesh another node's coordinates (#24).
+    let ids_given = has_value[value_cols.len()];
+    if let Some(c) = cnode {
+        match first_empty_id {
+            Some((line, col)) if ids_given => {
+                return Err(ParseError::at(
+                    path,
+                    line,
+                    col,
+                    format!(
+                        "empty node id in `{}`: other rows have ids, so every row needs one",
+                        headers[c].1
+                    ),
+                )
+                .into());
+            }
+            _ if !ids_given && cx.is_some() && cy.is_some() => warnings.push(format!(
+                "column `{}` has no values in any row: nodes are numbered by row",
+                headers[c].1
+            )),
+            _ if !ids_given => {
+                return Err(ParseError::at(
+                    path,
+                    header_idx + 1,
+                    headers[c].0,
+                    format!(
+                        "column `{}` has no node ids and the table has no X and Y columns: its rows cannot be joined to mesh nodes",
+                        headers[c].1
+                    ),
+                )
+                .into());
+            }
+            _ => {}
+        }
+    }
     for (slot, &(c, q)) in value_cols.iter().enumerate() {
         let n_missing = values[slot].iter().filter(|v| v.is_nan()).count();
         if n_missing == 0 {
@@ -393,43 +431,21 @@ fn check_duplicates(path: &Path, nodes: &FemNodes, lines: &[usize]) -> Result<()
             .into());
         }
     }
-    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for p in &nodes.positions {
-        for k in 0..3 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
+    if let Some(far) = far_outlier(&nodes.positions) {
+        return Err(ParseError::at(path, lines[far.index], 1, far.to_string()).into());
     }
-    let diag = ((hi[0] - lo[0]).powi(2) + (hi[1] - lo[1]).powi(2) + (hi[2] - lo[2]).powi(2))
-        .sqrt()
-        .max(1e-300);
-    let tol = 1e-9 * diag;
-    let mut order: Vec<usize> = (0..nodes.len()).collect();
-    order.par_sort_unstable_by(|&a, &b| {
-        nodes.positions[a][0]
-            .total_cmp(&nodes.positions[b][0])
-            .then(a.cmp(&b))
-    });
-    for (k, &a) in order.iter().enumerate() {
-        for &b in &order[k + 1..] {
-            let (pa, pb) = (nodes.positions[a], nodes.positions[b]);
-            if pb[0] - pa[0] > tol {
-                break;
-            }
-            if (pa[1] - pb[1]).abs() <= tol && (pa[2] - pb[2]).abs() <= tol {
-                let (first, second) = (a.min(b), a.max(b));
-                return Err(ParseError::at(
-                    path,
-                    lines[second],
-                    1,
-                    format!(
-                        "duplicate node: same coordinates as line {} ({}, {}, {})",
-                        lines[first], pa[0], pa[1], pa[2]
-                    ),
-                )
-                .into());
-            }
-        }
+    if let Some((first, second)) = first_coincident(&nodes.positions) {
+        let p = nodes.positions[first];
+        return Err(ParseError::at(
+            path,
+            lines[second],
+            1,
+            format!(
+                "duplicate node: same coordinates as line {} ({}, {}, {})",
+                lines[first], p[0], p[1], p[2]
+            ),
+        )
+        .into());
     }
     Ok(())
 }

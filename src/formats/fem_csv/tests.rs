@@ -9,6 +9,7 @@ use super::headers::strip_unit_suffix;
 use super::rows::{Rows, Schema, slow_row};
 use super::table::parse_csv_chunked;
 use super::*;
+use crate::formats::extent::{far_outlier, first_coincident};
 use crate::model::{Quantity, StressComponent};
 
 #[test]
@@ -221,4 +222,110 @@ fn duplicate_column_assignments_are_errors() {
             .starts_with("t.csv:1:1: --columns gives header `A`"),
         "{e}"
     );
+}
+
+/// #24: an empty or blank `Node` cell silently took the row number as its id
+/// (with `--fem-mesh`, another node's coordinates). A partly empty id column
+/// is an error at the empty cell, from the fast and the field-by-field row
+/// paths alike and for any chunking; a wholly empty one numbers rows, with a
+/// warning, where the table has coordinates.
+#[test]
+fn empty_node_id_is_a_positioned_error_not_the_row_number() {
+    for (table, expected) in [
+        // Fast-path rows around the empty cell.
+        (
+            "X,Y,Node,PWP\n0,0,1,5\n1,0,,6\n0,1,3,7\n",
+            "t.csv:3:5: empty node id in `Node`: other rows have ids",
+        ),
+        ("X,Y,Node,PWP\n0,0,1,5\n1,0,  ,6\n0,1,3,7\n", "t.csv:3:5: "),
+        (
+            "X,Y,Node,PWP\n0,0,1,5\n1,0,\"\",6\n0,1,3,7\n",
+            "t.csv:3:5: ",
+        ),
+        // Rows only the field-by-field path reads (non-ASCII, CRLF).
+        (
+            "X,Y,Node,Region\n0,0,1,sand\n1,0,,argile é\n0,1,3,clay\n",
+            "t.csv:3:5: ",
+        ),
+        ("Node,PWP\r\n1,1\r\n ,2\r\n3,3\r\n", "t.csv:3:1: "),
+        // The first row without an id, later rows with.
+        ("Node;PWP\n;1\n2;2\n", "t.csv:2:1: "),
+    ] {
+        for chunk in [1, 4, 1 << 20] {
+            let e = parse(table, chunk).unwrap_err();
+            assert!(e.starts_with(expected), "{table:?} chunk {chunk}: {e}");
+        }
+    }
+    // Each path on its own: the fast path hands the row over, the slow path
+    // records the cell.
+    let values = [(3, Quantity::Pwp)];
+    let factors = [1.0; 4];
+    let schema = Schema {
+        path: Path::new("t.csv"),
+        delim: Delimiter::Byte(b','),
+        decimal_comma: false,
+        coords: [Some(0), Some(1), None],
+        node: Some(2),
+        region: None,
+        value_cols: &values,
+        factors: &factors,
+    };
+    for line in ["1,0,,6", "1,0, ,6"] {
+        let mut rows = Rows::new(&schema, 0);
+        let (mut ranges, mut scratch) = (Vec::new(), Vec::new());
+        assert!(!fast_row(
+            &schema,
+            line,
+            3,
+            &mut ranges,
+            &mut scratch,
+            &mut rows
+        ));
+        assert!(rows.ids.is_empty());
+        slow_row(&schema, line, 3, &mut rows);
+        assert_eq!(rows.first_empty_id, Some((3, 5)), "{line:?}");
+    }
+    // No id in any row: rows are numbered, with a warning, when coordinates
+    // place them; without coordinates the rows cannot be joined to a mesh.
+    let (nodes, report) = parse("X,Y,Node,PWP\n0,0,,1\n1,0,,2\n0,1,,3\n", 4).unwrap();
+    assert_eq!(nodes.ids, [1, 2, 3]);
+    assert!(
+        report.warnings[0].contains("`Node` has no values in any row"),
+        "{:?}",
+        report.warnings
+    );
+    let e = parse("Node,PWP\n,1\n,2\n", 4).unwrap_err();
+    assert!(
+        e.starts_with("t.csv:1:1: column `Node` has no node ids"),
+        "{e}"
+    );
+}
+
+/// #24 (coincident mesh nodes): the duplicate check shared by tables and
+/// meshes finds a pair within 1e-9 of the diagonal on every axis and never a
+/// false pair on a structured grid (whose columns share an x); #30: a node
+/// 10^6 spreads away from the others is found by `far_outlier`.
+#[test]
+fn first_coincident_finds_pairs_and_only_pairs() {
+    let mut grid: Vec<[f64; 3]> = Vec::new();
+    for j in 0..300 {
+        for i in 0..300 {
+            grid.push([i as f64 * 0.5, j as f64 * 0.5, 0.0]);
+        }
+    }
+    assert_eq!(first_coincident(&grid), None);
+    // Beside far outliers the pairs are found still (no overflow), but every
+    // pair is within 1e-9 of such a diagonal: `far_outlier` refuses these first.
+    let mut with_outlier = grid.clone();
+    with_outlier.push([1e308, 0.0, 0.0]);
+    with_outlier.push([-1e308, -1e308, 1e308]);
+    assert_eq!(first_coincident(&with_outlier), Some((0, 1)));
+    let far = far_outlier(&with_outlier).unwrap();
+    assert_eq!((far.index, far.axis, far.value), (grid.len(), 0, 1e308));
+    assert_eq!(far_outlier(&grid), None);
+    let mut dup = grid.clone();
+    dup.push([10.0 + 1e-12, 20.0, 0.0]);
+    assert_eq!(first_coincident(&dup), Some((40 * 300 + 20, grid.len())));
+    assert_eq!(first_coincident(&[[1.0; 3]; 2]), Some((0, 1)));
+    assert_eq!(first_coincident(&[[1.0; 3]]), None);
 }

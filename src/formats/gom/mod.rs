@@ -390,7 +390,7 @@ impl GomDocument {
 
     fn read_nodes(&self, n_dim: usize, n_nodes: usize) -> Result<Vec<[f64; 3]>, ParseError> {
         let b = self.required("$$STARTNODES")?;
-        let (nodes, _) =
+        let (nodes, rows) =
             self.parse_rows(b, n_nodes, "node lines ($$STARTCOUNTERS)", |k, i, line| {
                 let mut xyz = [0.0f64; 3];
                 lex::reals(line, &mut xyz[..n_dim]).map_err(|bad| {
@@ -404,6 +404,17 @@ impl GomDocument {
                 })?;
                 Ok(xyz)
             })?;
+        // A node far outside the others cannot be meant (#30): refused at
+        // its coordinate.
+        if let Some(far) = super::extent::far_outlier(&nodes) {
+            let i = rows[far.index];
+            let offset = lex::tokens(self.doc.line(i))
+                .nth(far.axis)
+                .map_or(0, |(o, _)| o);
+            return Err(self
+                .doc
+                .error_at(i, offset, format!("node {}: {far}", far.index + 1)));
+        }
         Ok(nodes)
     }
 
