@@ -709,7 +709,7 @@ fn h_far_below_the_node_spacing_is_refused() {
         assert_contains(
             &text,
             &[
-                &format!("--h {}: the kernel support", extra[1]),
+                &format!("smoothing length h = {} m: the kernel support", extra[1]),
                 "below a thousandth of the node spacing l = 0.5000 m",
             ],
         );

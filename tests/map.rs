@@ -417,7 +417,7 @@ fn malformed_ply_files_are_positioned_errors() {
         (
             "float_coordinates",
             with_header(&text.replace("property double x", "property float x")),
-            "must be `double x, y, z`",
+            "m.ply:7:1: the PLY `node` element must be `double x, y, z`: property 1 is `property float x`",
         ),
         (
             "truncated",

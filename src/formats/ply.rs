@@ -17,6 +17,9 @@ struct Property {
     /// Scalar type, or for a list the (count type, item type).
     kind: PropKind,
     name: String,
+    /// The header line that declares it, as written, and its 1-based number.
+    text: String,
+    line: usize,
 }
 
 #[derive(Debug, Clone)]
@@ -30,6 +33,8 @@ struct Element {
     name: String,
     count: usize,
     properties: Vec<Property>,
+    /// 1-based header line of its `element` declaration.
+    line: usize,
 }
 
 fn type_size(t: &str) -> Option<usize> {
@@ -245,6 +250,7 @@ fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, 
                     name: name.to_string(),
                     count,
                     properties: Vec::new(),
+                    line: i + 1,
                 });
             }
             ["property", "list", ct, it, name] => {
@@ -258,6 +264,8 @@ fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, 
                 el.properties.push(Property {
                     kind: PropKind::List(c, t),
                     name: name.to_string(),
+                    text: line.trim().to_string(),
+                    line: i + 1,
                 });
             }
             ["property", t, name] => {
@@ -269,6 +277,8 @@ fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, 
                 el.properties.push(Property {
                     kind: PropKind::Scalar(size),
                     name: name.to_string(),
+                    text: line.trim().to_string(),
+                    line: i + 1,
                 });
             }
             // GeoStudio writes `property int` with no name in its `precision` element.
@@ -279,6 +289,8 @@ fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, 
                 el.properties.push(Property {
                     kind: PropKind::Scalar(type_size(t).unwrap_or(4)),
                     name: String::new(),
+                    text: line.trim().to_string(),
+                    line: i + 1,
                 });
             }
             [] => {}
@@ -295,18 +307,30 @@ fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, 
             FormatError::from(ParseError::at(path, 1, 1, "the PLY has no `node` element"))
         })?;
     let node = &elements[node_index];
-    let names: Vec<&str> = node.properties.iter().map(|p| p.name.as_str()).collect();
-    if names != ["x", "y", "z"]
-        || node
-            .properties
+    // The first property that is not the expected `double x|y|z`, at its line
+    // (or the element's line when properties are missing).
+    let wrong =
+        ["x", "y", "z"]
             .iter()
-            .any(|p| !matches!(p.kind, PropKind::Scalar(8)))
-    {
+            .enumerate()
+            .find_map(|(k, want)| match node.properties.get(k) {
+                Some(p) if p.name == *want && matches!(p.kind, PropKind::Scalar(8)) => None,
+                Some(p) => Some((p.line, format!("property {} is `{}`", k + 1, p.text))),
+                None => Some((
+                    node.line,
+                    format!("it has {} properties", node.properties.len()),
+                )),
+            });
+    let extra = node
+        .properties
+        .get(3)
+        .map(|p| (p.line, format!("property 4 (`{}`) is one too many", p.text)));
+    if let Some((line, what)) = wrong.or(extra) {
         return Err(ParseError::at(
             path,
+            line,
             1,
-            1,
-            format!("the PLY `node` element must be `double x, y, z`, found {names:?}"),
+            format!("the PLY `node` element must be `double x, y, z`: {what}"),
         )
         .into());
     }
