@@ -3,19 +3,34 @@
 //! (new folder, `--force` over an old one, the two-rename fallback), checked
 //! with the library's recorded trace and, where the machine lets it run, with
 //! `strace` on the real binary; an injected sync failure that leaves the old
-//! output in place; and the `fos --state` data loss.
+//! output in place; and a closed pipe. (The `fos --state` data loss is pinned
+//! in `tests/hardening.rs`, beside the other inputs-as-outputs cases.)
 
 mod common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use a3d_init::pipeline::ErrorKind;
 use a3d_init::pipeline::fem::FemOptions;
 use a3d_init::pipeline::map::MapConfig;
 use a3d_init::pipeline::mapping::{self, MapJob};
 use a3d_init::pipeline::output::trace::{self, Event};
-use a3d_init::pipeline::{ErrorKind, PipelineError};
-use common::{fixture, run, run_map};
+use common::{fixture, run_map};
+
+/// `map` of the shipped slope into `out`, as arguments of the binary.
+fn slope_map_args(out: &Path) -> Vec<String> {
+    let path = |p: PathBuf| p.display().to_string();
+    vec![
+        "map".into(),
+        "--fem".into(),
+        path(fixture("slope/sand-nodes.csv")),
+        "--mpm".into(),
+        path(fixture("slope")),
+        "--out".into(),
+        path(out.to_path_buf()),
+    ]
+}
 
 fn slope_job() -> MapJob {
     MapJob {
@@ -161,56 +176,6 @@ fn an_output_error_exits_2_and_names_the_path() {
     );
 }
 
-/// Regression (#24): `fos --mpm model --state run1/state.csv --out run1
-/// --force` exited 0 and deleted `run1/state.csv`, because `fos` listed only
-/// the model among its inputs. Every file a command reads now guards its
-/// output.
-#[test]
-fn regression_fos_state_table_inside_the_output_folder_is_not_deleted() {
-    let tmp = tempfile::tempdir().unwrap();
-    let mapped = tmp.path().join("mapped");
-    let (code, text) = run_map(
-        &fixture("slope"),
-        &fixture("slope/sand-nodes.csv"),
-        &mapped,
-        &[],
-    );
-    assert_eq!(code, 0, "{text}");
-    let run1 = tmp.path().join("run1");
-    std::fs::create_dir(&run1).unwrap();
-    let state = run1.join("state.csv");
-    std::fs::copy(mapped.join("mps.csv"), &state).unwrap();
-    let before = std::fs::read(&state).unwrap();
-    for command in ["fos", "verify", "run"] {
-        let (code, text) = run(&[
-            command,
-            "--mpm",
-            fixture("slope").to_str().unwrap(),
-            "--state",
-            state.to_str().unwrap(),
-            "--out",
-            run1.to_str().unwrap(),
-            "--force",
-        ]);
-        assert_eq!(code, 2, "{command}: {text}");
-        assert!(text.contains("holds the input"), "{command}: {text}");
-        assert_eq!(
-            std::fs::read(&state).unwrap(),
-            before,
-            "{command} changed the input"
-        );
-    }
-    // The same through the library, without the CLI.
-    let source = a3d_init::pipeline::start::StateSource::Table {
-        model: fixture("slope"),
-        state: state.clone(),
-    };
-    let e =
-        a3d_init::pipeline::fos::fos(&source, &Default::default(), Some(&run1), true).unwrap_err();
-    assert!(matches!(e, PipelineError::Output(_)), "{e}");
-    assert!(state.is_file());
-}
-
 /// The same order seen from outside: `strace` on the real binary (where
 /// ptrace is allowed), every file of the new folder `fsync`ed before the
 /// `renameat2` that publishes it, and the parent folder after it.
@@ -239,14 +204,8 @@ fn strace_sees_every_output_synced_before_the_rename() {
             "-o".into(),
             log.display().to_string(),
             env!("CARGO_BIN_EXE_a3d-init").into(),
-            "map".into(),
-            "--fem".into(),
-            fixture("slope/sand-nodes.csv").display().to_string(),
-            "--mpm".into(),
-            fixture("slope").display().to_string(),
-            "--out".into(),
-            out.display().to_string(),
         ];
+        args.extend(slope_map_args(&out));
         if force {
             args.push("--force".into());
         }
@@ -327,19 +286,7 @@ fn regression_a_closed_pipe_is_not_a_crash() {
             true,
         ),
         // map prints to stderr: closed; its output is complete.
-        (
-            vec![
-                "map".into(),
-                "--fem".into(),
-                fixture("slope/sand-nodes.csv").display().to_string(),
-                "--mpm".into(),
-                fixture("slope").display().to_string(),
-                "--out".into(),
-                out.display().to_string(),
-            ],
-            true,
-            true,
-        ),
+        (slope_map_args(&out), true, true),
     ];
     for (args, close_out, close_err) in cases {
         let mut command = common::bin();

@@ -142,7 +142,7 @@ fn force_never_deletes_or_overwrites_an_input() {
 }
 
 #[test]
-fn verify_out_may_not_hold_the_state_and_fem_mesh_is_an_input() {
+fn verify_run_and_fos_out_may_not_hold_the_state_and_fem_mesh_is_an_input() {
     let (tmp, gom, fem) = mini_project();
     let mapped = tmp.path().join("mapped");
     let (code, text) = map(&fem, &gom, &mapped, &[]);
@@ -155,6 +155,27 @@ fn verify_out_may_not_hold_the_state_and_fem_mesh_is_an_input() {
     let (code, text) = verify_state(&gom, &state, &state_dir, &["--force", "--max-steps", "10"]);
     assert_eq!(code, 2, "{text}");
     assert!(text.contains("holds the input"), "{text}");
+    assert_eq!(std::fs::read(&state).unwrap(), before);
+    // Regression (#24): `fos --mpm model --state run1/state.csv --out run1
+    // --force` exited 0 and deleted the state table, because `fos` listed
+    // only the model among its inputs. Every file a command reads now guards
+    // its output, for every command that takes a state table.
+    for command in ["fos", "run"] {
+        let (code, text) = run(&[
+            &command, &"--mpm", &gom, &"--state", &state, &"--out", &state_dir, &"--force",
+        ]);
+        assert_eq!(code, 2, "{command}: {text}");
+        assert!(text.contains("holds the input"), "{command}: {text}");
+        assert_eq!(std::fs::read(&state).unwrap(), before, "{command}");
+    }
+    // The same through the library, without the CLI.
+    let source = a3d_init::pipeline::start::StateSource::Table {
+        model: gom.clone(),
+        state: state.clone(),
+    };
+    let e = a3d_init::pipeline::fos::fos(&source, &Default::default(), Some(&state_dir), true)
+        .unwrap_err();
+    assert_eq!(e.kind(), a3d_init::pipeline::ErrorKind::Output, "{e}");
     assert_eq!(std::fs::read(&state).unwrap(), before);
     // --fem-mesh: the folder of Mesh.ply is an input folder too.
     let rd = fixture("geostudio-gsz-internal/rapid-drawdown");
@@ -450,22 +471,26 @@ fn verify_with_zero_gravity_plots_without_panicking() {
 /// every node at O(MPs × nodes) cost (a 60k-MP model ran past 60 s): refused.
 #[test]
 fn a_smoothing_length_wider_than_the_fem_is_refused() {
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("out");
-    let (code, text) = run_map(
-        &fixture("anura3d/K0_phreaticSurf_Geom"),
+    k0_map_refused(
         &fixture("geostudio-csv/k0-slope-hydrostatic.csv"),
-        &out,
         &["--h", "1000"],
-    );
-    assert_eq!(code, 2, "{text}");
-    assert_contains(
-        &text,
         &[
             "smoothing length h = 1000 m",
             "more than twice the FEM's extent",
         ],
     );
+}
+
+/// `map` of the K0 slope sample with `fem` and `extra` is refused (exit 2)
+/// saying each of `expected`, and leaves no output folder.
+#[track_caller]
+fn k0_map_refused(fem: &Path, extra: &[&str], expected: &[&str]) {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("out");
+    let (code, text) = run_map(&fixture("anura3d/K0_phreaticSurf_Geom"), fem, &out, extra);
+    assert_eq!(code, 2, "{extra:?}: {text}");
+    assert_contains(&text, expected);
+    assert!(!text.contains("panicked"), "{text}");
     assert!(!out.exists());
 }
 
@@ -493,15 +518,9 @@ fn calibrate_field_all_on_a_table_without_fields_is_exit_2_not_a_panic() {
         assert_contains(&text, &["xy.csv", "no field to calibrate on"]);
         assert!(!out.exists());
     }
-    let (code, text) = run_map(
-        &fixture("anura3d/K0_phreaticSurf_Geom"),
+    k0_map_refused(
         &fem,
-        &tmp.path().join("m"),
         &["--h", "auto"],
-    );
-    assert_eq!(code, 2, "{text}");
-    assert_contains(
-        &text,
         &["xy.csv", "no pore-water pressure or total stress columns"],
     );
 }
@@ -693,28 +712,18 @@ fn gravity_vector_not_along_minus_y_is_refused_by_every_command() {
 /// h wider than the FEM, whatever `--outside` says.
 #[test]
 fn h_far_below_the_node_spacing_is_refused() {
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("out");
     for extra in [
         &["--h", "1e-300"][..],
         &["--h", "0.0001", "--outside", "nearest"],
     ] {
-        let (code, text) = run_map(
-            &fixture("anura3d/K0_phreaticSurf_Geom"),
+        k0_map_refused(
             &fixture("geostudio-csv/k0-slope-hydrostatic.csv"),
-            &out,
             extra,
-        );
-        assert_eq!(code, 2, "{extra:?}: {text}");
-        assert_contains(
-            &text,
             &[
                 &format!("smoothing length h = {} m: the kernel support", extra[1]),
                 "below a thousandth of the node spacing l = 0.5000 m",
             ],
         );
-        assert!(!text.contains("panicked"), "{text}");
-        assert!(!out.exists());
     }
 }
 

@@ -210,9 +210,11 @@ mod tests {
         );
     }
 
+    /// Every refusal names its column: text that is not a map (when parsed),
+    /// and regions or materials that do not exist (when resolved).
     #[test]
-    fn garbage_text_is_refused_with_its_column() {
-        for (spec, column, text) in [
+    fn refusals_name_their_column() {
+        let parsed = [
             ("", 1, "no region=material pair"),
             (",,", 1, "no region=material pair"),
             ("a", 1, "expected region=material"),
@@ -221,23 +223,19 @@ mod tests {
             ("a=1=2", 1, "expected region=material"),
             ("a=1,a=2", 5, "mapped twice"),
             ("a=1, é=2,é=1", 10, "region `é` is mapped twice"),
-        ] {
-            let e = spec.parse::<MaterialMap>().unwrap_err();
-            assert_eq!(e.column, column, "{spec}: {e}");
-            assert!(e.message.contains(text), "{spec}: {e}");
-        }
-    }
-
-    #[test]
-    fn unknown_regions_and_materials_are_refused_with_their_column() {
-        for (spec, column, text) in [
+        ];
+        let resolved = [
             ("a=1,zz=2", 5, "no region `zz`"),
             ("b=0", 1, "no GOM material `0`"),
             ("b=3", 1, "no GOM material `3`"),
             ("b=\u{0}\u{ff}", 1, "no GOM material"),
-        ] {
-            let e = resolve(spec).unwrap_err();
-            assert_eq!(e.column, column, "{spec}: {e}");
+        ];
+        let parse = |spec: &str| spec.parse::<MaterialMap>().unwrap_err();
+        let cases = parsed.iter().map(|c| (c, parse(c.0)));
+        for ((spec, column, text), e) in
+            cases.chain(resolved.iter().map(|c| (c, resolve(c.0).unwrap_err())))
+        {
+            assert_eq!(e.column, *column, "{spec}: {e}");
             assert!(e.message.contains(text), "{spec}: {e}");
         }
         let map: MaterialMap = "a=1".parse().unwrap();

@@ -396,20 +396,7 @@ impl<const D: usize> SpatialHash<D> {
             cells = sized(cell_size);
         }
         let n_cells: usize = cells.iter().product();
-        let bounds = |element: &GridElement<D, NC>| {
-            let mut lo = [usize::MAX; D];
-            let mut hi = [0usize; D];
-            for &c in &element.corners {
-                let p = mesh.nodes[mesh_node[c as usize] as usize];
-                for d in 0..D {
-                    let i =
-                        (((p[d] - low[d]) / cell_size).floor().max(0.0) as usize).min(cells[d] - 1);
-                    lo[d] = lo[d].min(i);
-                    hi[d] = hi[d].max(i);
-                }
-            }
-            (lo, hi)
-        };
+        let bounds = |element: &GridElement<D, NC>| boxes(cell_size, cells, element);
         let for_each_cell = |lo: [usize; D], hi: [usize; D], f: &mut dyn FnMut(usize)| {
             let mut idx = lo;
             loop {

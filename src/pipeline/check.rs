@@ -112,14 +112,14 @@ pub fn check(start: &Start, options: &VerifyOptions) -> Result<VerifyOutcome, Pi
         match mpm::verify(
             &start.project.model,
             &start.points,
-            &start.states,
+            start.states(),
             &settings,
         ) {
             Ok(r) => Some(r),
             Err(
                 e
                 @ (mpm::MpmError::Unsupported(_) | mpm::MpmError::UnsupportedMaterialModel { .. }),
-            ) if start.kernel.is_some() => {
+            ) if start.kernel().is_some() => {
                 run_error = Some(format!("no equilibrium run: {e}"));
                 None
             }
@@ -128,14 +128,14 @@ pub fn check(start: &Start, options: &VerifyOptions) -> Result<VerifyOutcome, Pi
     } else {
         None
     };
-    let mut causes = causes(start.kernel.as_ref(), report.as_ref());
+    let mut causes = causes(start.kernel(), report.as_ref());
     causes.extend(run_error);
     let equilibrium = report.as_ref().is_some_and(|r| r.verdict.is_equilibrium())
-        && start.kernel.as_ref().is_none_or(|k| k.nan_points == 0);
+        && start.kernel().is_none_or(|k| k.nan_points == 0);
     Ok(VerifyOutcome {
         equilibrium,
         causes,
-        anura3d: start.kernel.clone(),
+        anura3d: start.kernel().cloned(),
         run: report,
     })
 }
@@ -161,11 +161,11 @@ pub fn write(
     // start.csv holds Anura3D's state at t = 0: the rows in reach are its
     // diagnostics; no Shepard ratio was computed, so that column stays empty.
     let diagnostics: Vec<mps_table::MpDiagnostics> = start
-        .at_zero
+        .at_zero()
         .iter()
         .enumerate()
         .map(|(i, s)| mps_table::MpDiagnostics {
-            neighbours: start.rows_in_reach.get(i).copied().unwrap_or(0),
+            neighbours: start.rows_in_reach().get(i).copied().unwrap_or(0),
             shepard: None,
             status: if s.pwp.is_finite() && s.total.iter().all(|v| v.is_finite()) {
                 "anura3d"
@@ -175,10 +175,10 @@ pub fn write(
         })
         .collect();
     out.write("start.csv", |w| {
-        mps_table::write_states(w, &start.points, &start.at_zero, &diagnostics)
+        mps_table::write_states(w, &start.points, start.at_zero(), &diagnostics)
     })?;
     let positions: Vec<[f64; 3]> = start.points.iter().map(|p| p.position).collect();
-    let start_stress: Vec<[f64; 6]> = start.at_zero.iter().map(MpState::effective).collect();
+    let start_stress: Vec<[f64; 6]> = start.at_zero().iter().map(MpState::effective).collect();
     write_snapshot(
         out,
         "mps_start.vtu",
@@ -216,13 +216,9 @@ pub fn verify(
     out: Option<&Path>,
     force: bool,
 ) -> Result<(VerifyOutcome, PathBuf), PipelineError> {
-    let runner::Begun {
-        reads,
-        start,
-        target,
-    } = runner::begin(source, out, "verify")?;
     // Rerunning `verify DIR` replaces its own default subfolder.
     let own_folder = out.is_none() && matches!(source, StateSource::Folder(_));
+    let (reads, start, target) = runner::begin(source, out, "verify")?;
     let force = force || (own_folder && target.join("verify.json").is_file());
     let dir = OutputDir::create(&target, force, &reads)?;
     let outcome = check(&start, options)?;

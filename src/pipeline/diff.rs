@@ -39,17 +39,6 @@ impl Default for DiffOptions {
     }
 }
 
-/// The comparison of two files or two folders.
-#[derive(Debug, Serialize, Default)]
-pub struct DiffReport {
-    /// Equal within the tolerances, and the same files in both folders.
-    pub equal: bool,
-    /// Files only in one of two folders.
-    pub notes: Vec<String>,
-    /// One comparison per pair of files.
-    pub files: Vec<FileDiff>,
-}
-
 /// The comparison of one pair of files.
 #[derive(Debug, Serialize, Default)]
 pub struct FileDiff {
@@ -534,6 +523,17 @@ fn files_of(dir: &Path) -> Result<BTreeMap<String, PathBuf>, PipelineError> {
         }
     }
     Ok(out)
+}
+
+/// The comparison of two files or two folders.
+#[derive(Debug, Serialize, Default)]
+pub struct DiffReport {
+    /// Equal within the tolerances, and the same files in both folders.
+    pub equal: bool,
+    /// Files only in one of two folders.
+    pub notes: Vec<String>,
+    /// One comparison per pair of files.
+    pub files: Vec<FileDiff>,
 }
 
 /// Compares two files, or two folders file by file (the files both hold; a

@@ -227,15 +227,11 @@ pub fn fos(
     out: Option<&Path>,
     force: bool,
 ) -> Result<(FosReport, PathBuf), PipelineError> {
-    let runner::Begun {
-        reads,
-        start,
-        target,
-    } = runner::begin(source, out, "fos")?;
+    let (reads, start, target) = runner::begin(source, out, "fos")?;
     let states = if options.zero_pwp {
-        without_pore_pressure(&start.states)
+        without_pore_pressure(start.states())
     } else {
-        start.states.clone()
+        start.states().to_vec()
     };
     analyse_into(&start, &states, options, &target, force, &reads)
 }
@@ -251,7 +247,7 @@ pub fn zero_and_mapped(
     let options = FosOptions::default();
     let zero = analyse_into(
         start,
-        &without_pore_pressure(&start.states),
+        &without_pore_pressure(start.states()),
         &options,
         &target.join("fos_zero_pwp"),
         true,
@@ -259,7 +255,7 @@ pub fn zero_and_mapped(
     )?;
     let mapped = analyse_into(
         start,
-        &start.states,
+        start.states(),
         &options,
         &target.join("fos_mapped"),
         true,

@@ -138,10 +138,13 @@ pub struct FieldRange {
 /// What `inspect --fem` shows of FEM node files.
 #[derive(Clone, Debug, Serialize)]
 pub struct FemSummary {
-    /// How each file was read.
+    /// How each file was read: dialect, columns, units, signs, warnings.
     pub reports: Vec<FemReadReport>,
+    /// What joining the files (or a table and its mesh) did.
     pub notes: Vec<String>,
+    /// The coordinate range of the nodes (`None` without nodes).
     pub extent: Option<Extent>,
+    /// Each field's range (Anura3D signs, kPa).
     pub fields: Vec<FieldRange>,
     /// Median nearest-node distance l (m).
     pub spacing: f64,

@@ -114,27 +114,16 @@ pub fn history_plot(path: &Path, report: &mpm::RunReport) -> Result<(), Pipeline
 }
 
 /// What a command on a mapped state begins with: the log of every file it
-/// reads (started before the first read), the loaded start, and the folder
-/// its outputs go to.
-pub struct Begun {
-    pub reads: ReadLog,
-    pub start: Start,
-    /// The folder asked for, else `default_name` in the start's home folder.
-    pub target: PathBuf,
-}
-
-/// Starts the read log and loads the start `source` names.
+/// reads (started before the first read), the start `source` names, and the
+/// folder its outputs go to (`out`, else `default_name` in the start's home
+/// folder).
 pub fn begin(
     source: &StateSource,
     out: Option<&Path>,
     default_name: &str,
-) -> Result<Begun, PipelineError> {
+) -> Result<(ReadLog, Start, PathBuf), PipelineError> {
     let reads = ReadLog::start();
     let start = Start::load(source)?;
     let target = out.map_or_else(|| start.home.join(default_name), Path::to_path_buf);
-    Ok(Begun {
-        reads,
-        start,
-        target,
-    })
+    Ok((reads, start, target))
 }

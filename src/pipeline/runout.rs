@@ -74,17 +74,13 @@ pub fn run(
     out: Option<&Path>,
     force: bool,
 ) -> Result<RunOutcome, PipelineError> {
-    let runner::Begun {
-        reads,
-        start,
-        target,
-    } = runner::begin(source, out, "run")?;
+    let (reads, start, target) = runner::begin(source, out, "run")?;
     let settings = options.settings(start.project.cps.as_ref())?;
     let dir = OutputDir::create(&target, force, &reads)?;
     let output = mpm::run(
         &start.project.model,
         &start.points,
-        &start.states,
+        start.states(),
         &settings,
     )
     .map_err(runner::runner_error)?;

@@ -7,7 +7,7 @@
 
 use std::path::{Path, PathBuf};
 
-use super::verify::KernelCheck;
+use super::verify::{Judged, KernelCheck};
 use super::{PipelineError, Project};
 use crate::formats::mps_table;
 use crate::model::{MaterialPoint, MpState};
@@ -27,19 +27,19 @@ pub struct Start {
     pub project: Project,
     /// The MPs (the model's own, in Anura3D's order).
     pub points: Vec<MaterialPoint>,
-    /// The state the runner starts from: what Anura3D holds at t = 0 with the
-    /// MPM-MIXED collapse of the first step applied, or the table's state.
-    pub states: Vec<MpState>,
-    /// The state at t = 0 as Anura3D holds it (before the MIXED collapse); the
-    /// table's state for a table.
-    pub at_zero: Vec<MpState>,
-    /// What the files Anura3D reads give (a folder only).
-    pub kernel: Option<KernelCheck>,
-    /// Per MP: MAPF rows in reach (a folder only; empty for a table).
-    pub rows_in_reach: Vec<u32>,
+    /// The state and where it came from.
+    pub state: StartState,
     /// The folder outputs go into by default: the map folder, or the state
     /// table's folder.
     pub home: PathBuf,
+}
+
+/// Where a start's state came from.
+pub enum StartState {
+    /// A map folder: what Anura3D will hold, judged from the files it reads.
+    Anura3d(Box<Judged>),
+    /// A state table, as given.
+    Table(Vec<MpState>),
 }
 
 impl Start {
@@ -53,10 +53,7 @@ impl Start {
                     points: project.points.clone(),
                     home: project.files.dir.clone(),
                     project,
-                    states: judged.run_start,
-                    at_zero: judged.start,
-                    kernel: Some(judged.check),
-                    rows_in_reach: judged.rows_in_reach,
+                    state: StartState::Anura3d(Box::new(judged)),
                 })
             }
             StateSource::Table { model, state } => {
@@ -65,19 +62,50 @@ impl Start {
                 Ok(Start {
                     project,
                     points,
-                    at_zero: states.clone(),
-                    states,
-                    kernel: None,
-                    rows_in_reach: Vec::new(),
+                    state: StartState::Table(states),
                     home: state.parent().unwrap_or(Path::new(".")).to_path_buf(),
                 })
             }
         }
     }
 
+    /// The state the runner starts from: what Anura3D holds at t = 0 with the
+    /// MPM-MIXED collapse of its first step applied, or the table's state.
+    pub fn states(&self) -> &[MpState] {
+        match &self.state {
+            StartState::Anura3d(judged) => &judged.run_start,
+            StartState::Table(states) => states,
+        }
+    }
+
+    /// The state at t = 0 as Anura3D holds it (before the MIXED collapse), or
+    /// the table's state.
+    pub fn at_zero(&self) -> &[MpState] {
+        match &self.state {
+            StartState::Anura3d(judged) => &judged.start,
+            StartState::Table(states) => states,
+        }
+    }
+
+    /// What the files Anura3D reads give (a map folder only).
+    pub fn kernel(&self) -> Option<&KernelCheck> {
+        match &self.state {
+            StartState::Anura3d(judged) => Some(&judged.check),
+            StartState::Table(_) => None,
+        }
+    }
+
+    /// Per MP: MAPF rows in reach (a map folder only; empty for a table).
+    pub fn rows_in_reach(&self) -> &[u32] {
+        match &self.state {
+            StartState::Anura3d(judged) => &judged.rows_in_reach,
+            StartState::Table(_) => &[],
+        }
+    }
+
     /// True when every MP's state is finite (the runner can start).
     pub fn runnable(&self) -> bool {
-        self.states.iter().all(|s| {
+        self.states().iter().all(|s| {
             s.pwp.is_finite() && s.saturation.is_finite() && s.total.iter().all(|v| v.is_finite())
         })
     }
