@@ -314,7 +314,7 @@ pub fn read_step(
             return Err(FormatError::file(
                 path,
                 format!(
-                    "{} analyses; choose one with --analysis: {}",
+                    "{} analyses; choose one by name or index (`--analysis`): {}",
                     project.analyses.len(),
                     analysis_list()
                 ),

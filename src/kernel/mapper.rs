@@ -87,7 +87,7 @@ pub struct MapResult {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum MapError {
     #[error(
-        "{count} material point(s) have no FEM node inside the kernel support (2h = {support:.4} m) or a Shepard ratio below {threshold}; first MP ids: {first_ids:?}. Use --outside nearest|skip, a larger --h, or check that the FEM covers the model"
+        "{count} material point(s) have no FEM node inside the kernel support (2h = {support:.4} m) or a Shepard ratio below {threshold}; first MP ids: {first_ids:?}. Use the outside policy nearest or skip (`--outside`), a larger smoothing length h (`--h`), or check that the FEM covers the model"
     )]
     NullPoints {
         count: usize,

@@ -103,7 +103,7 @@ pub(super) fn parse_csv_chunked(
             1,
             1,
             format!(
-                "no header with X and Y (or Node) columns found; headers seen: {}. Name them with --columns x=…,y=…",
+                "no header with X and Y (or Node) columns found; headers seen: {}. Name them with a column mapping (`--columns x=…,y=…`)",
                 first.iter().map(|(_, h)| format!("`{h}`")).collect::<Vec<_>>().join(", ")
             ),
         )

@@ -51,7 +51,7 @@ pub struct ProjectFiles {
 /// The message `map` gives when a project has no CPS and none is to be generated.
 pub fn missing_cps_message(files: &ProjectFiles) -> String {
     format!(
-        "{}: no CPS for project {} (looked for {name}.CPS_<nnn>{gid} in {}): Anura3D cannot run without one. Put the model's CPS beside the GOM, or pass --generate-cps to write a complete default CPS for the model's version",
+        "{}: no CPS for project {} (looked for {name}.CPS_<nnn>{gid} in {}): Anura3D cannot run without one. Put the model's CPS beside the GOM, or ask for a complete default CPS for the model's version to be generated (`--generate-cps`)",
         files.gom.display(),
         files.name,
         files.dir.display(),
