@@ -18,7 +18,7 @@ use crate::model::{MpState, Quantity};
 use crate::pipeline::check::{self, VerifyOptions};
 use crate::pipeline::map::{MapConfig, SmoothingLength, StressSource};
 use crate::pipeline::mapping::{self, MapJob};
-use crate::pipeline::output::{OutputDir, ReadLog};
+use crate::pipeline::output::{Destination, OutputDir, ReadLog};
 use crate::pipeline::start::{Start, StateSource};
 use crate::pipeline::{Project, calibrate, fos, plot};
 
@@ -169,11 +169,11 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
 
     // 4. Verify with the explicit MPM runner.
     let source = StateSource::Folder(target.clone());
+    let verify_dir = target.join("verify");
     let (outcome, verify_dir) = check::verify(
         &source,
         &VerifyOptions::default(),
-        Some(&target.join("verify")),
-        true,
+        Destination::new(Some(&verify_dir), true),
     )?;
     match &outcome.run {
         Some(r) => say!(

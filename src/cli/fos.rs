@@ -7,6 +7,7 @@ use std::time::Instant;
 
 use super::args::StateInputs;
 use super::print;
+use crate::pipeline::output::Destination;
 use crate::pipeline::{self, fos::FosOptions};
 
 #[derive(Debug, clap::Args)]
@@ -41,12 +42,8 @@ pub fn run(args: FosArgs) -> anyhow::Result<()> {
         window: args.window,
         zero_pwp: args.zero_pwp,
     };
-    let (report, target) = pipeline::fos::fos(
-        &args.inputs.source()?,
-        &options,
-        args.out.as_deref(),
-        args.force,
-    )?;
+    let to = Destination::new(args.out.as_deref(), args.force);
+    let (report, target) = pipeline::fos::fos(&args.inputs.source()?, &options, to)?;
     print::fos_report(&report, &target, started.elapsed().as_secs_f64());
     Ok(())
 }

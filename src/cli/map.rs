@@ -10,6 +10,7 @@ use crate::kernel::KernelKind;
 use crate::pipeline::map::{
     MapConfig, MaterialMap, MixedState, Outside, SmoothingLength, StressSource,
 };
+use crate::pipeline::output::Destination;
 use crate::pipeline::{self, mapping::MapJob};
 
 /// A clap mirror of one of the library's plain enums: the same variants, with
@@ -157,7 +158,8 @@ impl MapArgs {
 pub fn run(args: MapArgs) -> anyhow::Result<()> {
     let started = Instant::now();
     let progress = super::progress::show();
-    let (mapped, written) = pipeline::mapping::map(&args.job()?, args.out.as_deref(), args.force)?;
+    let to = Destination::new(args.out.as_deref(), args.force);
+    let (mapped, written) = pipeline::mapping::map(&args.job()?, to)?;
     drop(progress);
     let r = &mapped.report;
     say_err!(

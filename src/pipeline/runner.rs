@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use plotters::style::RGBColor;
 
 use super::PipelineError;
-use super::output::{OutputDir, ReadLog};
+use super::output::{Destination, OutputDir, ReadLog};
 use super::plot::{self, Series};
 use super::start::{Start, StateSource};
 use crate::formats::cps::CpsDocument;
@@ -115,15 +115,15 @@ pub fn history_plot(path: &Path, report: &mpm::RunReport) -> Result<(), Pipeline
 
 /// What a command on a mapped state begins with: the log of every file it
 /// reads (started before the first read), the start `source` names, and the
-/// folder its outputs go to (`out`, else `default_name` in the start's home
-/// folder).
+/// folder its outputs go to (the destination's, else `default_name` in the
+/// start's home folder).
 pub fn begin(
     source: &StateSource,
-    out: Option<&Path>,
+    to: Destination<'_>,
     default_name: &str,
 ) -> Result<(ReadLog, Start, PathBuf), PipelineError> {
     let reads = ReadLog::start();
     let start = Start::load(source)?;
-    let target = out.map_or_else(|| start.home.join(default_name), Path::to_path_buf);
+    let target = to.or(|| start.home.join(default_name));
     Ok((reads, start, target))
 }
