@@ -50,7 +50,7 @@ pub fn select_fields(
         return Ok(fem.fields.iter().map(|(q, _)| *q).collect());
     }
     let q = Quantity::from_name(field).ok_or_else(|| {
-        PipelineError::Input(format!(
+        PipelineError::Option(format!(
             "field `{field}`: expected pwp, sxx, syy, szz, sxy, syz, sxz, esxx, … or all"
         ))
     })?;
@@ -81,7 +81,7 @@ pub fn calibrate_h(
     let spacing = mapper::median_spacing(&fem.positions, fem.dim);
     let (lo, hi) = (0.3 * spacing, 2.5 * spacing);
     let objective = LooObjective::new(&fem.positions, fem.dim, &values, fields.len(), kernel, hi)
-        .map_err(|e| PipelineError::Input(format!("calibration: {e}")))?;
+        .map_err(|e| PipelineError::Numerical(format!("calibration: {e}")))?;
     let norm_kind = norm;
     let settings = AnnealSettings {
         seed,
@@ -89,7 +89,7 @@ pub fn calibrate_h(
     };
     let f = |h: f64| objective.evaluate(h, norm_kind);
     let mut calibration = try_calibrate(f, lo, hi, &settings)
-        .map_err(|e| PipelineError::Input(format!("calibration: {e}")))?;
+        .map_err(|e| PipelineError::Numerical(format!("calibration: {e}")))?;
     let mut fallback = None;
     if objective.is_constant() {
         let factor = kernel.spacing_factor();
