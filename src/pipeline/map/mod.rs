@@ -39,7 +39,7 @@ pub mod stress;
 
 pub use super::report::{InputFile, MapReport, MaterialCount, Smoothing};
 pub use crate::formats::material_map::{MaterialMap, MaterialRef};
-pub use config::{MapConfig, MixedState, Outside, SmoothingLength, StressSource};
+pub use config::{MapConfig, MixedState, Outside, SmoothingLength, StressSource, UnknownName};
 pub use interpolate::FemCloud;
 pub use place::Placement;
 pub use smoothing::ChosenH;
