@@ -226,8 +226,10 @@ def test_the_gil_is_released_during_long_work():
     done.set()
     t.join()
     during = [x for x in ticks if start < x < end]
-    # A held GIL would starve the ticking thread for the whole call.
-    assert len(during) >= 3, (len(during), end - start)
+    # A held GIL would stop the ticking thread for the whole call; released,
+    # it ticks (the scheduler gives it a share of the cores even while the
+    # mapper's threads run).
+    assert len(during) >= 1, (len(during), end - start)
 
 
 def test_nothing_reaches_the_terminal_unless_logging_is_configured(tmp_path, capfd):
