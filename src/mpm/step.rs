@@ -5,8 +5,11 @@
 //! Scheme (Modified Update Stress Last, Sulsky et al. 1995):
 //!
 //! 1. P2G: lumped nodal mass, momentum and internal force
-//!    f_int = −Σ V_p σ_p ∇N (total stress σ = σ′ + S·p on the normals).
-//!    Gravity enters as f_ext = m_I·g, which equals Σ N m_p g.
+//!    f_int = −Σ V_p σ_p ∇N, σ = σ′ plus the pore-water part the kernel's
+//!    analysis adds on the normals ([`super::loading`]: S·p in a multiphase
+//!    analysis, p for undrained-effective materials, else nothing). Gravity
+//!    enters as f_ext = Σ N w_p g with the kernel's weight w_p of each MP
+//!    (dry, buoyant or mixture).
 //!    2D-axisymmetric (x = r ≥ 0, y axial, zz the hoop component θθ): V_p and
 //!    m_p are per radian (they already hold the MP radius, see `place`), the
 //!    radial force gains the hoop term −V_p N_i σ_θθ / r_p, and the strain
@@ -37,6 +40,7 @@ use rayon::prelude::*;
 
 use super::b_matrix::{corner_force, hoop_strain_increment, strain_increment};
 use super::grid::Grid;
+use super::loading::Analysis;
 use super::material::SolidModel;
 use super::{MpmError, RunSettings};
 use crate::element::Element;
@@ -60,10 +64,14 @@ pub(crate) struct Particle<const D: usize, const NC: usize> {
     pub stress: [f64; 6],
     /// Mass (t; t per metre in plane strain, t per radian in axisymmetry).
     pub mass: f64,
+    /// The mass gravity pulls on (t, as `mass`): the kernel's weight of the
+    /// MP over g ([`super::loading`]).
+    pub weight: f64,
     /// Current volume (m³; m² per metre in plane strain, m³ per radian in
     /// axisymmetry).
     pub volume: f64,
-    /// S·p: added to the normal components to get the total stress (kPa).
+    /// The pore-water part of the stress in the internal force, added to the
+    /// normal components of σ′ (kPa): S·p, p or 0 ([`super::loading`]).
     pub pore_term: f64,
     pub element: u32,
     /// Index into the solver's material models.
@@ -80,6 +88,7 @@ pub(crate) struct Particle<const D: usize, const NC: usize> {
 #[derive(Clone, Copy, Debug)]
 struct Contribution<const D: usize> {
     mass: f64,
+    weight: f64,
     momentum: [f64; D],
     force: [f64; D],
 }
@@ -87,6 +96,7 @@ struct Contribution<const D: usize> {
 impl<const D: usize> Contribution<D> {
     const ZERO: Contribution<D> = Contribution {
         mass: 0.0,
+        weight: 0.0,
         momentum: [0.0; D],
         force: [0.0; D],
     };
@@ -114,6 +124,7 @@ pub(crate) struct Solver<const D: usize, const NC: usize> {
     /// Initial stress outside the yield surface, per MP.
     pub inadmissible: Vec<bool>,
     node_mass: Vec<f64>,
+    node_weight: Vec<f64>,
     node_momentum: Vec<[f64; D]>,
     node_force: Vec<[f64; D]>,
     node_acceleration: Vec<[f64; D]>,
@@ -169,6 +180,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         settings: &RunSettings,
     ) -> Result<Self, MpmError> {
         let axisymmetric = D == 2 && model.mesh.dimension == Dimension::Axisymmetric;
+        let analysis = Analysis::of(&model.materials, settings.submerged_calculation);
         let mut grid = Grid::<D, NC>::new::<E>(&model.mesh, &model.solid_fixity)?;
         if axisymmetric {
             grid.fix_axis(&model.mesh);
@@ -221,9 +233,10 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             let element = grid
                 .locate(&position, point.element)
                 .ok_or_else(|| bad(format!("position {:?} is outside the mesh", point.position)))?;
-            // ρ = (1 − n)ρs + n·S·ρw in t/m³: the unit weight (kN/m³) at g = 1 m/s².
-            let density = material.gamma_at_saturation(state.saturation, 1.0);
-            if !(density > 0.0 && density.is_finite()) {
+            // The kernel's mass and weight of the MP, and its pore term.
+            let loading = analysis.loading(material_index - 1, material, state.saturation);
+            let density = loading.density;
+            if !(density > 0.0 && density.is_finite() && loading.weight_density.is_finite()) {
                 return Err(bad(format!(
                     "material {} gives density {density} t/m³; check porosity and densities",
                     point.material
@@ -245,8 +258,9 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 inverse_radius: 0.0,
                 stress,
                 mass: density * point.volume,
+                weight: loading.weight_density * point.volume,
                 volume: point.volume,
-                pore_term: state.saturation * state.pwp,
+                pore_term: loading.pore_factor * state.pwp,
                 element,
                 model: slot,
                 yielded: false,
@@ -273,6 +287,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             particles,
             inadmissible,
             node_mass: vec![0.0; n_nodes],
+            node_weight: vec![0.0; n_nodes],
             node_momentum: vec![[0.0; D]; n_nodes],
             node_force: vec![[0.0; D]; n_nodes],
             node_acceleration: vec![[0.0; D]; n_nodes],
@@ -322,13 +337,14 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 for i in 0..NC {
                     let g = &element.shape.grad[i];
                     let force = corner_force::<D>(&total, g, n[i], p.volume, p.inverse_radius);
-                    let weight = p.mass * n[i];
+                    let share = p.mass * n[i];
                     let mut momentum = [0.0; D];
                     for d in 0..D {
-                        momentum[d] = weight * p.velocity[d];
+                        momentum[d] = share * p.velocity[d];
                     }
                     out[i] = Contribution {
-                        mass: weight,
+                        mass: share,
+                        weight: p.weight * n[i],
                         momentum,
                         force,
                     };
@@ -338,6 +354,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
 
         // Scatter serially in MP order (deterministic sums).
         self.node_mass.fill(0.0);
+        self.node_weight.fill(0.0);
         self.node_momentum.fill([0.0; D]);
         self.node_force.fill([0.0; D]);
         for (p, out) in self.particles.iter().zip(&self.p2g) {
@@ -345,6 +362,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             for i in 0..NC {
                 let node = corners[i] as usize;
                 self.node_mass[node] += out[i].mass;
+                self.node_weight[node] += out[i].weight;
                 for d in 0..D {
                     self.node_momentum[node][d] += out[i].momentum[d];
                     self.node_force[node][d] += out[i].force[d];
@@ -370,7 +388,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                     self.node_velocity[node][d] = 0.0;
                     continue;
                 }
-                let external = m * self.gravity[d];
+                let external = self.node_weight[node] * self.gravity[d];
                 let unbalanced = external + self.node_force[node][d];
                 node_sq += unbalanced * unbalanced;
                 external_sq += external * external;
