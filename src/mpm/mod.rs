@@ -18,11 +18,13 @@
 //! a step/time limit) and returns a [`RunReport`] with a [`Verdict`]; [`run()`]
 //! runs the same solver and can also return [`Snapshot`]s; [`Simulation`] gives
 //! step-by-step control; [`fos`] finds a factor of safety by strength
-//! reduction on the same runner. The module is pure: it consumes [`crate::model`] data,
+//! reduction on the same runner; [`equilibrium`] solves for the stress at rest
+//! in the runner's own discrete equations. The module is pure: it consumes [`crate::model`] data,
 //! does no I/O and prints nothing; it knows nothing about file formats or the
 //! mapping kernels.
 
 mod b_matrix;
+pub mod equilibrium;
 pub mod fos;
 pub mod grid;
 pub mod loading;
@@ -33,6 +35,7 @@ pub mod run;
 mod simulation;
 pub mod step;
 
+pub use equilibrium::{EquilibriumOutcome, EquilibriumSettings};
 pub use fos::{FosError, FosOutcome, FosReport, FosSettings, strength_reduction};
 pub use material::{Elasticity, SolidModel};
 pub use mohr_coulomb::{MohrCoulomb, ReturnKind, ReturnMap};

@@ -440,7 +440,7 @@ fn centroid(model: &AnuraModel, e: usize) -> [f64; 3] {
 }
 
 /// The ten largest positive scores, largest first, ties by element id.
-fn top_ten(model: &AnuraModel, scores: &[f64]) -> Vec<ElementScore> {
+pub(super) fn top_ten(model: &AnuraModel, scores: &[f64]) -> Vec<ElementScore> {
     let mut order: Vec<usize> = (0..scores.len()).filter(|&e| scores[e] > 0.0).collect();
     order.sort_by(|&a, &b| scores[b].total_cmp(&scores[a]).then(a.cmp(&b)));
     order
