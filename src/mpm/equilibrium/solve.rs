@@ -118,12 +118,14 @@ impl Anderson {
 }
 
 /// Group stresses after the strain from `x − x_c` on top of `committed`,
-/// with each group's return map; and which groups yielded.
+/// with each group's return map (`plastic`, else elastic only); and which
+/// groups yielded.
 fn evaluate<const D: usize, const NC: usize>(
     system: &System<D, NC>,
     x: &[f64],
     x_c: &[f64],
     committed: &[[f64; 6]],
+    plastic: bool,
 ) -> (Vec<[f64; 6]>, Vec<bool>) {
     let delta: Vec<f64> = x.iter().zip(x_c).map(|(a, b)| a - b).collect();
     let u = system.displacements(&delta);
@@ -135,7 +137,12 @@ fn evaluate<const D: usize, const NC: usize>(
         .map(|(g, s0)| {
             let strain = system.group_strain(&u, g);
             let mut s = *s0;
-            let kind = system.laws[g.law as usize].update(&mut s, &strain, D == 2);
+            let law = &system.laws[g.law as usize];
+            if !plastic {
+                law.elasticity.add_increment(&mut s, &strain);
+                return (s, false);
+            }
+            let kind = law.update(&mut s, &strain, D == 2);
             (s, kind.is_plastic())
         })
         .unzip()
@@ -180,7 +187,7 @@ fn load_step<const D: usize, const NC: usize>(
     let mut best_ratio = f64::INFINITY;
     let mut since_best = 0;
     loop {
-        let (stress, yielding) = evaluate(system, &x, x_c, committed);
+        let (stress, yielding) = evaluate(system, &x, x_c, committed, true);
         let (mut r, ratio) = residual(system, &stress, target);
         if ratio <= tolerance {
             return Step {
@@ -242,9 +249,11 @@ pub(super) fn solve<const D: usize, const NC: usize>(
     let t = Instant::now();
     let mut x_el = system.free_residual(&vec![0.0; system.external.len()], 1.0);
     cholesky.solve(&mut x_el);
-    let (stress, yielding) = evaluate(system, &x_el, &x_c0, &zero);
-    let (_, elastic_ratio) = residual(system, &stress, 1.0);
+    let (elastic, _) = evaluate(system, &x_el, &x_c0, &zero, false);
+    let (_, elastic_ratio) = residual(system, &elastic, 1.0);
+    drop(elastic);
     let elastic_s = t.elapsed().as_secs_f64();
+    let (stress, yielding) = evaluate(system, &x_el, &x_c0, &zero, true);
     let mut out = Solved {
         stress,
         yielding,
@@ -261,7 +270,14 @@ pub(super) fn solve<const D: usize, const NC: usize>(
         plastic_s: 0.0,
     };
     let tolerance = settings.tolerance;
-    if elastic_ratio <= tolerance && !out.yielding.iter().any(|&y| y) {
+    if elastic_ratio > 1e-6 {
+        // A factorisation this far off is a matrix that is singular in all
+        // but round-off: some part of the model is not held.
+        return Err(MpmError::InvalidSettings(format!(
+            "the elastic solve leaves an out-of-balance force ratio of {elastic_ratio:.2e}: the stiffness matrix is nearly singular (check that the GOM's fixities hold every part of the model)"
+        )));
+    }
+    if !out.yielding.iter().any(|&y| y) {
         out.converged = true;
         out.load_factor = 1.0;
         return Ok(out);
