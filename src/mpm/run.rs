@@ -140,7 +140,7 @@ pub struct Snapshot {
     pub displacements: Vec<[f64; 3]>,
     /// Effective stress σ′ (xx, yy, zz, xy, yz, xz; kPa).
     pub stresses: Vec<[f64; 6]>,
-    /// Yielded in any step so far.
+    /// Has yielded: accumulated plastic strain above 1e-6 (`step::PLASTIC_STRAIN_FLOOR`).
     pub plastic: Vec<bool>,
 }
 
@@ -182,7 +182,7 @@ pub struct RunReport {
     pub final_displacements: Vec<[f64; 3]>,
     /// Final effective stresses σ′ (kPa), in MP order.
     pub final_stresses: Vec<[f64; 6]>,
-    /// Per MP: yielded in any step.
+    /// Per MP: has yielded (accumulated plastic strain above 1e-6).
     pub final_plastic: Vec<bool>,
 }
 

@@ -49,6 +49,12 @@ use crate::model::{AnuraModel, Dimension, MaterialPoint, MpState};
 /// MPs per rayon task: large enough that scheduling costs stay negligible.
 const MIN_CHUNK: usize = 1024;
 
+/// Accumulated plastic strain above which an MP counts as having yielded. An
+/// MP at rest on its yield surface returns round-off-sized trial stresses now
+/// and then (a balanced state is balanced to round-off, not exactly): that is
+/// no plastic flow, and stays orders of magnitude below one microstrain.
+pub const PLASTIC_STRAIN_FLOOR: f64 = 1e-6;
+
 /// The state of one material point.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Particle<const D: usize, const NC: usize> {
@@ -78,7 +84,11 @@ pub(crate) struct Particle<const D: usize, const NC: usize> {
     pub model: u32,
     /// Yielded in the last step.
     pub yielded: bool,
-    /// Yielded in any step so far.
+    /// Accumulated plastic strain: the length of C·(σ_trial − σ) summed over
+    /// the plastic updates (engineering shear).
+    pub plastic_strain: f64,
+    /// Has yielded: its accumulated plastic strain exceeds
+    /// [`PLASTIC_STRAIN_FLOOR`].
     pub plastic: bool,
     /// Left the mesh; frozen since.
     pub lost: bool,
@@ -112,7 +122,8 @@ pub struct StepOutcome {
     pub kinetic_energy: f64,
     /// MPs whose stress update was plastic in this step.
     pub yielded: usize,
-    /// MPs that have yielded in any step so far.
+    /// MPs that have yielded in any step so far (accumulated plastic strain
+    /// above [`PLASTIC_STRAIN_FLOOR`]).
     pub plastic: usize,
 }
 
@@ -264,6 +275,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 element,
                 model: slot,
                 yielded: false,
+                plastic_strain: 0.0,
                 plastic: false,
                 lost: false,
             });
@@ -482,9 +494,21 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                         dt,
                     );
                 }
-                let kind = models[p.model as usize].update(&mut p.stress, &strain, plane_strain);
+                let model = &models[p.model as usize];
+                let before = p.stress;
+                let kind = model.update(&mut p.stress, &strain, plane_strain);
                 p.yielded = kind.is_plastic();
-                p.plastic |= p.yielded;
+                if p.yielded {
+                    let mut trial = before;
+                    model.elasticity.add_increment(&mut trial, &strain);
+                    let mut taken = [0.0; 6];
+                    for k in 0..6 {
+                        taken[k] = trial[k] - p.stress[k];
+                    }
+                    let e = model.elasticity.strain_of(&taken);
+                    p.plastic_strain += e.iter().map(|v| v * v).sum::<f64>().sqrt();
+                    p.plastic |= p.plastic_strain > PLASTIC_STRAIN_FLOOR;
+                }
                 p.volume *= 1.0 + strain[0] + strain[1] + strain[2];
                 if !grid.contains(p.element, &p.position) {
                     match grid.locate(&p.position, p.element) {
