@@ -193,6 +193,41 @@ fn flat_tet_column_gives_k0_in_both_directions() {
     assert!(runner_ratio(&model, &points, &states, &out.effective) < 1e-12);
 }
 
+/// A 2D-axisymmetric hollow cylinder (radii 1 to 3 m, 4 m high, rollers
+/// on both radii): balanced in the runner's equations with per-MP hoop
+/// terms (MPM-MP) and with one integration point per element carrying the
+/// element's mean hoop term (MPM-MIXED, all MPs holding one state); the rows'
+/// mean σ'v is the overburden.
+#[test]
+fn axisymmetric_cylinder_is_balanced_per_mp_and_per_element() {
+    let mut mesh = generate::structured_tri_mesh(1.0, 0.0, 2.0, 4.0, 4, 8);
+    mesh.dimension = a3d_init::model::Dimension::Axisymmetric;
+    let model = generate::single_material_model(mesh, &spec("soil", None, false), 3);
+    let points = points(&model);
+    let states = dry_states(&points);
+    let gamma = model.materials[0].gamma_dry(G);
+    for mixed in [false, true] {
+        let settings = EquilibriumSettings {
+            mixed,
+            ..EquilibriumSettings::default()
+        };
+        let out = equilibrium::solve(&model, &points, &states, &laws(&model), &settings).unwrap();
+        assert!(out.equilibrium && out.residual_ratio < 1e-12, "{out:?}");
+        assert!(runner_ratio(&model, &points, &states, &out.effective) < 1e-12);
+        let means = row_means(&points, &out.effective, 8, 0);
+        // Volumes are per radian: the row means weigh by radius, and the
+        // overburden holds for every radius of a confined column.
+        for (row, (v, h)) in means.into_iter().enumerate() {
+            let expect = -gamma * (4.0 - (0.5 * row as f64 + 0.25));
+            assert!(
+                (v - expect).abs() < 1e-3 * expect.abs(),
+                "mixed {mixed} row {row}: {v}"
+            );
+            assert!((h / v - 0.5).abs() < 2e-2, "row {row}: σ'h/σ'v = {}", h / v);
+        }
+    }
+}
+
 /// Hydrostatic pore pressure below a water table at y = 3 m in a 4 m column.
 fn water_table_states(points: &[MaterialPoint], saturation: f64) -> Vec<MpState> {
     points
@@ -450,6 +485,34 @@ fn map_stress_equilibrium_is_verified() {
         &r["equilibrium"]["chosen_because"].to_string(),
         &["auto: the FEM gives pore pressure only and the ground surface is not flat"],
     );
+}
+
+/// A 3D Mohr–Coulomb slope through the command line: the solve needs plastic
+/// iterations, and `verify` finds the folder IN EQUILIBRIUM with a ratio below
+/// 1e-3 and no MP outside its surface in the intended state (3D: no σ'zz
+/// defect).
+#[test]
+fn mohr_coulomb_3d_slope_is_verified_in_equilibrium() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut mesh = generate::structured_tet_mesh(10.0, 0.0, 5.0, 2.0, 10, 5, 2);
+    generate::slope_profile(&mut mesh, 5.0, 5.0, 2.0, 3.0, 7.0);
+    let model =
+        generate::single_material_model(mesh, &spec("sand", Some((30.0, 2.0, 0.0)), false), 4);
+    let (folder, fem) = project(tmp.path(), &model, "MPM-MIXED", -1.0);
+    let out = tmp.path().join("out");
+    let (code, text) = run_map(&folder, &fem, &out, &["--stress", "equilibrium"]);
+    assert_eq!(code, 0, "{text}");
+    let e = &report(&out)["equilibrium"];
+    assert!(e["plastic_iterations"].as_u64().unwrap() > 0, "{e}");
+    assert!(e["yielding_points"].as_u64().unwrap() > 0, "{e}");
+    let text = verify_ok(&out);
+    assert_contains(&text, &["verdict    IN EQUILIBRIUM"]);
+    let v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("verify/verify.json")).unwrap())
+            .unwrap();
+    assert!(v["run"]["initial_residual_ratio"].as_f64().unwrap() < 1e-3);
+    assert_eq!(v["anura3d"]["intended_outside_yield"], 0);
+    assert_eq!(v["run"]["inadmissible_points"], 0);
 }
 
 /// `auto` on flat ground keeps the geostatic stress, says why, and writes
