@@ -164,12 +164,16 @@ def map(
     fem_mesh: Optional[PathLike] = None,
     analysis: Optional[str] = None,
     step: str = "last",
+    k0_consistent: bool = True,
 ) -> Mapped:
     """``a3d-init map``: maps the FEM fields onto the model's MPs and writes a
     ready-to-run Anura3D project into ``out`` (default
     ``<project>.a3d-init/`` beside the model). The keywords are the CLI's long
     flags (``model`` may also be given as ``mpm``); ``h`` is metres,
     ``"auto"`` (leave-one-out calibration) or ``None`` (the spacing rule).
+    ``stress="equilibrium"`` solves for the stress at rest under gravity on
+    Anura3D's own discretisation (report key ``"equilibrium"``), with
+    ν = K0/(1 + K0) unless ``k0_consistent=False``.
     """
     if model is None:
         model = mpm
@@ -200,6 +204,7 @@ def map(
         _path(fem_mesh),
         analysis,
         step,
+        k0_consistent,
     )
     result = Mapped(json.loads(report))
     result.folder = folder

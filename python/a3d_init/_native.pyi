@@ -101,6 +101,7 @@ def map(
     fem_mesh: Optional[_Path] = None,
     analysis: Optional[str] = None,
     step: str = "last",
+    k0_consistent: bool = True,
 ) -> Tuple[str, str, List[str], Dict[str, npt.NDArray[Any]]]:
     """``a3d-init map``: (report JSON, folder, files written, state columns)."""
 

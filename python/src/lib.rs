@@ -25,7 +25,7 @@ use a3d_init::kernel::mapper::{self, MapSettings, NodeCloud, OutsidePolicy};
 use a3d_init::pipeline::check::VerifyOptions;
 use a3d_init::pipeline::fem::FemOptions;
 use a3d_init::pipeline::fos::FosOptions;
-use a3d_init::pipeline::map::{MapConfig, SmoothingLength, UnknownName};
+use a3d_init::pipeline::map::{EquilibriumOptions, MapConfig, SmoothingLength, UnknownName};
 use a3d_init::pipeline::mapping::MapJob;
 use a3d_init::pipeline::output::Destination;
 use a3d_init::pipeline::start::StateSource;
@@ -416,7 +416,7 @@ fn inspect<'py>(py: Python<'py>, model: PathBuf) -> PyResult<(String, Bound<'py,
 /// `map`: reads, maps and writes the project. Returns (report as JSON, the
 /// folder written, the files written, the mapped state's columns).
 #[pyfunction]
-#[pyo3(signature = (fem, model, out=None, force=false, h=None, kernel="cubic", seed=1, stress="auto", outside="error", min_shepard=0.02, material_map=None, mixed_state="mean", generate_cps=false, fem_vtu=false, columns=None, fem_units=None, fem_sign="geostudio", fem_mesh=None, analysis=None, step="last"))]
+#[pyo3(signature = (fem, model, out=None, force=false, h=None, kernel="cubic", seed=1, stress="auto", outside="error", min_shepard=0.02, material_map=None, mixed_state="mean", generate_cps=false, fem_vtu=false, columns=None, fem_units=None, fem_sign="geostudio", fem_mesh=None, analysis=None, step="last", k0_consistent=true))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn map<'py>(
     py: Python<'py>,
@@ -440,6 +440,7 @@ fn map<'py>(
     fem_mesh: Option<PathBuf>,
     analysis: Option<String>,
     step: &str,
+    k0_consistent: bool,
 ) -> PyResult<(String, PathBuf, Vec<String>, Bound<'py, PyDict>)> {
     let h = match h {
         None => SmoothingLength::SpacingRule,
@@ -472,6 +473,10 @@ fn map<'py>(
         mixed_state: mixed_state
             .parse()
             .map_err(|e: UnknownName| parse("mixed_state", &e))?,
+        equilibrium: EquilibriumOptions {
+            k0_consistent,
+            ..EquilibriumOptions::default()
+        },
         keep_fem_fields: true,
     };
     let job = MapJob {

@@ -82,6 +82,21 @@ def test_map_options_are_the_cli_flags(tmp_path):
         a3d_init.map(SAND, SLOPE, tmp_path / "x", h="-1")
 
 
+def test_map_solves_for_equilibrium_and_verify_measures_it(tmp_path):
+    out = tmp_path / "eq"
+    mapped = a3d_init.map(SAND, SLOPE, out, stress="equilibrium", h=0.046)
+    solve = mapped["equilibrium"]
+    assert solve["equilibrium"] is True
+    assert solve["residual_ratio"] < 1e-6
+    assert {m["poisson_from"] for m in solve["materials"]} <= {"k0", "gom", "default"}
+    # The state a3d-init intended (mps.csv) is at rest in the runner's equations.
+    verdict = a3d_init.verify(model=out, state=out / "mps.csv", out=tmp_path / "v")
+    assert verdict["equilibrium"] is True
+    assert verdict["run"]["initial_residual_ratio"] < 1e-6
+    gom = a3d_init.map(SAND, SLOPE, tmp_path / "gom", stress="equilibrium", h=0.046, k0_consistent=False)
+    assert gom["equilibrium"]["k0_consistent"] is False
+
+
 def test_interpolate_matches_map_and_reproduces_a_linear_field():
     rng = np.random.default_rng(3)
     nodes = rng.uniform(0, 1, (4000, 2))
