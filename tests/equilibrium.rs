@@ -59,14 +59,7 @@ fn points(model: &AnuraModel) -> Vec<MaterialPoint> {
 }
 
 fn dry_states(points: &[MaterialPoint]) -> Vec<MpState> {
-    vec![
-        MpState {
-            pwp: 0.0,
-            total: [0.0; 6],
-            saturation: 1.0,
-        };
-        points.len()
-    ]
+    a3d_init::testkit::zero_states(points)
 }
 
 fn solve(model: &AnuraModel, points: &[MaterialPoint], states: &[MpState]) -> EquilibriumOutcome {

@@ -44,6 +44,24 @@ pub use run::{
     verify,
 };
 pub use simulation::Simulation;
+
+/// One state per MP, and at least one MP: what the runner and the
+/// equilibrium solve both need before they start.
+pub(crate) fn check_points(
+    points: &[crate::model::MaterialPoint],
+    states: &[crate::model::MpState],
+) -> Result<(), MpmError> {
+    if points.len() != states.len() {
+        return Err(MpmError::LengthMismatch {
+            points: points.len(),
+            states: states.len(),
+        });
+    }
+    if points.is_empty() {
+        return Err(MpmError::NoMaterialPoints);
+    }
+    Ok(())
+}
 pub use step::StepOutcome;
 
 /// Everything that can stop the MPM check before it runs.

@@ -148,15 +148,7 @@ impl Simulation {
         settings: &RunSettings,
     ) -> Result<Simulation, MpmError> {
         settings.validate()?;
-        if points.len() != states.len() {
-            return Err(MpmError::LengthMismatch {
-                points: points.len(),
-                states: states.len(),
-            });
-        }
-        if points.is_empty() {
-            return Err(MpmError::NoMaterialPoints);
-        }
+        super::check_points(points, states)?;
         let build = Build {
             model,
             points,

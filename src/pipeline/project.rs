@@ -26,6 +26,20 @@ pub struct Project {
 }
 
 impl Project {
+    /// Per material of the model (in GOM order), whether any MP is of it.
+    pub fn materials_with_mps(&self) -> Vec<bool> {
+        let mut has_mps = vec![false; self.model.materials.len()];
+        for p in &self.points {
+            if let Some(slot) = (p.material as usize)
+                .checked_sub(1)
+                .and_then(|i| has_mps.get_mut(i))
+            {
+                *slot = true;
+            }
+        }
+        has_mps
+    }
+
     /// Reads a project (a GOM, CPS, GiD `-2.dat` or folder) and places its MPs
     /// for its computation method; errors are positioned.
     pub fn load(path: &Path) -> Result<Project, PipelineError> {

@@ -116,15 +116,7 @@ pub fn solve(
     laws: &[Option<SolidModel>],
     settings: &EquilibriumSettings,
 ) -> Result<EquilibriumOutcome, MpmError> {
-    if points.len() != states.len() {
-        return Err(MpmError::LengthMismatch {
-            points: points.len(),
-            states: states.len(),
-        });
-    }
-    if points.is_empty() {
-        return Err(MpmError::NoMaterialPoints);
-    }
+    super::check_points(points, states)?;
     let valid = settings.gravity >= 0.0 && settings.gravity.is_finite() && settings.tolerance > 0.0;
     if !valid {
         return Err(MpmError::InvalidSettings(format!(

@@ -94,15 +94,7 @@ pub fn laws(
     k0_consistent: bool,
 ) -> Result<(Vec<Option<SolidModel>>, Vec<ElasticChoice>), PipelineError> {
     let materials = &project.model.materials;
-    let mut has_mps = vec![false; materials.len()];
-    for p in &project.points {
-        if let Some(slot) = (p.material as usize)
-            .checked_sub(1)
-            .and_then(|i| has_mps.get_mut(i))
-        {
-            *slot = true;
-        }
-    }
+    let has_mps = project.materials_with_mps();
     let mut laws = Vec::with_capacity(materials.len());
     let mut choices = Vec::new();
     for (m, &used) in materials.iter().zip(&has_mps) {

@@ -54,15 +54,7 @@ pub fn assumed_defaults(
         parameters.push(Parameter::PoissonRatio);
     }
     let materials = &project.model.materials;
-    let mut has_mps = vec![false; materials.len()];
-    for p in &project.points {
-        if let Some(slot) = (p.material as usize)
-            .checked_sub(1)
-            .and_then(|i| has_mps.get_mut(i))
-        {
-            *slot = true;
-        }
-    }
+    let has_mps = project.materials_with_mps();
     defaults::assumed(materials, &parameters)
         .into_iter()
         .filter(|d| has_mps[d.material as usize - 1])
