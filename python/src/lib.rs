@@ -378,39 +378,24 @@ fn inspect<'py>(py: Python<'py>, model: PathBuf) -> PyResult<(String, Bound<'py,
     let summary = pipeline::inspect::ProjectSummary::of(&project);
     let points = &project.points;
     let columns = PyDict::new(py);
-    let column = |f: &dyn Fn(&a3d_init::model::MaterialPoint) -> f64| -> Vec<f64> {
-        points.iter().map(f).collect()
-    };
-    columns.set_item(
-        "id",
-        points
-            .iter()
-            .map(|p| p.id)
-            .collect::<Vec<_>>()
-            .into_pyarray(py),
-    )?;
+    columns.set_item("id", column_of(py, points, |p| p.id))?;
     // 1-based element ids, as in every file.
-    columns.set_item(
-        "element",
-        points
-            .iter()
-            .map(|p| p.element + 1)
-            .collect::<Vec<_>>()
-            .into_pyarray(py),
-    )?;
-    columns.set_item(
-        "material",
-        points
-            .iter()
-            .map(|p| p.material)
-            .collect::<Vec<_>>()
-            .into_pyarray(py),
-    )?;
-    columns.set_item("x", column(&|p| p.position[0]).into_pyarray(py))?;
-    columns.set_item("y", column(&|p| p.position[1]).into_pyarray(py))?;
-    columns.set_item("z", column(&|p| p.position[2]).into_pyarray(py))?;
-    columns.set_item("volume", column(&|p| p.volume).into_pyarray(py))?;
+    columns.set_item("element", column_of(py, points, |p| p.element + 1))?;
+    columns.set_item("material", column_of(py, points, |p| p.material))?;
+    columns.set_item("x", column_of(py, points, |p| p.position[0]))?;
+    columns.set_item("y", column_of(py, points, |p| p.position[1]))?;
+    columns.set_item("z", column_of(py, points, |p| p.position[2]))?;
+    columns.set_item("volume", column_of(py, points, |p| p.volume))?;
     Ok((json(&summary)?, columns))
+}
+
+/// One numpy column from a field of each item.
+fn column_of<'py, T, U: numpy::Element>(
+    py: Python<'py>,
+    items: &[T],
+    f: impl Fn(&T) -> U,
+) -> Bound<'py, numpy::PyArray1<U>> {
+    items.iter().map(f).collect::<Vec<U>>().into_pyarray(py)
 }
 
 /// `map`: reads, maps and writes the project. Returns (report as JSON, the
@@ -496,43 +481,18 @@ fn map<'py>(
         let flat: Vec<f64> = states.iter().flat_map(f).collect();
         Array2::from_shape_vec((n, 6), flat).map_err(|e| A3dInitError::new_err(e.to_string()))
     };
-    state.set_item(
-        "pwp",
-        states
-            .iter()
-            .map(|s| s.pwp)
-            .collect::<Vec<_>>()
-            .into_pyarray(py),
-    )?;
+    state.set_item("pwp", column_of(py, states, |s| s.pwp))?;
     state.set_item("total_stress", tensor(&|s| s.total)?.into_pyarray(py))?;
     state.set_item(
         "effective_stress",
         tensor(&|s| s.effective())?.into_pyarray(py),
     )?;
-    state.set_item(
-        "saturation",
-        states
-            .iter()
-            .map(|s| s.saturation)
-            .collect::<Vec<_>>()
-            .into_pyarray(py),
-    )?;
+    state.set_item("saturation", column_of(py, states, |s| s.saturation))?;
     let diagnostics = &mapped.diagnostics;
-    state.set_item(
-        "neighbours",
-        diagnostics
-            .iter()
-            .map(|d| d.neighbours)
-            .collect::<Vec<_>>()
-            .into_pyarray(py),
-    )?;
+    state.set_item("neighbours", column_of(py, diagnostics, |d| d.neighbours))?;
     state.set_item(
         "shepard",
-        diagnostics
-            .iter()
-            .map(|d| d.shepard.unwrap_or(f64::NAN))
-            .collect::<Vec<_>>()
-            .into_pyarray(py),
+        column_of(py, diagnostics, |d| d.shepard.unwrap_or(f64::NAN)),
     )?;
     Ok((json(&mapped.report)?, written.folder, written.files, state))
 }
