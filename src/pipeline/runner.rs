@@ -17,7 +17,7 @@ use crate::mpm::{self, RunSettings};
 /// Local damping α when neither the caller nor the CPS gives one.
 pub const DEFAULT_DAMPING: f64 = 0.75;
 
-/// `s` with the CPS's gravity and Courant number (capped at 0.9) and the local
+/// `s` with the CPS's gravity, submerged-calculation switch and Courant number (capped at 0.9) and the local
 /// damping α: `damping`, else the CPS `$$HOMOGENEOUS_LOCAL_DAMPING`, else
 /// [`DEFAULT_DAMPING`], clamped to [0, 0.99].
 pub fn with_cps(
@@ -27,6 +27,7 @@ pub fn with_cps(
 ) -> RunSettings {
     if let Some(cps) = cps {
         s.gravity = cps.gravity();
+        s.submerged_calculation = cps.submerged_calculation();
         if let Some(c) = cps.get_real("$$COURANT_NUMBER", 0) {
             s.courant = c.min(0.9);
         }
