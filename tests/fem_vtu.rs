@@ -459,3 +459,165 @@ fn an_ogs_column_maps_onto_an_anura3d_column() {
     let report = std::fs::read_to_string(out.join("report.json")).unwrap();
     assert_contains(&report, &["Taylor", "effective", "Pa (assumed)"]);
 }
+
+/// The shipped OGS rain field of the paper's slope
+/// (`fixtures/slope/ogs/results/`): it starts at the paper's initial
+/// saturation S0 = 0.31 (Table 1) through van Genuchten's curve, and stays
+/// within what its boundaries allow: no pressure above hydrostatic over the
+/// 0.6 m layer, none above atmospheric on the surface or the seepage face at
+/// the toe, and the mean suction falls while the rain lasts.
+#[test]
+fn the_shipped_ogs_rain_field_starts_at_the_papers_saturation_and_obeys_its_boundaries() {
+    let pvd = fixture("slope/ogs/results/rain.pvd");
+    let options = VtuOptions::default();
+    let read_step = |k: u32| {
+        let (nodes, report) = fem_vtu::read(&pvd, &options, &StepChoice::Number(k)).unwrap();
+        (nodes, report.vtu.unwrap().series.unwrap())
+    };
+    // Van Genuchten (paper Eq. 5): α = 0.51 1/kPa, n = 2.73, S_r = 0.1.
+    let (alpha, n, s_r) = (0.51, 2.73, 0.1);
+    let m = 1.0 - 1.0 / n;
+    let se0: f64 = (0.31 - s_r) / (1.0 - s_r);
+    let suction0 = (se0.powf(-1.0 / m) - 1.0).powf(1.0 / n) / alpha;
+    let (first, chosen) = read_step(0);
+    assert_eq!((chosen.steps, chosen.time), (41, 0.0));
+    for &p in field(&first, Quantity::Pwp) {
+        // Anura3D's sign: a suction is a positive pwp.
+        assert!((p - suction0).abs() < 1e-9 * suction0, "{p} vs {suction0}");
+    }
+    let hydrostatic_layer = RHO_W * G * 0.6 / 1000.0;
+    let mut mean_before = f64::INFINITY;
+    for k in 1..41 {
+        let (nodes, chosen) = read_step(k);
+        assert!((chosen.time - 180.0 * k as f64).abs() < 1e-6, "{chosen:?}");
+        let p = field(&nodes, Quantity::Pwp);
+        // The surface: the highest node of each column; the toe: x = 6 m.
+        let mut top: std::collections::BTreeMap<i64, (f64, f64)> = Default::default();
+        for (i, x) in nodes.positions.iter().enumerate() {
+            let e = top
+                .entry((x[0] * 1000.0).round() as i64)
+                .or_insert((f64::NEG_INFINITY, 0.0));
+            if x[1] > e.0 {
+                *e = (x[1], p[i]);
+            }
+            if (x[0] - 6.0).abs() < 1e-9 {
+                assert!(
+                    p[i] > -0.01,
+                    "t = {} s, toe node {x:?}: pwp {}",
+                    chosen.time,
+                    p[i]
+                );
+            }
+            assert!(
+                p[i] > -hydrostatic_layer,
+                "t = {} s, {x:?}: {}",
+                chosen.time,
+                p[i]
+            );
+        }
+        for (x, (_, pt)) in &top {
+            assert!(
+                *pt > -0.01,
+                "t = {} s, surface at x = {x} mm: {pt}",
+                chosen.time
+            );
+        }
+        let mean = p.iter().sum::<f64>() / p.len() as f64;
+        assert!(
+            mean <= mean_before + 1e-9,
+            "t = {} s: mean pwp rose",
+            chosen.time
+        );
+        mean_before = mean;
+    }
+    // After 2 h the layer is wet: water pressure at the foot of the slope.
+    assert!(mean_before < 0.0, "{mean_before}");
+}
+
+/// Bad VTU/PVD input through the command line: exit code 2, the file and
+/// line named, no panic; the units given or assumed said, with a warning
+/// when the magnitudes contradict them.
+#[test]
+fn bad_vtu_input_exits_2_naming_its_place() {
+    let run = |args: &[&str]| {
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_a3d-init"))
+            .args(args)
+            .output()
+            .unwrap();
+        let text = format!(
+            "{}{}",
+            String::from_utf8_lossy(&o.stdout),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(!text.contains("panicked"), "{text}");
+        (o.status.code(), text)
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let good = std::fs::read_to_string(vtu("hm2d_quad8_ascii.vtu")).unwrap();
+    let bad = tmp.path().join("bad.vtu");
+    std::fs::write(
+        &bad,
+        good.replacen(
+            "19620.015123730216 19620.01512373022",
+            "19620.015123730216 1.0.0",
+            1,
+        ),
+    )
+    .unwrap();
+    let (code, text) = run(&["inspect", "--fem", bad.to_str().unwrap()]);
+    assert_eq!(code, Some(2), "{text}");
+    assert_contains(
+        &text,
+        &["bad.vtu:35:30: array `pressure`: `1.0.0` is not a number"],
+    );
+
+    let ascii = vtu("hm2d_quad8_ascii.vtu");
+    let ascii = ascii.to_str().unwrap();
+    let (code, text) = run(&["inspect", "--fem", ascii, "--columns", "pwp=p_L"]);
+    assert_eq!(code, Some(2), "{text}");
+    assert_contains(
+        &text,
+        &["hm2d_quad8_ascii.vtu:", "no point array `p_L` for pwp"],
+    );
+    let (code, text) = run(&["inspect", "--fem", ascii, "--columns", "pore=pressure"]);
+    assert_eq!(code, Some(2), "{text}");
+    assert_contains(&text, &["--columns", "unknown role"]);
+
+    // A series listing a file that is not there.
+    let pvd = tmp.path().join("series.pvd");
+    std::fs::copy(vtu("hm2d_quad4_series.pvd"), &pvd).unwrap();
+    let (code, text) = run(&["inspect", "--fem", pvd.to_str().unwrap()]);
+    assert_eq!(code, Some(2), "{text}");
+    assert_contains(&text, &["hm2d_quad4_series_t_5.vtu"]);
+
+    // The paper's failure time lies between two outputs of the slope's series.
+    let rain = fixture("slope/ogs/results/rain.pvd");
+    let (code, text) = run(&[
+        "inspect",
+        "--fem",
+        rain.to_str().unwrap(),
+        "--step",
+        "time=1.56h",
+    ]);
+    assert_eq!(code, Some(2), "{text}");
+    assert_contains(
+        &text,
+        &["between step 31 at t = 5580 s (1.55 h) and step 32 at t = 5760 s (1.6 h)"],
+    );
+
+    // Units: assumed Pa, or given; a unit that contradicts the magnitudes is questioned.
+    let (code, text) = run(&["inspect", "--fem", ascii]);
+    assert_eq!(code, Some(0), "{text}");
+    assert_contains(&text, &["pressure and stress Pa (assumed)"]);
+    assert!(!text.contains("warning"), "{text}");
+    let (code, text) = run(&["inspect", "--fem", ascii, "--fem-units", "pressure=kPa"]);
+    assert_eq!(code, Some(0), "{text}");
+    assert_contains(
+        &text,
+        &[
+            "pressure and stress kPa (given)",
+            "warning",
+            "is the file in Pa?",
+        ],
+    );
+}

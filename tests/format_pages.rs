@@ -125,9 +125,11 @@ fn read(reader: &str, path: &Path) -> Result<(), String> {
         }
         "mapf" => mapf::read(path).map(drop).map_err(|x| e(&x)),
         "mps-csv" => mps_table::read_table(path).map(drop).map_err(|x| e(&x)),
-        "fem-csv" | "fem-vtu" | "fem-pvd" => a3d_init::pipeline::fem::load(&FemOptions::files(vec![path.to_path_buf()]))
-            .map(drop)
-            .map_err(|x| e(&x)),
+        "fem-csv" | "fem-vtu" | "fem-pvd" => {
+            a3d_init::pipeline::fem::load(&FemOptions::files(vec![path.to_path_buf()]))
+                .map(drop)
+                .map_err(|x| e(&x))
+        }
         "ply" => ply::read_ply_mesh(path).map(drop).map_err(|x| e(&x)),
         other => panic!("unknown reader `{other}`"),
     }
