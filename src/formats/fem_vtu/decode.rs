@@ -351,7 +351,14 @@ mod tests {
 
     fn decode(text: &str, layout: Layout, count: usize) -> Result<Vec<f64>, ParseError> {
         let mut source = Base64Source::new(text.as_bytes(), 0);
-        block(Path::new("t.vtu"), &mut source, layout, Scalar::F64, count, "array `a`")
+        block(
+            Path::new("t.vtu"),
+            &mut source,
+            layout,
+            Scalar::F64,
+            count,
+            "array `a`",
+        )
     }
 
     #[test]
@@ -401,7 +408,10 @@ mod tests {
         let mut bytes = 16u64.to_be_bytes().to_vec();
         bytes.extend(3.0f64.to_be_bytes());
         bytes.extend((-0.5f64).to_be_bytes());
-        let mut source = RawSource { data: &bytes, at: 0 };
+        let mut source = RawSource {
+            data: &bytes,
+            at: 0,
+        };
         let layout = Layout {
             big_endian: true,
             ..LE64
@@ -419,9 +429,19 @@ mod tests {
             data: &bytes,
             at: 1000,
         };
-        let e = block(Path::new("t.vtu"), &mut source, LE64, Scalar::F64, 2, "array `a`")
-            .unwrap_err()
-            .to_string();
-        assert_eq!(e, "t.vtu: byte 1008: array `a`: 16 bytes needed, 10 left in the file");
+        let e = block(
+            Path::new("t.vtu"),
+            &mut source,
+            LE64,
+            Scalar::F64,
+            2,
+            "array `a`",
+        )
+        .unwrap_err()
+        .to_string();
+        assert_eq!(
+            e,
+            "t.vtu: byte 1008: array `a`: 16 bytes needed, 10 left in the file"
+        );
     }
 }

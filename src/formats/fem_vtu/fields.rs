@@ -605,7 +605,10 @@ mod tests {
         assert_eq!(magnitude_warning(&column(98.1), true, "Pa"), None);
         // A file in kPa read as Pa: 0.098 kPa.
         let w = magnitude_warning(&column(0.0981), true, "Pa").unwrap();
-        assert!(w.contains("is the file in kPa?") && w.contains("(assumed)"), "{w}");
+        assert!(
+            w.contains("is the file in kPa?") && w.contains("(assumed)"),
+            "{w}"
+        );
         // A file in Pa read as kPa: 98 100 kPa.
         let w = magnitude_warning(&column(98_100.0), false, "kPa").unwrap();
         assert!(w.contains("is the file in Pa?"), "{w}");
