@@ -146,7 +146,7 @@ def test_read_fem_reads_an_ogs_series_in_its_own_signs_and_units():
     suction = (((0.31 - s_r) / (1 - s_r)) ** (-1 / m) - 1) ** (1 / n) / alpha
     assert fem["dim"] == 2
     assert np.allclose(fem["fields"]["pwp"], suction, rtol=1e-9)
-    with pytest.raises(a3d_init.A3dInitError, match=r"between step 31 at t = 5580 s \(1.55 h\)"):
+    with pytest.raises(a3d_init.A3dInitError, match=r"between step 35 at t = 5580 s \(1.55 h\)"):
         a3d_init.read_fem(rain, step="time=1.56h")
     with pytest.raises(ValueError, match="fem_sign"):
         a3d_init.read_fem(rain, fem_sign="upside-down")
