@@ -6,7 +6,7 @@
 //! A rule block is a fenced code block whose info string is `rule`:
 //!
 //! ```text
-//! reader: gom                       (gom, cps, mapf, mps-csv, fem-csv, ply)
+//! reader: gom                       (gom, cps, mapf, mps-csv, fem-csv, ply, fem-vtu, fem-pvd)
 //! base: anura3d-mini/TwoMat.GOM     (a file under fixtures/, or `none`)
 //! append: text after $$FINISH\n     (edits, in order; `\n` is a line break)
 //! replace: old text => new text     (the first occurrence)
@@ -102,6 +102,8 @@ fn file_name(reader: &str) -> &'static str {
         "mps-csv" => "mps.csv",
         "fem-csv" => "nodes.csv",
         "ply" => "Mesh.ply",
+        "fem-vtu" => "result.vtu",
+        "fem-pvd" => "series.pvd",
         other => panic!("unknown reader `{other}`"),
     }
 }
@@ -123,9 +125,11 @@ fn read(reader: &str, path: &Path) -> Result<(), String> {
         }
         "mapf" => mapf::read(path).map(drop).map_err(|x| e(&x)),
         "mps-csv" => mps_table::read_table(path).map(drop).map_err(|x| e(&x)),
-        "fem-csv" => a3d_init::pipeline::fem::load(&FemOptions::files(vec![path.to_path_buf()]))
-            .map(drop)
-            .map_err(|x| e(&x)),
+        "fem-csv" | "fem-vtu" | "fem-pvd" => {
+            a3d_init::pipeline::fem::load(&FemOptions::files(vec![path.to_path_buf()]))
+                .map(drop)
+                .map_err(|x| e(&x))
+        }
         "ply" => ply::read_ply_mesh(path).map(drop).map_err(|x| e(&x)),
         other => panic!("unknown reader `{other}`"),
     }

@@ -54,6 +54,7 @@ fn sample_slope() -> (Project, fem::LoadedFem) {
         mesh: None,
         analysis: None,
         step: StepChoice::Last,
+        vtu: Default::default(),
     })
     .unwrap();
     (project, fem)

@@ -160,7 +160,7 @@ def map(
     fem_vtu: bool = False,
     columns: Optional[str] = None,
     fem_units: Optional[str] = None,
-    fem_sign: str = "geostudio",
+    fem_sign: Optional[str] = None,
     fem_mesh: Optional[PathLike] = None,
     analysis: Optional[str] = None,
     step: str = "last",
@@ -283,13 +283,15 @@ def read_fem(
     *,
     columns: Optional[str] = None,
     fem_units: Optional[str] = None,
-    fem_sign: str = "geostudio",
+    fem_sign: Optional[str] = None,
     fem_mesh: Optional[PathLike] = None,
     analysis: Optional[str] = None,
     step: str = "last",
 ) -> Dict[str, Any]:
     """Reads FEM node files as ``map`` does (GeoStudio CSV tables, ``node.csv``
-    with ``fem_mesh``, ``.gsz`` projects), in Anura3D's units and signs.
+    with ``fem_mesh``, ``.gsz`` projects, ``.vtu``/``.pvd`` results from
+    OpenGeoSys or ParaView), in Anura3D's units and signs. ``fem_sign`` None
+    takes the format's own (GeoStudio's for tables, OpenGeoSys's for VTU).
     Returns ``positions`` (n, 3), ``dim``, ``ids``, ``regions`` (or None),
     ``fields`` {name: (n,)}, ``reports`` (how each file was read) and ``notes``."""
     out = _native.read_fem(_paths(fem), columns, fem_units, fem_sign, _path(fem_mesh), analysis, step)

@@ -18,6 +18,7 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
 use a3d_init::formats::fem_csv::{self, CsvOptions, SignConvention};
+use a3d_init::formats::fem_vtu::{self, StressRule, VtuOptions};
 use a3d_init::formats::material_map::MaterialMapError;
 use a3d_init::kernel::KernelKind;
 use a3d_init::kernel::loo::Norm;
@@ -118,16 +119,23 @@ fn fem_options(
     fem: Vec<PathBuf>,
     columns: Option<&str>,
     fem_units: Option<&str>,
-    fem_sign: &str,
+    fem_sign: Option<&str>,
     fem_mesh: Option<PathBuf>,
     analysis: Option<String>,
     step: &str,
 ) -> PyResult<FemOptions> {
-    let columns = match columns {
-        Some(s) => {
-            fem_csv::parse_columns_option(s).map_err(|e| option_err(format!("columns: {e}")))?
-        }
-        None => Vec::new(),
+    // `columns` names table headers, or VTU arrays by role when every file is a .vtu/.pvd.
+    let all_vtu = fem.iter().all(|p| fem_vtu::is_vtk_path(p));
+    let (columns, arrays) = match columns {
+        Some(s) if all_vtu => (
+            Vec::new(),
+            fem_vtu::parse_arrays_option(s).map_err(|e| option_err(format!("columns: {e}")))?,
+        ),
+        Some(s) => (
+            fem_csv::parse_columns_option(s).map_err(|e| option_err(format!("columns: {e}")))?,
+            Vec::new(),
+        ),
+        None => (Vec::new(), Vec::new()),
     };
     let units = match fem_units {
         Some(s) => {
@@ -135,12 +143,15 @@ fn fem_options(
         }
         None => Default::default(),
     };
+    // None: GeoStudio's for tables and .gsz, OpenGeoSys's for .vtu/.pvd.
     let sign = match fem_sign {
-        "geostudio" => SignConvention::GeoStudio,
-        "tension-positive" | "tension_positive" => SignConvention::TensionPositive,
-        _ => {
+        None => None,
+        Some("geostudio") => Some(SignConvention::GeoStudio),
+        Some("tension-positive" | "tension_positive") => Some(SignConvention::TensionPositive),
+        Some("ogs") => Some(SignConvention::Ogs),
+        Some(other) => {
             return Err(PyValueError::new_err(format!(
-                "fem_sign: expected 'geostudio' or 'tension-positive', got {fem_sign:?}"
+                "fem_sign: expected 'geostudio', 'tension-positive' or 'ogs', got {other:?}"
             )));
         }
     };
@@ -148,8 +159,14 @@ fn fem_options(
         paths: fem,
         csv: CsvOptions {
             columns,
+            units: units.clone(),
+            sign: sign.unwrap_or(SignConvention::GeoStudio),
+        },
+        vtu: VtuOptions {
+            arrays,
             units,
             sign,
+            stress: StressRule::Auto,
         },
         mesh: fem_mesh,
         analysis,
@@ -333,14 +350,14 @@ fn calibrate<'py>(
 /// Reads FEM node files as `map` does: (positions (n, 3), dim, ids, regions,
 /// fields {name: values}, read reports as JSON, notes).
 #[pyfunction]
-#[pyo3(signature = (fem, columns=None, fem_units=None, fem_sign="geostudio", fem_mesh=None, analysis=None, step="last"))]
+#[pyo3(signature = (fem, columns=None, fem_units=None, fem_sign=None, fem_mesh=None, analysis=None, step="last"))]
 #[allow(clippy::too_many_arguments)]
 fn read_fem<'py>(
     py: Python<'py>,
     fem: Vec<PathBuf>,
     columns: Option<&str>,
     fem_units: Option<&str>,
-    fem_sign: &str,
+    fem_sign: Option<&str>,
     fem_mesh: Option<PathBuf>,
     analysis: Option<String>,
     step: &str,
@@ -401,7 +418,7 @@ fn column_of<'py, T, U: numpy::Element>(
 /// `map`: reads, maps and writes the project. Returns (report as JSON, the
 /// folder written, the files written, the mapped state's columns).
 #[pyfunction]
-#[pyo3(signature = (fem, model, out=None, force=false, h=None, kernel="cubic", seed=1, stress="auto", outside="error", min_shepard=0.02, material_map=None, mixed_state="mean", generate_cps=false, fem_vtu=false, columns=None, fem_units=None, fem_sign="geostudio", fem_mesh=None, analysis=None, step="last", k0_consistent=true))]
+#[pyo3(signature = (fem, model, out=None, force=false, h=None, kernel="cubic", seed=1, stress="auto", outside="error", min_shepard=0.02, material_map=None, mixed_state="mean", generate_cps=false, fem_vtu=false, columns=None, fem_units=None, fem_sign=None, fem_mesh=None, analysis=None, step="last", k0_consistent=true))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn map<'py>(
     py: Python<'py>,
@@ -421,7 +438,7 @@ fn map<'py>(
     fem_vtu: bool,
     columns: Option<&str>,
     fem_units: Option<&str>,
-    fem_sign: &str,
+    fem_sign: Option<&str>,
     fem_mesh: Option<PathBuf>,
     analysis: Option<String>,
     step: &str,

@@ -151,6 +151,22 @@ def test_read_fem_converts_signs_and_units():
     assert fem["reports"][0]["nodes"] == len(raw)
 
 
+def test_read_fem_reads_an_ogs_series_in_its_own_signs_and_units():
+    # fixtures/slope/ogs: OGS writes Pa, suction negative; step 0 is Table 1's
+    # initial saturation 0.31, a uniform suction through van Genuchten (#26).
+    rain = SLOPE / "ogs/results/rain.pvd"
+    fem = a3d_init.read_fem(rain, step="0")
+    alpha, n, s_r = 0.51, 2.73, 0.1
+    m = 1 - 1 / n
+    suction = (((0.31 - s_r) / (1 - s_r)) ** (-1 / m) - 1) ** (1 / n) / alpha
+    assert fem["dim"] == 2
+    assert np.allclose(fem["fields"]["pwp"], suction, rtol=1e-9)
+    with pytest.raises(a3d_init.A3dInitError, match=r"between step 35 at t = 5580 s \(1.55 h\)"):
+        a3d_init.read_fem(rain, step="time=1.56h")
+    with pytest.raises(ValueError, match="fem_sign"):
+        a3d_init.read_fem(rain, fem_sign="upside-down")
+
+
 def test_verify_and_fos_on_a_mapped_folder(tmp_path):
     fem = tmp_path / "fem.csv"
     rows = ["X (m),Y (m),PWP (kPa),Material"]

@@ -8,30 +8,51 @@ use anyhow::{Context, bail};
 use serde::Serialize;
 
 use crate::formats::fem_csv::{self, CsvOptions, SignConvention};
+use crate::formats::fem_vtu::{self, StressRule, VtuOptions};
 use crate::pipeline::fem::{FemOptions, LoadedFem};
 use crate::pipeline::start::StateSource;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
 pub enum SignArg {
+    /// Stresses compression positive, pwp positive below the water table (CSV and .gsz default).
     Geostudio,
+    /// Anura3D's: tension positive, pwp negative in compression.
     TensionPositive,
+    /// OpenGeoSys: pressure positive in compression, stresses tension positive (.vtu/.pvd default).
+    Ogs,
+}
+
+impl From<SignArg> for SignConvention {
+    fn from(s: SignArg) -> SignConvention {
+        match s {
+            SignArg::Geostudio => SignConvention::GeoStudio,
+            SignArg::TensionPositive => SignConvention::TensionPositive,
+            SignArg::Ogs => SignConvention::Ogs,
+        }
+    }
 }
 
 /// Options shared by every command that reads FEM node files.
 #[derive(Debug, Clone, clap::Args)]
 pub struct FemArgs {
-    /// FEM node file(s): CSV node tables, or a GeoStudio node.csv with --fem-mesh. Several files are joined by node id or coordinates.
+    /// FEM node file(s): CSV node tables, a GeoStudio node.csv with --fem-mesh, a .gsz project, or VTK results (.vtu, .pvd time series: OpenGeoSys, ParaView). Several files are joined by node id or coordinates.
     #[arg(long = "fem", value_name = "FILE")]
     pub fem: Vec<PathBuf>,
-    /// Explicit column mapping, e.g. `x=X (m),y=Y (m),pwp=PWP`.
+    /// Explicit column mapping, e.g. `x=X (m),y=Y (m),pwp=PWP`; for .vtu/.pvd, arrays by role: `pwp=p,stress=sigma,saturation=S,region=MaterialIDs`.
     #[arg(long, value_name = "FIELD=HEADER,…")]
     pub columns: Option<String>,
-    /// Unit overrides, e.g. `length=ft,pressure=psf`.
+    /// Unit overrides, e.g. `length=ft,pressure=psf` (.vtu/.pvd: m and Pa unless given).
     #[arg(long, value_name = "length=…,pressure=…")]
     pub fem_units: Option<String>,
-    /// Sign convention of the FEM file.
-    #[arg(long, value_enum, default_value_t = SignArg::Geostudio)]
-    pub fem_sign: SignArg,
+    /// Sign convention of the FEM file [default: geostudio; ogs for .vtu/.pvd].
+    #[arg(long, value_enum)]
+    pub fem_sign: Option<SignArg>,
+    /// .vtu/.pvd: whether the stress array is effective (made total with σ + α·χ·pwp) or total [default: effective when a pressure array is read, as OGS's HydroMechanics and RichardsMechanics write `sigma`].
+    #[arg(
+        long,
+        value_name = "effective[,biot=α][,chi=1|saturation|saturation^m]|total"
+    )]
+    pub fem_sigma: Option<String>,
     /// GeoStudio mesh (`Mesh.ply`) giving the coordinates of a `node.csv` without X, Y columns.
     #[arg(long, value_name = "PLY")]
     pub fem_mesh: Option<PathBuf>,
@@ -50,7 +71,8 @@ impl FemArgs {
             fem: paths,
             columns: None,
             fem_units: None,
-            fem_sign: SignArg::Geostudio,
+            fem_sign: None,
+            fem_sigma: None,
             fem_mesh: None,
             analysis: None,
             step: "last".into(),
@@ -62,11 +84,24 @@ impl FemArgs {
         if self.fem.is_empty() {
             bail!("give the FEM node file(s) with --fem FILE");
         }
-        let columns = match &self.columns {
+        // `--columns` names table headers, or VTU arrays when every file is one.
+        let all_vtu = self.fem.iter().all(|p| fem_vtu::is_vtk_path(p));
+        let (columns, arrays) = match &self.columns {
+            Some(s) if all_vtu => (
+                Vec::new(),
+                fem_vtu::parse_arrays_option(s).map_err(|e| anyhow::anyhow!("--columns: {e}"))?,
+            ),
+            Some(s) => (
+                fem_csv::parse_columns_option(s).map_err(|e| anyhow::anyhow!("--columns: {e}"))?,
+                Vec::new(),
+            ),
+            None => (Vec::new(), Vec::new()),
+        };
+        let stress = match &self.fem_sigma {
             Some(s) => {
-                fem_csv::parse_columns_option(s).map_err(|e| anyhow::anyhow!("--columns: {e}"))?
+                fem_vtu::parse_stress_option(s).map_err(|e| anyhow::anyhow!("--fem-sigma: {e}"))?
             }
-            None => Vec::new(),
+            None => StressRule::Auto,
         };
         let units = match &self.fem_units {
             Some(s) => {
@@ -78,11 +113,14 @@ impl FemArgs {
             paths: self.fem.clone(),
             csv: CsvOptions {
                 columns,
+                units: units.clone(),
+                sign: self.fem_sign.map_or(SignConvention::GeoStudio, Into::into),
+            },
+            vtu: VtuOptions {
+                arrays,
                 units,
-                sign: match self.fem_sign {
-                    SignArg::Geostudio => SignConvention::GeoStudio,
-                    SignArg::TensionPositive => SignConvention::TensionPositive,
-                },
+                sign: self.fem_sign.map(Into::into),
+                stress,
             },
             mesh: self.fem_mesh.clone(),
             analysis: self.analysis.clone(),

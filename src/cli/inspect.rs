@@ -5,7 +5,8 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use crate::pipeline::inspect::{self, FemSummary, GszStep, GszSummary, ProjectSummary};
+use crate::formats::fem_vtu::{self, VtuReport};
+use crate::pipeline::inspect::{self, FemSummary, GszStep, GszSummary, ProjectSummary, VtuSummary};
 
 #[derive(Debug, clap::Args)]
 pub struct InspectArgs {
@@ -55,6 +56,25 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
             Some(e) => Err(e.into()),
             None => Ok(()),
         };
+    }
+    if fem_vtu::is_vtk_path(model) {
+        let summary = inspect::vtu(model)?;
+        let mut out = std::io::stdout().lock();
+        if args.json {
+            serde_json::to_writer_pretty(&mut out, &summary)?;
+            writeln!(out)?;
+        } else {
+            print_vtu(&mut out, &summary)?;
+        }
+        if let Some(first) = summary.missing.first() {
+            anyhow::bail!(
+                "{}: {} of the series' files are missing, the first {}",
+                model.display(),
+                summary.missing.len(),
+                first.display()
+            );
+        }
+        return Ok(());
     }
     let summary = inspect::project(model, args.mps.as_deref(), args.force)?;
     let mut out = std::io::stdout().lock();
@@ -168,14 +188,17 @@ fn print_summary(out: &mut impl Write, s: &ProjectSummary) -> std::io::Result<()
 fn print_fem(out: &mut impl Write, s: &FemSummary) -> std::io::Result<()> {
     for r in &s.reports {
         writeln!(out, "file       {}", r.path.display())?;
-        writeln!(
-            out,
-            "dialect    delimiter `{}`, decimal {}, BOM {}, header on line {}",
-            r.delimiter,
-            if r.decimal_comma { "comma" } else { "point" },
-            if r.bom { "yes" } else { "no" },
-            r.header_line
-        )?;
+        match &r.vtu {
+            Some(vtu) => print_vtu_report(out, vtu)?,
+            None => writeln!(
+                out,
+                "dialect    delimiter `{}`, decimal {}, BOM {}, header on line {}",
+                r.delimiter,
+                if r.decimal_comma { "comma" } else { "point" },
+                if r.bom { "yes" } else { "no" },
+                r.header_line
+            )?,
+        }
         writeln!(out, "nodes      {} ({}D)", r.nodes, r.dim)?;
         writeln!(out, "sign       {:?}", r.sign)?;
         writeln!(out, "columns")?;
@@ -294,6 +317,88 @@ fn print_gsz(out: &mut impl Write, s: &GszSummary) -> std::io::Result<()> {
             }
             GszStep::Unreadable(e) => writeln!(out, "  step {}: unreadable: {e}", last.folder)?,
         }
+    }
+    Ok(())
+}
+
+fn print_vtu(out: &mut impl Write, s: &VtuSummary) -> std::io::Result<()> {
+    if let (Some(first), Some(last)) = (s.outputs.first(), s.outputs.last()) {
+        writeln!(
+            out,
+            "series     {}: {} outputs, t = {} .. {}",
+            s.path.display(),
+            s.outputs.len(),
+            fem_vtu::pvd::time_text(first.time),
+            fem_vtu::pvd::time_text(last.time)
+        )?;
+        for (k, o) in s.outputs.iter().enumerate() {
+            writeln!(
+                out,
+                "  step {k:>3}  t = {:<26} {}{}",
+                fem_vtu::pvd::time_text(o.time),
+                o.file.display(),
+                if s.missing.contains(&o.file) {
+                    "  (missing)"
+                } else {
+                    ""
+                }
+            )?;
+        }
+        writeln!(
+            out,
+            "last       {} (described below)",
+            s.last.file.display()
+        )?;
+    } else {
+        writeln!(out, "file       {}", s.path.display())?;
+    }
+    print_vtu_report(out, &s.last)?;
+    writeln!(
+        out,
+        "signs      OGS by default (--fem-sign): pressure positive in compression (negated), stress tension positive (kept)"
+    )?;
+    writeln!(
+        out,
+        "stress     `sigma` with a pressure array is effective (OGS's HydroMechanics, RichardsMechanics): made total with α = 1 and χ = S (1 without saturation); --fem-sigma"
+    )
+}
+
+fn print_vtu_report(out: &mut impl Write, r: &VtuReport) -> std::io::Result<()> {
+    if let Some(c) = &r.series {
+        writeln!(
+            out,
+            "step       {} of {} (0-based), t = {}: {}",
+            c.step,
+            c.steps,
+            fem_vtu::pvd::time_text(c.time),
+            c.file.display()
+        )?;
+    }
+    writeln!(out, "encoding   {}", r.encoding)?;
+    let cells: Vec<String> = r.cells.iter().map(|(k, n)| format!("{n} {k}")).collect();
+    writeln!(out, "cells      {}", cells.join(", "))?;
+    if !r.materials.is_empty() {
+        let m: Vec<String> = r
+            .materials
+            .iter()
+            .map(|(id, n)| format!("{id}: {n} cells (region `mat{id}`)"))
+            .collect();
+        writeln!(out, "materials  MaterialIDs {}", m.join(", "))?;
+    }
+    writeln!(out, "arrays")?;
+    for a in &r.arrays {
+        writeln!(
+            out,
+            "  {:<24} {:<5} {} × {:<8} → {}",
+            a.name, a.location, a.components, a.scalar, a.used_as
+        )?;
+    }
+    writeln!(out, "units      {}", r.units)?;
+    if let Some(rule) = &r.stress_rule {
+        writeln!(out, "stress     {rule}")?;
+    }
+    for n in &r.notes {
+        writeln!(out, "note       {n}")?;
     }
     Ok(())
 }

@@ -268,18 +268,41 @@ impl std::str::FromStr for StepChoice {
         if let Some(t) = s.strip_prefix("time=") {
             // NaN, infinities and overflowing numbers (`1e400`) are refused:
             // no saved step is at such a time (#24).
-            return match t.parse::<f64>() {
-                Ok(v) if v.is_finite() => Ok(StepChoice::Time(v)),
-                Ok(_) => Err(format!(
+            return match parse_time(t) {
+                Some(v) if v.is_finite() => Ok(StepChoice::Time(v)),
+                Some(_) => Err(format!(
                     "`{s}`: the time must be a finite number of seconds"
                 )),
-                Err(_) => Err(format!("`{s}`: expected time=<seconds>")),
+                None => Err(format!(
+                    "`{s}`: expected time=<number>[s|min|h|d] (seconds without a unit)"
+                )),
             };
         }
         s.parse()
             .map(StepChoice::Number)
-            .map_err(|_| format!("`{s}`: expected a step number, last, or time=<seconds>"))
+            .map_err(|_| format!("`{s}`: expected a step number, last, or time=<time>[s|min|h|d]"))
     }
+}
+
+/// A time with an optional unit (`5616`, `5616s`, `93.6min`, `1.56h`, `0.065d`)
+/// in seconds (#26).
+pub fn parse_time(text: &str) -> Option<f64> {
+    let t = text.trim();
+    if let Ok(seconds) = t.parse::<f64>() {
+        return Some(seconds);
+    }
+    let split = t
+        .find(|c: char| c.is_ascii_alphabetic() && c != 'e' && c != 'E')
+        .unwrap_or(t.len());
+    let (number, unit) = t.split_at(split);
+    let factor = match unit.trim() {
+        "" | "s" => 1.0,
+        "min" => 60.0,
+        "h" => 3600.0,
+        "d" => 86400.0,
+        _ => return None,
+    };
+    number.trim().parse::<f64>().ok().map(|v| v * factor)
 }
 
 /// Reads the nodes of one analysis step, with coordinates from the analysis mesh

@@ -9,6 +9,7 @@ pub mod cps;
 pub mod cps_template;
 pub mod extent;
 pub mod fem_csv;
+pub mod fem_vtu;
 pub mod gom;
 pub mod gsz;
 pub mod input;

@@ -1,12 +1,14 @@
 //! FEM node results from every supported source, through one registry
 //! ([`reader_for`]): GeoStudio-style CSV tables (with a `Mesh.ply` for a
-//! `node.csv` without coordinates) and GeoStudio `.gsz` projects. Several files
+//! `node.csv` without coordinates), GeoStudio `.gsz` projects and VTK XML
+//! results (`.vtu`, `.pvd` time series: OpenGeoSys, ParaView). Several files
 //! are joined by node id. Used by `map`, `inspect --fem` and `calibrate` alike.
 
 use std::path::{Path, PathBuf};
 
 use super::PipelineError;
 use crate::formats::fem_csv::{self, CsvOptions, FemReadReport};
+use crate::formats::fem_vtu::{self, VtuOptions};
 use crate::formats::gsz::StepChoice;
 use crate::model::FemNodes;
 
@@ -20,8 +22,10 @@ pub struct FemOptions {
     pub mesh: Option<PathBuf>,
     /// `.gsz`: analysis name or 1-based index.
     pub analysis: Option<String>,
-    /// `.gsz`: saved step.
+    /// `.gsz` and `.pvd`: saved step.
     pub step: StepChoice,
+    /// Arrays, units, signs and stress rule of `.vtu` and `.pvd` files.
+    pub vtu: VtuOptions,
 }
 
 impl FemOptions {
@@ -34,6 +38,7 @@ impl FemOptions {
             mesh: None,
             analysis: None,
             step: StepChoice::Last,
+            vtu: VtuOptions::default(),
         }
     }
 }
@@ -45,16 +50,20 @@ pub enum FemReader {
     Gsz,
     /// A delimited node table (GeoStudio CSV exports, `node.csv`).
     Csv,
+    /// A VTK XML result: `.vtu`, or a `.pvd` time series of them.
+    Vtu,
 }
 
-/// The reader for `path`, by extension (everything that is not a `.gsz` is
-/// read as a delimited table, whose dialect is sniffed).
+/// The reader for `path`, by extension (everything that is not a `.gsz`,
+/// `.vtu` or `.pvd` is read as a delimited table, whose dialect is sniffed).
 pub fn reader_for(path: &Path) -> FemReader {
     if path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("gsz"))
     {
         FemReader::Gsz
+    } else if fem_vtu::is_vtk_path(path) {
+        FemReader::Vtu
     } else {
         FemReader::Csv
     }
@@ -80,6 +89,7 @@ pub fn load(options: &FemOptions) -> Result<LoadedFem, PipelineError> {
     let mut parts = Vec::new();
     let mut reports = Vec::new();
     let mut notes = Vec::new();
+    let mut sign = options.csv.sign;
     let mesh = options
         .mesh
         .as_deref()
@@ -95,6 +105,15 @@ pub fn load(options: &FemOptions) -> Result<LoadedFem, PipelineError> {
                     &options.csv,
                 )?;
                 notes.push(note);
+                parts.push(nodes);
+                reports.push(report);
+            }
+            FemReader::Vtu => {
+                let (nodes, report) = fem_vtu::read(path, &options.vtu, &options.step)?;
+                if let Some(vtu) = &report.vtu {
+                    notes.push(vtu_note(path, vtu));
+                }
+                sign = report.sign;
                 parts.push(nodes);
                 reports.push(report);
             }
@@ -128,9 +147,31 @@ pub fn load(options: &FemOptions) -> Result<LoadedFem, PipelineError> {
         nodes,
         reports,
         paths: options.paths.clone(),
-        sign: options.csv.sign,
+        sign,
         notes,
     })
+}
+
+/// One line on a VTU read: the step of a series, the cells and the units.
+fn vtu_note(path: &Path, vtu: &fem_vtu::VtuReport) -> String {
+    let step = match &vtu.series {
+        Some(c) => format!(
+            ", step {} of {} (t = {}, {})",
+            c.step,
+            c.steps,
+            fem_vtu::pvd::time_text(c.time),
+            c.file.display()
+        ),
+        None => String::new(),
+    };
+    let cells: Vec<String> = vtu.cells.iter().map(|(k, n)| format!("{n} {k}")).collect();
+    format!(
+        "{}{step}: {}; {}; {}",
+        path.display(),
+        cells.join(", "),
+        vtu.encoding,
+        vtu.units
+    )
 }
 
 /// Joins several node files: by id when every file has ids in the same set, the

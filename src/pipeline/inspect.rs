@@ -15,6 +15,7 @@ use super::project::Project;
 use crate::diagnose::Extent;
 use crate::formats::cps::CpsDocument;
 use crate::formats::fem_csv::FemReadReport;
+use crate::formats::fem_vtu;
 use crate::formats::gsz::{self, GszProject, StepChoice};
 use crate::formats::project::{OutputNames, ProjectFiles};
 use crate::model::{FemNodes, Material};
@@ -251,5 +252,48 @@ pub fn gsz(path: &Path) -> Result<GszSummary, PipelineError> {
         path: path.to_path_buf(),
         project,
         last_steps,
+    })
+}
+
+/// What `inspect run.pvd` (or `inspect result.vtu`) shows: the outputs of a
+/// series and the arrays, cells and materials of its last output.
+#[derive(Clone, Debug, Serialize)]
+pub struct VtuSummary {
+    pub path: PathBuf,
+    /// The series' outputs (a `.pvd`), in time order.
+    pub outputs: Vec<fem_vtu::pvd::Output>,
+    /// Files the series lists that do not exist.
+    pub missing: Vec<PathBuf>,
+    /// The last output (or the `.vtu` itself), described.
+    pub last: fem_vtu::VtuReport,
+}
+
+/// Summarises a `.vtu` or a `.pvd` time series.
+pub fn vtu(path: &Path) -> Result<VtuSummary, PipelineError> {
+    let is_pvd = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("pvd"));
+    if !is_pvd {
+        return Ok(VtuSummary {
+            path: path.to_path_buf(),
+            outputs: Vec::new(),
+            missing: Vec::new(),
+            last: fem_vtu::describe(path)?,
+        });
+    }
+    let series = fem_vtu::pvd::read(path)?;
+    let missing: Vec<PathBuf> = series
+        .outputs
+        .iter()
+        .filter(|o| !o.file.is_file())
+        .map(|o| o.file.clone())
+        .collect();
+    let last_file = &series.outputs[series.outputs.len() - 1].file;
+    let last = fem_vtu::describe(last_file)?;
+    Ok(VtuSummary {
+        path: path.to_path_buf(),
+        outputs: series.outputs,
+        missing,
+        last,
     })
 }

@@ -134,7 +134,7 @@ pub fn synonym(n: &str) -> Option<Field> {
 }
 
 /// Factor from a header unit to kPa (pressure) or m (length).
-pub(super) fn unit_factor(unit: &str, length: bool) -> Option<f64> {
+pub fn unit_factor(unit: &str, length: bool) -> Option<f64> {
     let u: String = unit
         .chars()
         .filter(|c| !c.is_whitespace())

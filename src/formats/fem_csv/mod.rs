@@ -31,7 +31,7 @@ mod table;
 #[cfg(test)]
 mod tests;
 
-pub use headers::{Field, normalise, synonym};
+pub use headers::{Field, normalise, synonym, unit_factor};
 pub use options::{
     CsvOptions, SignConvention, UnitOverride, parse_columns_option, parse_units_option,
 };
@@ -63,6 +63,10 @@ pub struct FemReadReport {
     /// False for a GeoStudio `node.csv` (coordinates live in the mesh PLY).
     pub has_coordinates: bool,
     pub warnings: Vec<String>,
+    /// What the VTU reader found (a `.vtu` or `.pvd`; the dialect fields
+    /// above are then empty).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vtu: Option<crate::formats::fem_vtu::VtuReport>,
 }
 
 /// Reads a node table. `path` names the file in errors.

@@ -13,6 +13,28 @@ pub enum SignConvention {
     GeoStudio,
     /// Already Anura3D's convention: kept.
     TensionPositive,
+    /// OpenGeoSys: pore pressure positive in compression (negated), stresses
+    /// tension positive (kept).
+    Ogs,
+}
+
+impl SignConvention {
+    /// The factor the pore pressure of a file in this convention is
+    /// multiplied by (−1 or 1).
+    pub fn pwp_sign(self) -> f64 {
+        match self {
+            SignConvention::GeoStudio | SignConvention::Ogs => -1.0,
+            SignConvention::TensionPositive => 1.0,
+        }
+    }
+
+    /// The factor its stresses are multiplied by (−1 or 1).
+    pub fn stress_sign(self) -> f64 {
+        match self {
+            SignConvention::GeoStudio => -1.0,
+            SignConvention::TensionPositive | SignConvention::Ogs => 1.0,
+        }
+    }
 }
 
 /// Unit overrides (`--fem-units length=ft,pressure=psf`).

@@ -9,7 +9,7 @@ use rayon::prelude::*;
 
 use super::dialect::{Delimiter, sniff_delimiter, split_line};
 use super::headers::{Field, header_unit, normalise, strip_unit_suffix, synonym, unit_factor};
-use super::options::{CsvOptions, SignConvention, check_columns_option};
+use super::options::{CsvOptions, check_columns_option};
 use super::rows::{Rows, Schema, merge_rows, nth_line_start, parse_chunk, split_chunks};
 use super::{ColumnReport, FemReadReport};
 use crate::formats::error::{FormatError, ParseError};
@@ -188,8 +188,11 @@ pub(super) fn parse_csv_chunked(
             }
             _ => (None, 1.0),
         };
-        let flip =
-            matches!(field, Some(Field::Value(_))) && options.sign == SignConvention::GeoStudio;
+        let flip = match field {
+            Some(Field::Value(Quantity::Pwp)) => options.sign.pwp_sign() < 0.0,
+            Some(Field::Value(_)) => options.sign.stress_sign() < 0.0,
+            _ => false,
+        };
         factors.push(if flip { -factor } else { factor });
         columns.push(ColumnReport {
             header: h.clone(),
@@ -408,6 +411,7 @@ pub(super) fn parse_csv_chunked(
         dim: nodes.dim,
         sign: options.sign,
         has_coordinates: cx.is_some() && cy.is_some(),
+        vtu: None,
         warnings,
     };
     Ok((nodes, report))

@@ -103,6 +103,9 @@ pub fn build_report(r: ReportInputs<'_>) -> MapReport {
             "FEM sign geostudio: stresses compression positive and pwp positive below the water table in the file; all were negated into Anura3D's convention"
         }
         SignConvention::TensionPositive => "FEM sign tension-positive: values kept as in the file",
+        SignConvention::Ogs => {
+            "FEM sign ogs (OpenGeoSys): pressure positive in compression in the file, negated; stresses tension positive, kept"
+        }
     };
     let min_mp = r.placement.min_mp_spacing;
     MapReport {
