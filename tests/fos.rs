@@ -50,12 +50,8 @@ fn show(report: &FosReport) -> String {
         .iter()
         .map(|t| {
             format!(
-                "F={:.4} {:?} u={:.3e} du3={:?} du4={:?}",
-                t.factor,
-                t.end,
-                t.max_displacement,
-                t.third_quarter_movement,
-                t.last_quarter_movement
+                "F={:.4} {:?} δ={:.3e} u={:.3e}",
+                t.factor, t.end, t.measure, t.max_displacement
             )
         })
         .collect();

@@ -52,7 +52,7 @@ pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
         let started = Instant::now();
         let options = FosOptions {
             damping: args.damping,
-            ..FosOptions::default()
+            ..FosOptions::srm()
         };
         let (report, target) =
             pipeline::fos::fos(&source, &options, args.out.as_deref(), args.force)?;
