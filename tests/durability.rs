@@ -15,6 +15,7 @@ use a3d_init::pipeline::ErrorKind;
 use a3d_init::pipeline::fem::FemOptions;
 use a3d_init::pipeline::map::MapConfig;
 use a3d_init::pipeline::mapping::{self, MapJob};
+use a3d_init::pipeline::output::Destination;
 use a3d_init::pipeline::output::trace::{self, Event};
 use common::{fixture, run_map};
 
@@ -92,18 +93,18 @@ fn map_outputs_are_synced_before_the_publishing_rename_and_a_failed_sync_keeps_t
 
     // A new folder.
     trace::start();
-    mapping::map(&job, Some(&target), false).unwrap();
+    mapping::map(&job, Destination::new(Some(&target), false)).unwrap();
     assert_durable_order(&trace::take(), &target);
 
     // --force over the old one (RENAME_EXCHANGE).
     trace::start();
-    mapping::map(&job, Some(&target), true).unwrap();
+    mapping::map(&job, Destination::new(Some(&target), true)).unwrap();
     assert_durable_order(&trace::take(), &target);
 
     // The two-rename fallback.
     trace::disable_exchange(true);
     trace::start();
-    let result = mapping::map(&job, Some(&target), true);
+    let result = mapping::map(&job, Destination::new(Some(&target), true));
     trace::disable_exchange(false);
     result.unwrap();
     assert_durable_order(&trace::take(), &target);
@@ -129,7 +130,7 @@ fn map_outputs_are_synced_before_the_publishing_rename_and_a_failed_sync_keeps_t
     ] {
         trace::disable_exchange(!exchange);
         trace::fail_sync_of(Some(failing));
-        let result = mapping::map(&job, Some(&target), true);
+        let result = mapping::map(&job, Destination::new(Some(&target), true));
         trace::fail_sync_of(None);
         trace::disable_exchange(false);
         let Err(e) = result else {

@@ -330,17 +330,6 @@ fn demo_prints_only_measured_words() {
     );
 }
 
-/// Where the oracle kernel is: `$ANURA3D_KERNEL`, else `target/anura3d-kernel/Anura3D.out`
-/// (built by `.ci/run`).
-fn kernel() -> Option<PathBuf> {
-    let path = std::env::var_os("ANURA3D_KERNEL")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("target/anura3d-kernel/Anura3D.out")
-        });
-    path.is_file().then_some(path)
-}
-
 /// Runs the kernel on `out` and compares its initial-state dump with verify/start.csv.
 fn compare_with_kernel(kernel: &Path, out: &Path, work: &Path) {
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/anura3d-kernel/run.sh");
@@ -415,17 +404,8 @@ fn compare_with_kernel(kernel: &Path, out: &Path, work: &Path) {
 }
 
 #[test]
-#[allow(clippy::print_stderr)] // the skip must be visible in the test output
 fn anura3d_kernel_holds_what_verify_says() {
-    let Some(kernel) = kernel() else {
-        // CI sets A3D_INIT_REQUIRE_KERNEL: there the oracle must run.
-        assert!(
-            std::env::var_os("A3D_INIT_REQUIRE_KERNEL").is_none(),
-            "A3D_INIT_REQUIRE_KERNEL is set but there is no Anura3D kernel at target/anura3d-kernel/Anura3D.out (or $ANURA3D_KERNEL)"
-        );
-        eprintln!(
-            "SKIPPED anura3d_kernel_holds_what_verify_says: no Anura3D kernel (set ANURA3D_KERNEL or run .ci/run, which builds it with gfortran)"
-        );
+    let Some(kernel) = anura3d_kernel_or_skip("anura3d_kernel_holds_what_verify_says") else {
         return;
     };
     let tmp = tempfile::tempdir().unwrap();

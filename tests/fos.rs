@@ -32,7 +32,17 @@ fn layer_with_dilatancy(
     // associated material (ψ = φ′). With ψ = 0 the continuum fails at
     // τ/σ′n = sin φ′ instead (Davis 1968), which has its own test.
     let dry = mohr_coulomb_material(2e4, 0.3, 2650.0, 0.4, PHI, 0.0, dilatancy);
-    let material = if saturated_soil { saturated(dry) } else { dry };
+    // A seeping layer needs Anura3D's two-phase (coupled) analysis: its
+    // one-phase drained analysis balances σ′ against the buoyant weight and
+    // has no seepage force (`mpm::loading`).
+    let material = if saturated_soil {
+        a3d_init::model::Material {
+            material_type: "saturated_material_coupled".into(),
+            ..saturated(dry)
+        }
+    } else {
+        dry
+    };
     let (model, tied) = inclined_layer_tri3(BETA, THICKNESS, 0.25, 2, 8, material);
     let points = place_points(&model);
     let surface_y0 = THICKNESS / BETA.to_radians().cos();
@@ -103,8 +113,9 @@ fn non_associated_infinite_slope_matches_davis() {
 
 /// Reference: cohesionless infinite slope with seepage parallel to the
 /// surface and the water table at the surface, pore pressure
-/// p = −γw·z·cos²β: FS = (γ′/γsat)·tan φ′ / tan β (Duncan, Wright & Brandon
-/// 2014, §6.2). Within 5 %.
+/// p = −γw·z·cos²β, in a coupled (two-phase) material whose total stress
+/// σ′ + p carries the water: FS = (γ′/γsat)·tan φ′ / tan β (Duncan, Wright &
+/// Brandon 2014, §6.2). Within 5 %.
 #[test]
 fn seeping_infinite_slope_matches_buoyant_ratio() {
     let (model, points, states, settings) = layer(true);

@@ -173,8 +173,12 @@ fn verify_run_and_fos_out_may_not_hold_the_state_and_fem_mesh_is_an_input() {
         model: gom.clone(),
         state: state.clone(),
     };
-    let e = a3d_init::pipeline::fos::fos(&source, &Default::default(), Some(&state_dir), true)
-        .unwrap_err();
+    let e = a3d_init::pipeline::fos::fos(
+        &source,
+        &Default::default(),
+        a3d_init::pipeline::output::Destination::new(Some(&state_dir), true),
+    )
+    .unwrap_err();
     assert_eq!(e.kind(), a3d_init::pipeline::ErrorKind::Output, "{e}");
     assert_eq!(std::fs::read(&state).unwrap(), before);
     // --fem-mesh: the folder of Mesh.ply is an input folder too.

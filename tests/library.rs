@@ -16,6 +16,7 @@ use a3d_init::pipeline::fem::FemOptions;
 use a3d_init::pipeline::fos::FosOptions;
 use a3d_init::pipeline::map::MapConfig;
 use a3d_init::pipeline::mapping::{self, MapJob};
+use a3d_init::pipeline::output::Destination;
 use a3d_init::pipeline::runout::RunOptions;
 use a3d_init::pipeline::start::StateSource;
 use a3d_init::pipeline::{self, ErrorKind};
@@ -40,7 +41,7 @@ fn map_verify_run_fos_diff_inspect_and_calibrate_run_without_the_cli() {
 
     // map, twice: the second into an existing folder needs force.
     let out = tmp.path().join("out");
-    let (mapped, written) = mapping::map(&job, Some(&out), false).unwrap();
+    let (mapped, written) = mapping::map(&job, Destination::new(Some(&out), false)).unwrap();
     assert_eq!(written.folder, out);
     assert!(
         written.files.iter().any(|f| f == "TwoMat.MAPF"),
@@ -48,7 +49,9 @@ fn map_verify_run_fos_diff_inspect_and_calibrate_run_without_the_cli() {
         written.files
     );
     assert_eq!(mapped.states.len(), mapped.project.points.len());
-    let e = mapping::map(&job, Some(&out), false).err().unwrap();
+    let e = mapping::map(&job, Destination::new(Some(&out), false))
+        .err()
+        .unwrap();
     assert_eq!(e.kind(), ErrorKind::Output);
     assert!(matches!(e, pipeline::PipelineError::Exists(_)));
 
@@ -81,7 +84,8 @@ fn map_verify_run_fos_diff_inspect_and_calibrate_run_without_the_cli() {
     // verify, from the folder: the state Anura3D will hold.
     let source = StateSource::Folder(out.clone());
     let (outcome, verify_dir) =
-        pipeline::check::verify(&source, &VerifyOptions::default(), None, false).unwrap();
+        pipeline::check::verify(&source, &VerifyOptions::default(), Destination::default())
+            .unwrap();
     assert_eq!(verify_dir, out.join("verify"));
     let check = outcome.anura3d.as_ref().unwrap();
     let table = check.mps_csv.as_ref().unwrap();
@@ -102,8 +106,7 @@ fn map_verify_run_fos_diff_inspect_and_calibrate_run_without_the_cli() {
             snapshots: vec![0.02],
             damping: None,
         },
-        None,
-        false,
+        Destination::default(),
     )
     .unwrap();
     assert_eq!(run.snapshots.len(), 1);
@@ -115,15 +118,15 @@ fn map_verify_run_fos_diff_inspect_and_calibrate_run_without_the_cli() {
             snapshots: vec![],
             damping: None,
         },
-        None,
-        true,
+        Destination::new(None, true),
     )
     .err()
     .unwrap();
     assert_eq!(e.kind(), ErrorKind::OptionValue, "{e}");
 
     // fos, on the same start verify judged.
-    let (fos, fos_dir) = pipeline::fos::fos(&source, &FosOptions::default(), None, false).unwrap();
+    let (fos, fos_dir) =
+        pipeline::fos::fos(&source, &FosOptions::default(), Destination::default()).unwrap();
     assert!(fos.factor.is_finite() && fos.factor > 0.0, "{}", fos.factor);
     assert_eq!(fos.n_points, mapped.states.len());
     assert!(fos_dir.join("fos.json").is_file());
@@ -166,7 +169,7 @@ fn regression_verify_counts_mps_compared_never_more_than_the_model() {
     let tmp = tempfile::tempdir().unwrap();
     let job = mini_job(tmp.path());
     let out = tmp.path().join("out");
-    mapping::map(&job, Some(&out), false).unwrap();
+    mapping::map(&job, Destination::new(Some(&out), false)).unwrap();
     let mps = out.join("mps.csv");
     let text = std::fs::read_to_string(&mps).unwrap();
     let rows: Vec<&str> = text.lines().collect();
@@ -179,8 +182,7 @@ fn regression_verify_counts_mps_compared_never_more_than_the_model() {
     let (outcome, _) = pipeline::check::verify(
         &StateSource::Folder(out.clone()),
         &VerifyOptions::default(),
-        None,
-        false,
+        Destination::default(),
     )
     .unwrap();
     let table = outcome.anura3d.unwrap().mps_csv.unwrap();

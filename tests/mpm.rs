@@ -234,7 +234,8 @@ fn undamped_bar_oscillates_with_the_analytic_period() {
 #[test]
 fn saturated_column_with_hydrostatic_pore_pressure_is_in_equilibrium() {
     // Water table at the surface: total σv = −γsat·depth, p = −γw·depth,
-    // σ′ = σ − p. The internal force uses the total stress (Bishop, S = 1).
+    // σ′ = σ − p = −γ′·depth, which the one-phase drained analysis balances
+    // against the buoyant weight γ′.
     let material = saturated(elastic());
     let model = column_tri3(1.0, 10.0, 2, 20, material.clone());
     let points = place_points(&model);
@@ -242,14 +243,22 @@ fn saturated_column_with_hydrostatic_pore_pressure_is_in_equilibrium() {
     let report = verify_in_equilibrium(&model, &points, &states, 1e-12);
     let submerged = material.gamma_at_saturation(1.0, G) - G;
     assert_geostatic(&points, &report.final_stresses, submerged, 10.0, 1e-2);
-    // Forgetting the pore pressure (effective stress written as total) leaves
-    // the water's weight unbalanced.
-    let mut wrong = states.clone();
-    for s in &mut wrong {
+    // A one-phase drained analysis balances σ′ against the buoyant weight, as
+    // Anura3D does: the pore pressure only told σ′ from the total stress, so
+    // the same σ′ without it is balanced too.
+    let mut dropped = states.clone();
+    for s in &mut dropped {
         s.total = s.effective();
         s.pwp = 0.0;
     }
-    let report = verify(&model, &points, &wrong, &RunSettings::verify()).expect("valid");
+    verify_in_equilibrium(&model, &points, &dropped, 1e-12);
+    // In a coupled (two-phase) analysis the total stress σ′ + p carries the
+    // water's weight: the same state holds, and forgetting the pore pressure
+    // leaves the water's weight unbalanced.
+    let mut coupled = model.clone();
+    coupled.materials[0].material_type = "saturated_material_coupled".into();
+    verify_in_equilibrium(&coupled, &points, &states, 1e-12);
+    let report = verify(&coupled, &points, &dropped, &RunSettings::verify()).expect("valid");
     assert!(!report.verdict.is_equilibrium());
 }
 

@@ -65,10 +65,15 @@ fn sample_slope() -> (Project, fem::LoadedFem) {
 fn map_stages_run_alone_give_what_map_gives() {
     use a3d_init::kernel::Kernel;
     use map::{inputs, interpolate, mixed, place, plausibility, smoothing, stress};
-    let config = MapConfig::default();
+    let config = MapConfig {
+        stress: StressSource::Geostatic,
+        ..MapConfig::default()
+    };
     let (project, mut fem) = sample_slope();
     inputs::check_fem(&project, &fem).unwrap();
-    let source = inputs::stress_source(config.stress, &fem).unwrap();
+    let source = inputs::stress_source(config.stress, &project, &fem)
+        .unwrap()
+        .source;
     assert_eq!(source, StressSource::Geostatic);
     let chosen = smoothing::choose_h(&fem.nodes, config.kernel, &config.h, source).unwrap();
     let support = config.kernel.support() * chosen.h;
@@ -99,7 +104,10 @@ fn map_stages_run_alone_give_what_map_gives() {
 #[test]
 fn map_report_names_the_material_defaults_it_assumes() {
     let (mut project, fem) = sample_slope();
-    let config = MapConfig::default();
+    let config = MapConfig {
+        stress: StressSource::Geostatic,
+        ..MapConfig::default()
+    };
     let with_k0 = map::map(project, fem, &config).unwrap();
     assert!(with_k0.report.assumed_defaults.is_empty());
     let json = serde_json::to_string(&with_k0.report).unwrap();
@@ -121,4 +129,54 @@ fn map_report_names_the_material_defaults_it_assumes() {
     assert_eq!(without.states, with_k0.states);
     let json = serde_json::to_value(&without.report).unwrap();
     assert_eq!(json["assumed_defaults"][0]["parameter"], "k0");
+}
+
+/// `auto` on the sample slope (pore pressures only, ground not flat) is the
+/// equilibrium solve, and the stages run alone give what `map` gives: the
+/// pore state collapsed as MPM-MIXED will hold it, then the solve (#25).
+#[test]
+fn auto_on_a_slope_is_the_equilibrium_stage() {
+    use a3d_init::kernel::Kernel;
+    use map::{equilibrium, inputs, interpolate, mixed, place, smoothing, stress};
+    let config = MapConfig::default();
+    let (project, mut fem) = sample_slope();
+    let resolved = inputs::stress_source(config.stress, &project, &fem).unwrap();
+    assert_eq!(resolved.source, StressSource::Equilibrium);
+    assert!(
+        resolved.because.contains("not flat"),
+        "{}",
+        resolved.because
+    );
+    let source = resolved.source;
+    let chosen = smoothing::choose_h(&fem.nodes, config.kernel, &config.h, source).unwrap();
+    let support = config.kernel.support() * chosen.h;
+    let placement = place::place(&project, &fem, None, source, config.outside, support).unwrap();
+    let cloud = interpolate::prepare(
+        &mut fem.nodes,
+        &placement,
+        source,
+        config.settings(chosen.h),
+        chosen.spacing,
+        false,
+    );
+    let quantities = cloud.quantities.clone();
+    let mut result = interpolate::interpolate_taking(cloud, &placement, &fem.paths).unwrap();
+    let values = std::mem::take(&mut result.values);
+    let mut states = stress::derive_stress(&project, source, &quantities, values).states;
+    stress::zero_skipped(&mut states, &result.status);
+    let report = equilibrium::equilibrium_stress(
+        &project,
+        &mut states,
+        config.mixed_state,
+        &config.equilibrium,
+        resolved.because,
+    )
+    .unwrap();
+    assert!(report.outcome.equilibrium, "{:?}", report.outcome);
+    mixed::collapse_mixed(&project, config.mixed_state, &mut states);
+
+    let (project, fem) = sample_slope();
+    let mapped = map::map(project, fem, &config).unwrap();
+    assert_eq!(states, mapped.states);
+    assert_eq!(mapped.report.stress_source, "equilibrium");
 }

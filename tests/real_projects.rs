@@ -304,6 +304,8 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
             "--generate-cps",
             "--outside",
             "nearest",
+            "--stress",
+            "geostatic",
         ],
     );
     assert_eq!(code, 0, "{stderr}");
@@ -323,7 +325,13 @@ fn node_table_listing_a_subset_of_the_mesh_is_joined_by_id() {
         &gom,
         &gsz,
         &out2,
-        &["--generate-cps", "--outside", "nearest"],
+        &[
+            "--generate-cps",
+            "--outside",
+            "nearest",
+            "--stress",
+            "geostatic",
+        ],
     );
     assert_eq!(code, 0, "{stderr}");
     // Informational notes are not warnings.

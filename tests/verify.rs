@@ -57,7 +57,8 @@ fn k0_slope_is_reported_out_of_balance_with_places() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("slope");
     let fem = fixture("geostudio-csv/k0-slope-hydrostatic.csv");
-    let (code, text) = run_map(&fixture("anura3d/K0_phreaticSurf_Geom"), &fem, &out, &[]);
+    let model = fixture("anura3d/K0_phreaticSurf_Geom");
+    let (code, text) = run_map(&model, &fem, &out, &["--stress", "geostatic"]);
     assert_eq!(code, 0, "{text}");
     let (code, text) = run(&["verify", out.to_str().unwrap()]);
     assert_eq!(code, 1, "{text}");
@@ -68,6 +69,19 @@ fn k0_slope_is_reported_out_of_balance_with_places() {
             .unwrap();
     assert!(report["run"]["max_displacement"].as_f64().unwrap() < 1e-3);
     assert_eq!(report["run"]["stop"], "Settled");
+
+    // `auto` (pore pressures only, ground not flat) solves for equilibrium
+    // instead (#25): verify finds it balanced to round-off.
+    let auto = tmp.path().join("auto");
+    let (code, text) = run_map(&model, &fem, &auto, &[]);
+    assert_eq!(code, 0, "{text}");
+    assert_contains(&text, &["stress: equilibrium"]);
+    let text = verify_ok(&auto);
+    assert_contains(&text, &["verdict    IN EQUILIBRIUM"]);
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(auto.join("verify/verify.json")).unwrap())
+            .unwrap();
+    assert!(report["run"]["initial_residual_ratio"].as_f64().unwrap() < 1e-9);
 }
 
 #[test]

@@ -70,6 +70,11 @@ pub enum BenchWhat {
     /// FEM CSV reading throughput (MB/s) on a generated 3D table of `--nodes` rows
     /// (x, y, z, pwp and six stresses, shortest round-trip decimals).
     Csv,
+    /// The equilibrium solve (`map --stress equilibrium`) on a generated dry
+    /// Mohr–Coulomb slope of about `--points` MPs (`--dim 2`: TRI3, 3 MPs per
+    /// element; `--dim 3`: tetrahedral_old, 4 MPs per element): assembly,
+    /// factorisation, elastic solve, plastic iterations, peak memory.
+    Equilibrium,
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
@@ -190,6 +195,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
             );
         }
         BenchWhat::E2e => e2e(&args)?,
+        BenchWhat::Equilibrium => equilibrium(&args)?,
         BenchWhat::Csv => {
             let text = generated_fem_csv(args.nodes, 3);
             let mb = text.len() as f64 / 1e6;
@@ -359,10 +365,111 @@ fn e2e(args: &BenchArgs) -> anyhow::Result<()> {
         "total",
         compute_s + write_s + publish_s
     );
+    say_peak_rss();
+    Ok(())
+}
+
+/// Prints the process's peak resident memory (Linux), if known.
+fn say_peak_rss() {
     if let Ok(status) = std::fs::read_to_string("/proc/self/status")
         && let Some(line) = status.lines().find(|l| l.starts_with("VmHWM"))
     {
         say!("  peak RSS {}", line.trim_start_matches("VmHWM:").trim());
     }
+}
+
+/// `bench equilibrium`: a dry Mohr–Coulomb slope (φ′ = 30°, c′ = 5 kPa; 100 m
+/// wide, crest 40 m high, toe 25 m, the face over the middle 30 m: 27°) of
+/// about `--points` MPs, solved as `map --stress equilibrium` solves it.
+fn equilibrium(args: &BenchArgs) -> anyhow::Result<()> {
+    use crate::mpm::equilibrium::{self, EquilibriumSettings};
+    use crate::mpm::{Elasticity, ReturnMap, SolidModel};
+    let threads = rayon::current_num_threads();
+    let t = Instant::now();
+    let (width, height) = (100.0, 40.0);
+    let mut mesh = if args.dim == 2 {
+        // Two TRI3 per cell, 3 MPs each, cells 2:1.
+        let ny = ((args.points as f64 / 12.0).sqrt().round() as usize).max(1);
+        generate::structured_tri_mesh(0.0, 0.0, width, height, 2 * ny, ny)
+    } else {
+        // Six tetrahedra per cell, 4 MPs each, cells 2:1:1.
+        let ny = ((args.points as f64 / 48.0).cbrt().round() as usize).max(1);
+        generate::structured_tet_mesh(width, 0.0, height, width / 2.0, 2 * ny, ny, ny)
+    };
+    generate::slope_profile(&mut mesh, height, height, 25.0, 35.0, 65.0);
+    let spec = MaterialSpec {
+        mohr_coulomb: Some((30.0, 5.0, 0.0)),
+        ..MaterialSpec::dry_soil("soil")
+    };
+    let mps = if args.dim == 2 { 3 } else { 4 };
+    let model = generate::single_material_model(mesh, &spec, mps);
+    let points =
+        crate::place::place_material_points_for(&model, crate::model::ComputationMethod::MpmMp)
+            .map_err(|e| anyhow::anyhow!("placing the MPs: {} errors", e.0.len()))?;
+    let states = vec![
+        crate::model::MpState {
+            saturation: 1.0,
+            ..Default::default()
+        };
+        points.len()
+    ];
+    let m = &model.materials[0];
+    let k0 = m.k0.unwrap_or(0.5);
+    let elasticity = Elasticity::from_young_poisson(spec.young_modulus, k0 / (1.0 + k0))
+        .ok_or_else(|| anyhow::anyhow!("invalid elasticity"))?;
+    let gom = SolidModel::from_material(m)?;
+    let laws = vec![Some(SolidModel {
+        elasticity,
+        plasticity: gom
+            .plasticity
+            .map(|r| ReturnMap::new(r.criterion, elasticity)),
+    })];
+    let generate_s = t.elapsed().as_secs_f64();
+    let t = Instant::now();
+    let out = equilibrium::solve(
+        &model,
+        &points,
+        &states,
+        &laws,
+        &EquilibriumSettings::default(),
+    )?;
+    let total_s = t.elapsed().as_secs_f64();
+    say!(
+        "equilibrium: {}D, {} elements, {} MPs, {} unknowns, {threads} thread(s) (model generated in {generate_s:.2} s, not counted)",
+        args.dim,
+        model.mesh.n_elements(),
+        points.len(),
+        out.unknowns
+    );
+    say!("  {:<28} {:>8.3} s", "assemble K", out.assembly_s);
+    say!(
+        "  {:<28} {:>8.3} s ({} entries in K, {} in L)",
+        "factorise K (Cholesky)",
+        out.factorisation_s,
+        out.stiffness_entries,
+        out.factor_entries
+    );
+    say!("  {:<28} {:>8.3} s", "elastic solve", out.elastic_solve_s);
+    say!(
+        "  {:<28} {:>8.3} s ({} iterations, {} load steps, {} MPs yielding)",
+        "plastic iterations",
+        out.plastic_s,
+        out.plastic_iterations,
+        out.load_steps,
+        out.yielding_points
+    );
+    say!(
+        "  {:<28} {:>8.3} s (residual ratio {:.2e}; elastic {:.2e}; {})",
+        "total solve",
+        total_s,
+        out.residual_ratio,
+        out.elastic_residual_ratio,
+        if out.equilibrium {
+            "in equilibrium"
+        } else {
+            "NO EQUILIBRIUM"
+        }
+    );
+    say_peak_rss();
     Ok(())
 }

@@ -1,8 +1,9 @@
 //! `a3d-init demo`: the paper's application end to end on the shipped slope
 //! fixture (`fixtures/slope/`), composed of library calls: inspect → calibrate
-//! h → map → verify → factors of safety, leaving a ready-to-run Anura3D
-//! project with plots of the mapped fields (cf. the paper's Fig. 9), the
-//! calibration curve and the verify history. The pore pressures are a
+//! h → map (the stress solved for equilibrium) → verify, with the geostatic
+//! map of the same slope beside it for comparison → factors of safety,
+//! leaving a ready-to-run Anura3D project with plots of the mapped fields
+//! (cf. the paper's Fig. 9), the calibration curve and the verify history. The pore pressures are a
 //! documented stand-in field, not a SEEP/W result. Everything printed is what
 //! was run and measured.
 
@@ -18,7 +19,7 @@ use crate::model::{MpState, Quantity};
 use crate::pipeline::check::{self, VerifyOptions};
 use crate::pipeline::map::{MapConfig, SmoothingLength, StressSource};
 use crate::pipeline::mapping::{self, MapJob};
-use crate::pipeline::output::{OutputDir, ReadLog};
+use crate::pipeline::output::{Destination, OutputDir, ReadLog};
 use crate::pipeline::start::{Start, StateSource};
 use crate::pipeline::{Project, calibrate, fos, plot};
 
@@ -105,7 +106,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         outcome.stats.r2
     );
 
-    // 3. Map with that h.
+    // 3. Map with that h, the stress solved for equilibrium.
     let job = MapJob {
         model: dir.clone(),
         fem: fem_options,
@@ -115,7 +116,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
                 outcome: Box::new(outcome.clone()),
                 seed: 1,
             },
-            stress: StressSource::Geostatic,
+            stress: StressSource::Equilibrium,
             ..MapConfig::default()
         },
         generate_cps: false,
@@ -166,18 +167,33 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         mapped.report.stress_source,
         mapped.report.mapf_smoothing_length
     );
+    if let Some(e) = &mapped.report.equilibrium {
+        let o = &e.outcome;
+        say!(
+            "             equilibrium solve: {}, out-of-balance force ratio {:.2e} after {} plastic iterations ({} MPs on their yield surface), {:.2} s",
+            if o.equilibrium {
+                "IN EQUILIBRIUM"
+            } else {
+                "NO EQUILIBRIUM"
+            },
+            o.residual_ratio,
+            o.plastic_iterations,
+            o.yielding_points,
+            o.assembly_s + o.factorisation_s + o.elastic_solve_s + o.plastic_s
+        );
+    }
 
     // 4. Verify with the explicit MPM runner.
     let source = StateSource::Folder(target.clone());
+    let verify_dir = target.join("verify");
     let (outcome, verify_dir) = check::verify(
         &source,
         &VerifyOptions::default(),
-        Some(&target.join("verify")),
-        true,
+        Destination::new(Some(&verify_dir), true),
     )?;
     match &outcome.run {
         Some(r) => say!(
-            "4 verify     {}: initial residual {:.3}, {} MPs yielded, max displacement {:.3} m after {:.3} s",
+            "4 verify     {}: initial residual {:.2e}, {} MPs yielded, max displacement {:.3} m after {:.3} s",
             if outcome.equilibrium {
                 "IN EQUILIBRIUM"
             } else {
@@ -205,6 +221,53 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
             d.outside_because_of_defect
         );
     }
+    // The state a3d-init intended (mps.csv), without Anura3D's 2D reading.
+    let (intended, intended_verify) = check::verify(
+        &StateSource::Table {
+            model: target.clone(),
+            state: target.join("mps.csv"),
+        },
+        &VerifyOptions::default(),
+        Destination::new(Some(&target.join("verify-intended")), true),
+    )?;
+    if let Some(r) = &intended.run {
+        say!(
+            "             the intended state (mps.csv, σ'zz as solved): {}, initial residual {:.2e}, max displacement {:.1e} m",
+            if intended.equilibrium {
+                "IN EQUILIBRIUM"
+            } else {
+                "NOT IN EQUILIBRIUM"
+            },
+            r.initial_residual_ratio,
+            r.max_displacement
+        );
+    }
+    // The geostatic column formula on the same slope, for comparison.
+    let geostatic_job = MapJob {
+        config: MapConfig {
+            stress: StressSource::Geostatic,
+            ..job.config.clone()
+        },
+        ..job.clone()
+    };
+    let geostatic = target.join("geostatic");
+    let (_, geostatic_written) =
+        mapping::map(&geostatic_job, Destination::new(Some(&geostatic), true))?;
+    let (geostatic_outcome, geostatic_verify) = check::verify(
+        &StateSource::Folder(geostatic.clone()),
+        &VerifyOptions::default(),
+        Destination::new(None, true),
+    )?;
+    let ratio = |o: &check::VerifyOutcome| {
+        o.run
+            .as_ref()
+            .map_or(f64::NAN, |r| r.initial_residual_ratio)
+    };
+    say!(
+        "             out-of-balance force ratio geostatic {:.3} vs equilibrium {:.2e} (verify's first step; geostatic/ holds the geostatic map)",
+        ratio(&geostatic_outcome),
+        ratio(&outcome)
+    );
     // 5. Factor of safety by strength reduction on the state Anura3D will
     // hold: zero pwp, then the mapped pwp.
     let mut fos_folders = Vec::new();
@@ -221,6 +284,16 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     let names: Vec<&str> = written.iter().map(String::as_str).collect();
     say!("  {}", wrote(&target, &names));
     say!("  {}", wrote(&verify_dir, &check::file_names(&outcome)));
+    say!(
+        "  {}",
+        wrote(&intended_verify, &check::file_names(&intended))
+    );
+    let geostatic_files: Vec<&str> = geostatic_written.files.iter().map(String::as_str).collect();
+    say!("  {}", wrote(&geostatic_written.folder, &geostatic_files));
+    say!(
+        "  {}",
+        wrote(&geostatic_verify, &check::file_names(&geostatic_outcome))
+    );
     for (folder, files) in &fos_folders {
         say!("  {}", wrote(folder, files));
     }

@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use super::args::{LeArgs, MethodArg, StateInputs};
 use super::print;
+use crate::pipeline::output::Destination;
 use crate::pipeline::{
     self,
     fos::{FosMethod, FosOptions},
@@ -61,12 +62,8 @@ pub fn run(args: FosArgs) -> anyhow::Result<()> {
         window: args.window,
         zero_pwp: args.zero_pwp,
     };
-    let (analysis, target) = pipeline::fos::fos(
-        &args.inputs.source()?,
-        &options,
-        args.out.as_deref(),
-        args.force,
-    )?;
+    let to = Destination::new(args.out.as_deref(), args.force);
+    let (analysis, target) = pipeline::fos::fos(&args.inputs.source()?, &options, to)?;
     print::fos_report(&analysis, &target, started.elapsed().as_secs_f64());
     Ok(())
 }

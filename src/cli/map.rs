@@ -8,8 +8,9 @@ use std::time::Instant;
 use super::args::FemArgs;
 use crate::kernel::KernelKind;
 use crate::pipeline::map::{
-    MapConfig, MaterialMap, MixedState, Outside, SmoothingLength, StressSource,
+    EquilibriumOptions, MapConfig, MaterialMap, MixedState, Outside, SmoothingLength, StressSource,
 };
+use crate::pipeline::output::Destination;
 use crate::pipeline::{self, mapping::MapJob};
 
 /// A clap mirror of one of the library's plain enums: the same variants, with
@@ -41,12 +42,17 @@ value_enum_mirror!(
 value_enum_mirror!(
     /// `--stress`: [`StressSource`].
     StressArg => StressSource {
-        /// `fem` when the FEM file has total stresses, otherwise `geostatic`.
+        /// `fem` when the FEM file has total stresses; with pore pressures only,
+        /// `equilibrium` when the ground surface is not flat, else `geostatic`.
         Auto,
         /// Map the FEM total stresses.
         Fem,
         /// Overburden of the GOM materials along the vertical, σh = K0·σ'v + S·p.
         Geostatic,
+        /// Solve for the stress at rest under gravity on Anura3D's own
+        /// discretisation (pore pressures held, σ = σ' + S·p; elastic, then
+        /// elastoplastic where MPs yield). Exit 1 when no equilibrium exists.
+        Equilibrium,
         /// Zero total stress (warned).
         Zero,
     }
@@ -95,6 +101,13 @@ pub struct MapArgs {
     /// every MP the state of the element's first MP.
     #[arg(long, value_enum, default_value_t = MixedStateArg::Mean)]
     pub mixed_state: MixedStateArg,
+    /// `--stress equilibrium`: ν = K0/(1 + K0) for every material whose GOM
+    /// gives K0, so that flat ground gives σ'h = K0·σ'v (the default).
+    #[arg(long, overrides_with = "no_k0_consistent")]
+    pub k0_consistent: bool,
+    /// `--stress equilibrium`: the GOM's ν for every material.
+    #[arg(long, overrides_with = "k0_consistent")]
+    pub no_k0_consistent: bool,
     /// Output folder (default `<project>.a3d-init/` next to the model).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -138,6 +151,10 @@ impl MapArgs {
             stress: self.stress.into(),
             material_map: self.material_map.clone(),
             mixed_state: self.mixed_state.into(),
+            equilibrium: EquilibriumOptions {
+                k0_consistent: !self.no_k0_consistent,
+                ..EquilibriumOptions::default()
+            },
             keep_fem_fields: true,
         })
     }
@@ -157,7 +174,8 @@ impl MapArgs {
 pub fn run(args: MapArgs) -> anyhow::Result<()> {
     let started = Instant::now();
     let progress = super::progress::show();
-    let (mapped, written) = pipeline::mapping::map(&args.job()?, args.out.as_deref(), args.force)?;
+    let to = Destination::new(args.out.as_deref(), args.force);
+    let (mapped, written) = pipeline::mapping::map(&args.job()?, to)?;
     drop(progress);
     let r = &mapped.report;
     say_err!(
@@ -173,6 +191,23 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         r.stress_source,
         r.material_separation
     );
+    if let Some(e) = &r.equilibrium {
+        let o = &e.outcome;
+        say_err!(
+            "  equilibrium: {} — out-of-balance force ratio {:.2e} (elastic {:.2e}), {} plastic iterations, {} MPs yielding; {} unknowns, solved in {:.2} s",
+            if o.equilibrium {
+                "IN EQUILIBRIUM"
+            } else {
+                "NO EQUILIBRIUM"
+            },
+            o.residual_ratio,
+            o.elastic_residual_ratio,
+            o.plastic_iterations,
+            o.yielding_points,
+            o.unknowns,
+            o.assembly_s + o.factorisation_s + o.elastic_solve_s + o.plastic_s
+        );
+    }
     say_err!(
         "  pwp {:.3} .. {:.3} kPa, σyy {:.3} .. {:.3} kPa (Anura3D signs)",
         r.pwp_range.0,
@@ -192,7 +227,11 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         written.files.join(", "),
         started.elapsed().as_secs_f64()
     );
-    Ok(())
+    let holds = r.equilibrium.as_ref().is_none_or(|e| e.outcome.equilibrium);
+    super::Verdict::check(
+        holds,
+        "NO EQUILIBRIUM: the equilibrium solve found no state at rest under gravity with these pore pressures (the folder holds the best state; see report.json `equilibrium`)",
+    )
 }
 
 #[cfg(test)]

@@ -132,8 +132,9 @@ impl Verdict {
 }
 
 /// Entry point of the binary. Exit codes: 0 success, 1 a negative verdict
-/// (`diff` found differences, `verify` found no equilibrium), 2 bad input or any
-/// other error. Never panics on bad input.
+/// (`diff` found differences, `verify` found no equilibrium, `map --stress
+/// equilibrium` found no state at rest), 2 bad input or any other error.
+/// Never panics on bad input.
 pub fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,

@@ -12,6 +12,7 @@ use anyhow::Context;
 use super::Verdict as ExitVerdict;
 use super::args::StateInputs;
 use super::print;
+use crate::pipeline::output::Destination;
 use crate::pipeline::{self, check::VerifyOptions, fos::FosOptions, runout::RunOptions};
 
 #[derive(Debug, clap::Args)]
@@ -46,6 +47,13 @@ pub struct RunArgs {
     pub snapshots: String,
 }
 
+impl VerifyArgs {
+    /// `--out` and `--force`.
+    fn destination(&self) -> Destination<'_> {
+        Destination::new(self.out.as_deref(), self.force)
+    }
+}
+
 pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
     let source = args.inputs.source()?;
     if args.fos {
@@ -54,8 +62,7 @@ pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
             damping: args.damping,
             ..FosOptions::srm()
         };
-        let (report, target) =
-            pipeline::fos::fos(&source, &options, args.out.as_deref(), args.force)?;
+        let (report, target) = pipeline::fos::fos(&source, &options, args.destination())?;
         print::fos_report(&report, &target, started.elapsed().as_secs_f64());
         return Ok(());
     }
@@ -63,8 +70,7 @@ pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
         max_steps: args.max_steps,
         damping: args.damping,
     };
-    let (outcome, target) =
-        pipeline::check::verify(&source, &options, args.out.as_deref(), args.force)?;
+    let (outcome, target) = pipeline::check::verify(&source, &options, args.destination())?;
     print::verify_outcome(&outcome, &target);
     ExitVerdict::check(
         outcome.equilibrium,
@@ -91,12 +97,7 @@ pub fn run_run(args: RunArgs) -> anyhow::Result<()> {
         snapshots: snapshot_times(&args.snapshots)?,
         damping: args.verify.damping,
     };
-    let outcome = pipeline::runout::run(
-        &source,
-        &options,
-        args.verify.out.as_deref(),
-        args.verify.force,
-    )?;
+    let outcome = pipeline::runout::run(&source, &options, args.verify.destination())?;
     let r = &outcome.report;
     say!(
         "run        {} MPs, {} steps, t = {:.3} s, damping α = {}",

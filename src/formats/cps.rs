@@ -223,6 +223,12 @@ impl CpsDocument {
             .unwrap_or(crate::model::DEFAULT_GRAVITY)
     }
 
+    /// `$$SUBMERGED_CALCULATION 1 n`: buoyant weights in a one-phase analysis
+    /// (off when absent).
+    pub fn submerged_calculation(&self) -> bool {
+        self.get_real("$$SUBMERGED_CALCULATION", 0) == Some(1.0)
+    }
+
     /// `$$COMPUTATION_METHOD` (`MPM-MIXED` when absent).
     pub fn computation_method(&self) -> String {
         self.get_token("$$COMPUTATION_METHOD", 0)

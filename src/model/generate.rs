@@ -129,6 +129,19 @@ pub fn structured_tet_mesh(
     }
 }
 
+/// Turns a box mesh of height `height` (base at y = 0) into a slope: every
+/// node's y is scaled by h(x)/`height`, with the ground h(x) = `crest` for
+/// x ≤ `x0`, `toe` for x ≥ `x1` and linear between (an embankment's or a
+/// cut's face). Elements keep their orientation; the base and the sides stay
+/// where they were, so [`box_fixities`] still holds the model.
+pub fn slope_profile(mesh: &mut Mesh, height: f64, crest: f64, toe: f64, x0: f64, x1: f64) {
+    for p in &mut mesh.nodes {
+        let t = ((p[0] - x0) / (x1 - x0)).clamp(0.0, 1.0);
+        let ground = crest + t * (toe - crest);
+        p[1] *= ground / height;
+    }
+}
+
 /// Solid fixities of a box: base (y = min) fixed in all directions, the lateral
 /// faces (x = min/max, and z = min/max in 3D) on rollers.
 pub fn box_fixities(mesh: &Mesh) -> Vec<[bool; 3]> {

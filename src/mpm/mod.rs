@@ -8,21 +8,26 @@
 //! nodal fixities from the GOM, local (Cundall) damping as Anura3D applies it,
 //! and a MUSL update ([`step`] documents the scheme). Material points carry the
 //! effective stress σ′; the pore pressure p and the saturation S are frozen
-//! (drained analysis) and enter the internal force through Bishop's total stress
-//! σ = σ′ + S·p on the normal components. Materials are linear elastic or
-//! Mohr–Coulomb ([`material`]).
+//! (drained analysis). What of p enters the internal force, and which weight
+//! gravity pulls on, is the kernel's choice for the model's kind of analysis
+//! ([`loading`]: σ′ with the dry or buoyant weight in a one-phase analysis,
+//! Bishop's σ′ + S·p with the mixture's weight in a multiphase one).
+//! Materials are linear elastic or Mohr–Coulomb ([`material`]).
 //!
 //! Entry points: [`verify`] runs a damped simulation until the state settles (or
 //! a step/time limit) and returns a [`RunReport`] with a [`Verdict`]; [`run()`]
 //! runs the same solver and can also return [`Snapshot`]s; [`Simulation`] gives
 //! step-by-step control; [`fos`] finds a factor of safety by strength
-//! reduction on the same runner. The module is pure: it consumes [`crate::model`] data,
+//! reduction on the same runner; [`equilibrium`] solves for the stress at rest
+//! in the runner's own discrete equations. The module is pure: it consumes [`crate::model`] data,
 //! does no I/O and prints nothing; it knows nothing about file formats or the
 //! mapping kernels.
 
 mod b_matrix;
+pub mod equilibrium;
 pub mod fos;
 pub mod grid;
+pub mod loading;
 pub mod material;
 pub mod mohr_coulomb;
 mod principal;
@@ -30,6 +35,7 @@ pub mod run;
 mod simulation;
 pub mod step;
 
+pub use equilibrium::{EquilibriumOutcome, EquilibriumSettings};
 pub use fos::{FosError, FosOutcome, FosReport, FosSettings, strength_reduction};
 pub use material::{Elasticity, SolidModel};
 pub use mohr_coulomb::{MohrCoulomb, ReturnKind, ReturnMap};
@@ -109,6 +115,9 @@ pub struct RunSettings {
     pub gravity: f64,
     /// Local damping factor α in [0, 1) (CPS `$$HOMOGENEOUS_LOCAL_DAMPING 1 α`).
     pub damping: f64,
+    /// The CPS's `$$SUBMERGED_CALCULATION 1`: buoyant weights for every
+    /// material of a one-phase analysis ([`loading`]).
+    pub submerged_calculation: bool,
     /// Courant number in (0, 1] (CPS `$$COURANT_NUMBER`).
     pub courant: f64,
     /// Hard cap on the number of steps.
@@ -138,6 +147,7 @@ impl RunSettings {
         RunSettings {
             gravity: crate::model::DEFAULT_GRAVITY,
             damping: 0.75,
+            submerged_calculation: false,
             courant: 0.9,
             max_steps: 10_000,
             end_time: None,

@@ -140,7 +140,7 @@ pub struct Snapshot {
     pub displacements: Vec<[f64; 3]>,
     /// Effective stress σ′ (xx, yy, zz, xy, yz, xz; kPa).
     pub stresses: Vec<[f64; 6]>,
-    /// Yielded in any step so far.
+    /// Has yielded: accumulated plastic strain above 1e-6 (`step::PLASTIC_STRAIN_FLOOR`).
     pub plastic: Vec<bool>,
 }
 
@@ -182,7 +182,7 @@ pub struct RunReport {
     pub final_displacements: Vec<[f64; 3]>,
     /// Final effective stresses σ′ (kPa), in MP order.
     pub final_stresses: Vec<[f64; 6]>,
-    /// Per MP: yielded in any step.
+    /// Per MP: has yielded (accumulated plastic strain above 1e-6).
     pub final_plastic: Vec<bool>,
 }
 
@@ -440,7 +440,7 @@ fn centroid(model: &AnuraModel, e: usize) -> [f64; 3] {
 }
 
 /// The ten largest positive scores, largest first, ties by element id.
-fn top_ten(model: &AnuraModel, scores: &[f64]) -> Vec<ElementScore> {
+pub(super) fn top_ten(model: &AnuraModel, scores: &[f64]) -> Vec<ElementScore> {
     let mut order: Vec<usize> = (0..scores.len()).filter(|&e| scores[e] > 0.0).collect();
     order.sort_by(|&a, &b| scores[b].total_cmp(&scores[a]).then(a.cmp(&b)));
     order

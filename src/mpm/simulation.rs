@@ -29,7 +29,7 @@ pub(crate) struct PointView {
     pub stress: [f64; 6],
     /// The 0-based element it is in now.
     pub element: u32,
-    /// Yielded in any step so far.
+    /// Has yielded: accumulated plastic strain above 1e-6 (`step::PLASTIC_STRAIN_FLOOR`).
     pub plastic: bool,
     /// Left the mesh.
     pub lost: bool,
@@ -259,7 +259,7 @@ impl Simulation {
         self.inner.tie(pairs)
     }
 
-    /// Per MP: yielded in any step so far.
+    /// Per MP: has yielded (accumulated plastic strain above 1e-6).
     pub fn plastic_flags(&self) -> Vec<bool> {
         self.per_point(|p| p.plastic)
     }

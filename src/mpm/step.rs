@@ -5,8 +5,11 @@
 //! Scheme (Modified Update Stress Last, Sulsky et al. 1995):
 //!
 //! 1. P2G: lumped nodal mass, momentum and internal force
-//!    f_int = −Σ V_p σ_p ∇N (total stress σ = σ′ + S·p on the normals).
-//!    Gravity enters as f_ext = m_I·g, which equals Σ N m_p g.
+//!    f_int = −Σ V_p σ_p ∇N, σ = σ′ plus the pore-water part the kernel's
+//!    analysis adds on the normals ([`super::loading`]: S·p in a multiphase
+//!    analysis, p for undrained-effective materials, else nothing). Gravity
+//!    enters as f_ext = Σ N w_p g with the kernel's weight w_p of each MP
+//!    (dry, buoyant or mixture).
 //!    2D-axisymmetric (x = r ≥ 0, y axial, zz the hoop component θθ): V_p and
 //!    m_p are per radian (they already hold the MP radius, see `place`), the
 //!    radial force gains the hoop term −V_p N_i σ_θθ / r_p, and the strain
@@ -37,6 +40,7 @@ use rayon::prelude::*;
 
 use super::b_matrix::{corner_force, hoop_strain_increment, strain_increment};
 use super::grid::Grid;
+use super::loading::Analysis;
 use super::material::SolidModel;
 use super::{MpmError, RunSettings};
 use crate::element::Element;
@@ -44,6 +48,12 @@ use crate::model::{AnuraModel, Dimension, MaterialPoint, MpState};
 
 /// MPs per rayon task: large enough that scheduling costs stay negligible.
 const MIN_CHUNK: usize = 1024;
+
+/// Accumulated plastic strain above which an MP counts as having yielded. An
+/// MP at rest on its yield surface returns round-off-sized trial stresses now
+/// and then (a balanced state is balanced to round-off, not exactly): that is
+/// no plastic flow, and stays orders of magnitude below one microstrain.
+pub const PLASTIC_STRAIN_FLOOR: f64 = 1e-6;
 
 /// The state of one material point.
 #[derive(Clone, Copy, Debug)]
@@ -60,17 +70,25 @@ pub(crate) struct Particle<const D: usize, const NC: usize> {
     pub stress: [f64; 6],
     /// Mass (t; t per metre in plane strain, t per radian in axisymmetry).
     pub mass: f64,
+    /// The mass gravity pulls on (t, as `mass`): the kernel's weight of the
+    /// MP over g ([`super::loading`]).
+    pub weight: f64,
     /// Current volume (m³; m² per metre in plane strain, m³ per radian in
     /// axisymmetry).
     pub volume: f64,
-    /// S·p: added to the normal components to get the total stress (kPa).
+    /// The pore-water part of the stress in the internal force, added to the
+    /// normal components of σ′ (kPa): S·p, p or 0 ([`super::loading`]).
     pub pore_term: f64,
     pub element: u32,
     /// Index into the solver's material models.
     pub model: u32,
     /// Yielded in the last step.
     pub yielded: bool,
-    /// Yielded in any step so far.
+    /// Accumulated plastic strain: the length of C·(σ_trial − σ) summed over
+    /// the plastic updates (engineering shear).
+    pub plastic_strain: f64,
+    /// Has yielded: its accumulated plastic strain exceeds
+    /// [`PLASTIC_STRAIN_FLOOR`].
     pub plastic: bool,
     /// Left the mesh; frozen since.
     pub lost: bool,
@@ -80,6 +98,7 @@ pub(crate) struct Particle<const D: usize, const NC: usize> {
 #[derive(Clone, Copy, Debug)]
 struct Contribution<const D: usize> {
     mass: f64,
+    weight: f64,
     momentum: [f64; D],
     force: [f64; D],
 }
@@ -87,6 +106,7 @@ struct Contribution<const D: usize> {
 impl<const D: usize> Contribution<D> {
     const ZERO: Contribution<D> = Contribution {
         mass: 0.0,
+        weight: 0.0,
         momentum: [0.0; D],
         force: [0.0; D],
     };
@@ -102,7 +122,8 @@ pub struct StepOutcome {
     pub kinetic_energy: f64,
     /// MPs whose stress update was plastic in this step.
     pub yielded: usize,
-    /// MPs that have yielded in any step so far.
+    /// MPs that have yielded in any step so far (accumulated plastic strain
+    /// above [`PLASTIC_STRAIN_FLOOR`]).
     pub plastic: usize,
 }
 
@@ -114,6 +135,7 @@ pub(crate) struct Solver<const D: usize, const NC: usize> {
     /// Initial stress outside the yield surface, per MP.
     pub inadmissible: Vec<bool>,
     node_mass: Vec<f64>,
+    node_weight: Vec<f64>,
     node_momentum: Vec<[f64; D]>,
     node_force: Vec<[f64; D]>,
     node_acceleration: Vec<[f64; D]>,
@@ -169,6 +191,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         settings: &RunSettings,
     ) -> Result<Self, MpmError> {
         let axisymmetric = D == 2 && model.mesh.dimension == Dimension::Axisymmetric;
+        let analysis = Analysis::of(&model.materials, settings.submerged_calculation);
         let mut grid = Grid::<D, NC>::new::<E>(&model.mesh, &model.solid_fixity)?;
         if axisymmetric {
             grid.fix_axis(&model.mesh);
@@ -221,9 +244,10 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             let element = grid
                 .locate(&position, point.element)
                 .ok_or_else(|| bad(format!("position {:?} is outside the mesh", point.position)))?;
-            // ρ = (1 − n)ρs + n·S·ρw in t/m³: the unit weight (kN/m³) at g = 1 m/s².
-            let density = material.gamma_at_saturation(state.saturation, 1.0);
-            if !(density > 0.0 && density.is_finite()) {
+            // The kernel's mass and weight of the MP, and its pore term.
+            let loading = analysis.loading(material_index - 1, material, state.saturation);
+            let density = loading.density;
+            if !(density > 0.0 && density.is_finite() && loading.weight_density.is_finite()) {
                 return Err(bad(format!(
                     "material {} gives density {density} t/m³; check porosity and densities",
                     point.material
@@ -245,11 +269,13 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 inverse_radius: 0.0,
                 stress,
                 mass: density * point.volume,
+                weight: loading.weight_density * point.volume,
                 volume: point.volume,
-                pore_term: state.saturation * state.pwp,
+                pore_term: loading.pore_factor * state.pwp,
                 element,
                 model: slot,
                 yielded: false,
+                plastic_strain: 0.0,
                 plastic: false,
                 lost: false,
             });
@@ -273,6 +299,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             particles,
             inadmissible,
             node_mass: vec![0.0; n_nodes],
+            node_weight: vec![0.0; n_nodes],
             node_momentum: vec![[0.0; D]; n_nodes],
             node_force: vec![[0.0; D]; n_nodes],
             node_acceleration: vec![[0.0; D]; n_nodes],
@@ -322,13 +349,14 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 for i in 0..NC {
                     let g = &element.shape.grad[i];
                     let force = corner_force::<D>(&total, g, n[i], p.volume, p.inverse_radius);
-                    let weight = p.mass * n[i];
+                    let share = p.mass * n[i];
                     let mut momentum = [0.0; D];
                     for d in 0..D {
-                        momentum[d] = weight * p.velocity[d];
+                        momentum[d] = share * p.velocity[d];
                     }
                     out[i] = Contribution {
-                        mass: weight,
+                        mass: share,
+                        weight: p.weight * n[i],
                         momentum,
                         force,
                     };
@@ -338,6 +366,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
 
         // Scatter serially in MP order (deterministic sums).
         self.node_mass.fill(0.0);
+        self.node_weight.fill(0.0);
         self.node_momentum.fill([0.0; D]);
         self.node_force.fill([0.0; D]);
         for (p, out) in self.particles.iter().zip(&self.p2g) {
@@ -345,6 +374,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             for i in 0..NC {
                 let node = corners[i] as usize;
                 self.node_mass[node] += out[i].mass;
+                self.node_weight[node] += out[i].weight;
                 for d in 0..D {
                     self.node_momentum[node][d] += out[i].momentum[d];
                     self.node_force[node][d] += out[i].force[d];
@@ -370,7 +400,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                     self.node_velocity[node][d] = 0.0;
                     continue;
                 }
-                let external = m * self.gravity[d];
+                let external = self.node_weight[node] * self.gravity[d];
                 let unbalanced = external + self.node_force[node][d];
                 node_sq += unbalanced * unbalanced;
                 external_sq += external * external;
@@ -464,9 +494,21 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                         dt,
                     );
                 }
-                let kind = models[p.model as usize].update(&mut p.stress, &strain, plane_strain);
+                let model = &models[p.model as usize];
+                let before = p.stress;
+                let kind = model.update(&mut p.stress, &strain, plane_strain);
                 p.yielded = kind.is_plastic();
-                p.plastic |= p.yielded;
+                if p.yielded {
+                    let mut trial = before;
+                    model.elasticity.add_increment(&mut trial, &strain);
+                    let mut taken = [0.0; 6];
+                    for k in 0..6 {
+                        taken[k] = trial[k] - p.stress[k];
+                    }
+                    let e = model.elasticity.strain_of(&taken);
+                    p.plastic_strain += e.iter().map(|v| v * v).sum::<f64>().sqrt();
+                    p.plastic |= p.plastic_strain > PLASTIC_STRAIN_FLOOR;
+                }
                 p.volume *= 1.0 + strain[0] + strain[1] + strain[2];
                 if !grid.contains(p.element, &p.position) {
                     match grid.locate(&p.position, p.element) {

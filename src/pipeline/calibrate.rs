@@ -50,7 +50,7 @@ pub fn select_fields(
         return Ok(fem.fields.iter().map(|(q, _)| *q).collect());
     }
     let q = Quantity::from_name(field).ok_or_else(|| {
-        PipelineError::Input(format!(
+        PipelineError::Option(format!(
             "field `{field}`: expected pwp, sxx, syy, szz, sxy, syz, sxz, esxx, … or all"
         ))
     })?;
@@ -77,19 +77,33 @@ pub fn calibrate_h(
     seed: u64,
     norm: Norm,
 ) -> Result<Outcome, PipelineError> {
+    let names: Vec<String> = fields.iter().map(|q| q.name()).collect();
     let values = field_values(fem, fields);
-    let spacing = mapper::median_spacing(&fem.positions, fem.dim);
+    calibrate_values(&fem.positions, fem.dim, &values, &names, kernel, seed, norm)
+}
+
+/// [`calibrate_h`] on plain arrays: `values` row-major, one column per name
+/// in `fields` (node i's value of field k at `i * fields.len() + k`).
+pub fn calibrate_values(
+    positions: &[[f64; 3]],
+    dim: usize,
+    values: &[f64],
+    fields: &[String],
+    kernel: KernelKind,
+    seed: u64,
+    norm: Norm,
+) -> Result<Outcome, PipelineError> {
+    let spacing = mapper::median_spacing(positions, dim);
     let (lo, hi) = (0.3 * spacing, 2.5 * spacing);
-    let objective = LooObjective::new(&fem.positions, fem.dim, &values, fields.len(), kernel, hi)
+    let objective = LooObjective::new(positions, dim, values, fields.len(), kernel, hi)
         .map_err(|e| PipelineError::Input(format!("calibration: {e}")))?;
-    let norm_kind = norm;
     let settings = AnnealSettings {
         seed,
         ..AnnealSettings::default()
     };
-    let f = |h: f64| objective.evaluate(h, norm_kind);
+    let f = |h: f64| objective.evaluate(h, norm);
     let mut calibration = try_calibrate(f, lo, hi, &settings)
-        .map_err(|e| PipelineError::Input(format!("calibration: {e}")))?;
+        .map_err(|e| PipelineError::Numerical(format!("calibration: {e}")))?;
     let mut fallback = None;
     if objective.is_constant() {
         let factor = kernel.spacing_factor();
@@ -108,7 +122,7 @@ pub fn calibrate_h(
         spacing,
         h_over_l: calibration.h / spacing,
         kernel: kernel.name(),
-        fields: fields.iter().map(|q| q.name()).collect(),
+        fields: fields.to_vec(),
         norm,
         stats,
         calibration,

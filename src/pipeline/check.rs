@@ -5,10 +5,10 @@
 //! `start.csv`, `mps_start.vtu` and, after a run, `verify_history.svg` and
 //! `mps_end.vtu`.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use super::PipelineError;
-use super::output::OutputDir;
+use super::output::{Destination, OutputDir};
 use super::runner::{self, history_plot, write_snapshot};
 use super::start::{Start, StateSource};
 use super::verify::KernelCheck;
@@ -207,19 +207,18 @@ pub fn write(
 }
 
 /// `verify`: loads the state `source` names, checks it and writes the outputs
-/// into `out` (default `verify/` in the state's folder; rerunning replaces
-/// that default folder without `force`). Returns the outcome and the folder
-/// written. A negative verdict is an outcome, not an error.
+/// into the destination (default `verify/` in the state's folder; rerunning
+/// replaces that default folder without being asked). Returns the outcome and
+/// the folder written. A negative verdict is an outcome, not an error.
 pub fn verify(
     source: &StateSource,
     options: &VerifyOptions,
-    out: Option<&Path>,
-    force: bool,
+    to: Destination<'_>,
 ) -> Result<(VerifyOutcome, PathBuf), PipelineError> {
     // Rerunning `verify DIR` replaces its own default subfolder.
-    let own_folder = out.is_none() && matches!(source, StateSource::Folder(_));
-    let (reads, start, target) = runner::begin(source, out, "verify")?;
-    let force = force || (own_folder && target.join("verify.json").is_file());
+    let own_folder = to.folder.is_none() && matches!(source, StateSource::Folder(_));
+    let (reads, start, target) = runner::begin(source, to, "verify")?;
+    let force = to.replace || (own_folder && target.join("verify.json").is_file());
     let dir = OutputDir::create(&target, force, &reads)?;
     let outcome = check(&start, options)?;
     write(&outcome, &start, &dir)?;

@@ -21,7 +21,7 @@ use std::path::{Path, PathBuf};
 use plotters::style::RGBColor;
 
 use super::PipelineError;
-use super::output::{OutputDir, ReadLog};
+use super::output::{Destination, OutputDir, ReadLog};
 use super::plot::{self, Series};
 use super::runner;
 use super::slope::{LeOptions, LeReport};
@@ -493,20 +493,19 @@ pub fn analyse_into(
 
 /// `fos`: loads the state `source` names (for a map folder, the state Anura3D
 /// will hold, as `verify` judges it), finds the factor of safety and writes
-/// the outputs into `out` (default `fos/` in the state's folder).
+/// the outputs into the destination (default `fos/` in the state's folder).
 pub fn fos(
     source: &StateSource,
     options: &FosOptions,
-    out: Option<&Path>,
-    force: bool,
+    to: Destination<'_>,
 ) -> Result<(FosAnalysis, PathBuf), PipelineError> {
-    let (reads, start, target) = runner::begin(source, out, "fos")?;
+    let (reads, start, target) = runner::begin(source, to, "fos")?;
     let states = if options.zero_pwp {
         without_pore_pressure(start.states())
     } else {
         start.states().to_vec()
     };
-    analyse_into(&start, &states, options, &target, force, &reads)
+    analyse_into(&start, &states, options, &target, to.replace, &reads)
 }
 
 /// The demo's two analyses of one start (limit equilibrium, Morgenstern–

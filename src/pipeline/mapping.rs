@@ -9,7 +9,7 @@ use std::time::Instant;
 use super::PipelineError;
 use super::fem::FemOptions;
 use super::map::{MapConfig, Mapped};
-use super::output::{OutputDir, ReadLog};
+use super::output::{Destination, OutputDir, ReadLog};
 use super::project::Project;
 
 /// Everything `map` needs.
@@ -78,21 +78,16 @@ pub struct Written {
     pub folder: PathBuf,
 }
 
-/// `map`: computes and writes the project into `out` (default
+/// `map`: computes and writes the project into the destination (default
 /// `<project>.a3d-init/` beside the model; an existing folder is replaced
-/// only under `force`, and never when it is or holds an input).
-pub fn map(
-    job: &MapJob,
-    out: Option<&Path>,
-    force: bool,
-) -> Result<(Mapped, Written), PipelineError> {
+/// only when the destination says so, and never when it is or holds an
+/// input).
+pub fn map(job: &MapJob, to: Destination<'_>) -> Result<(Mapped, Written), PipelineError> {
     let reads = ReadLog::start();
     let mapped = compute(job)?;
-    let target = out.map_or_else(
-        || default_out(&mapped.project.files.dir, &mapped.project.files.name),
-        Path::to_path_buf,
-    );
-    let dir = OutputDir::create(&target, force, &reads)?;
+    let files = &mapped.project.files;
+    let target = to.or(|| default_out(&files.dir, &files.name));
+    let dir = OutputDir::create(&target, to.replace, &reads)?;
     let files = super::write::write_project(&mapped, &dir.staging(), job.fem_vtu)?;
     let folder = dir.commit()?;
     Ok((mapped, Written { files, folder }))

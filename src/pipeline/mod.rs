@@ -67,8 +67,9 @@ pub enum PipelineError {
     Exists(std::path::PathBuf),
 }
 
-/// The kinds of [`PipelineError`].
+/// The kinds of [`PipelineError`] (more may come: match with a wildcard arm).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+#[non_exhaustive]
 pub enum ErrorKind {
     /// An input file: missing, unreadable or malformed.
     InputFile,

@@ -39,6 +39,29 @@ use std::path::{Path, PathBuf};
 use super::PipelineError;
 pub use crate::formats::input::ReadLog;
 
+/// Where a command writes its output folder, and whether an existing one may
+/// be replaced (an input is never replaced, whatever this says).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Destination<'a> {
+    /// The folder; `None`: the command's default folder.
+    pub folder: Option<&'a Path>,
+    /// Replace an existing folder (the CLI's `--force`).
+    pub replace: bool,
+}
+
+impl<'a> Destination<'a> {
+    /// `folder` (or the command's default), replacing an existing one when
+    /// `replace`.
+    pub fn new(folder: Option<&'a Path>, replace: bool) -> Destination<'a> {
+        Destination { folder, replace }
+    }
+
+    /// The folder given, else `default`.
+    pub fn or(&self, default: impl FnOnce() -> PathBuf) -> PathBuf {
+        self.folder.map_or_else(default, Path::to_path_buf)
+    }
+}
+
 fn refused(message: String) -> PipelineError {
     PipelineError::Output(message)
 }

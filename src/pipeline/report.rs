@@ -120,6 +120,11 @@ pub struct MapReport {
     /// among the notes); left out of report.json when there are none.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub assumed_defaults: Vec<crate::state::defaults::AssumedDefault>,
+    /// `--stress equilibrium`: the elastic parameters each material got, the
+    /// residual reached, the plastic iterations and the verdict; left out of
+    /// report.json for every other stress source.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub equilibrium: Option<super::map::equilibrium::EquilibriumReport>,
     pub notes: Vec<String>,
     pub warnings: Vec<String>,
     pub timings_ms: Vec<(String, f64)>,

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use plotters::style::RGBColor;
 
 use super::PipelineError;
-use super::output::{OutputDir, ReadLog};
+use super::output::{Destination, OutputDir, ReadLog};
 use super::plot::{self, Series};
 use super::start::{Start, StateSource};
 use crate::formats::cps::CpsDocument;
@@ -17,7 +17,7 @@ use crate::mpm::{self, RunSettings};
 /// Local damping α when neither the caller nor the CPS gives one.
 pub const DEFAULT_DAMPING: f64 = 0.75;
 
-/// `s` with the CPS's gravity and Courant number (capped at 0.9) and the local
+/// `s` with the CPS's gravity, submerged-calculation switch and Courant number (capped at 0.9) and the local
 /// damping α: `damping`, else the CPS `$$HOMOGENEOUS_LOCAL_DAMPING`, else
 /// [`DEFAULT_DAMPING`], clamped to [0, 0.99].
 pub fn with_cps(
@@ -27,6 +27,7 @@ pub fn with_cps(
 ) -> RunSettings {
     if let Some(cps) = cps {
         s.gravity = cps.gravity();
+        s.submerged_calculation = cps.submerged_calculation();
         if let Some(c) = cps.get_real("$$COURANT_NUMBER", 0) {
             s.courant = c.min(0.9);
         }
@@ -115,15 +116,15 @@ pub fn history_plot(path: &Path, report: &mpm::RunReport) -> Result<(), Pipeline
 
 /// What a command on a mapped state begins with: the log of every file it
 /// reads (started before the first read), the start `source` names, and the
-/// folder its outputs go to (`out`, else `default_name` in the start's home
-/// folder).
+/// folder its outputs go to (the destination's, else `default_name` in the
+/// start's home folder).
 pub fn begin(
     source: &StateSource,
-    out: Option<&Path>,
+    to: Destination<'_>,
     default_name: &str,
 ) -> Result<(ReadLog, Start, PathBuf), PipelineError> {
     let reads = ReadLog::start();
     let start = Start::load(source)?;
-    let target = out.map_or_else(|| start.home.join(default_name), Path::to_path_buf);
+    let target = to.or(|| start.home.join(default_name));
     Ok((reads, start, target))
 }

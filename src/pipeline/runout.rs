@@ -3,10 +3,10 @@
 //! demonstration of run-out, not a replacement for Anura3D). Writes
 //! `run.json`, `run_history.svg` and one `mps_t<time>.vtu` per snapshot.
 
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use super::PipelineError;
-use super::output::OutputDir;
+use super::output::{Destination, OutputDir};
 use super::runner::{self, history_plot, write_snapshot};
 use super::start::StateSource;
 use crate::mpm::{self, RunSettings};
@@ -67,16 +67,16 @@ pub struct RunOutcome {
 }
 
 /// `run`: loads the state `source` names, runs it for `options.time` and
-/// writes the outputs into `out` (default `run/` in the state's folder).
+/// writes the outputs into the destination (default `run/` in the state's
+/// folder).
 pub fn run(
     source: &StateSource,
     options: &RunOptions,
-    out: Option<&Path>,
-    force: bool,
+    to: Destination<'_>,
 ) -> Result<RunOutcome, PipelineError> {
-    let (reads, start, target) = runner::begin(source, out, "run")?;
+    let (reads, start, target) = runner::begin(source, to, "run")?;
     let settings = options.settings(start.project.cps.as_ref())?;
-    let dir = OutputDir::create(&target, force, &reads)?;
+    let dir = OutputDir::create(&target, to.replace, &reads)?;
     let output = mpm::run(
         &start.project.model,
         &start.points,

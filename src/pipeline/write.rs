@@ -25,7 +25,7 @@ impl Folder<'_> {
     ) -> Result<(), PipelineError> {
         let path = self.path(name);
         let io =
-            |e: std::io::Error| PipelineError::Input(format!("writing {}: {e}", path.display()));
+            |e: std::io::Error| PipelineError::Output(format!("writing {}: {e}", path.display()));
         // Large tables bypass the page cache (see `direct`); whole pages only.
         let file = super::direct::DirectFile::create(&path).map_err(io)?;
         let mut w = BufWriter::with_capacity(1 << 16, file);
@@ -39,7 +39,7 @@ impl Folder<'_> {
 
     fn copy(&self, from: &Path, name: &str) -> Result<(), PipelineError> {
         std::fs::copy(from, self.path(name))
-            .map_err(|e| PipelineError::Input(format!("copying {}: {e}", from.display())))?;
+            .map_err(|e| PipelineError::Output(format!("copying {}: {e}", from.display())))?;
         Ok(())
     }
 }
@@ -145,7 +145,7 @@ pub fn write_project(
         written.push("fem.vtu".into());
     }
     let json = serde_json::to_string_pretty(&mapped.report)
-        .map_err(|e| PipelineError::Input(format!("report.json: {e}")))?;
+        .map_err(|e| PipelineError::Output(format!("report.json: {e}")))?;
     out.write("report.json", |w| w.write_all(json.as_bytes()))?;
     written.push("report.json".into());
     Ok(written)

@@ -9,6 +9,7 @@
 
 pub mod defaults;
 pub mod geostatic;
+pub mod ground;
 pub mod mixed;
 pub mod plausibility;
 

@@ -231,3 +231,31 @@ pub fn mini_regions_csv() -> String {
     }
     csv
 }
+
+/// Where the real Anura3D kernel (the oracle) is: `$ANURA3D_KERNEL`, else
+/// `target/anura3d-kernel/Anura3D.out` (built by `.ci/run`).
+pub fn anura3d_kernel() -> Option<PathBuf> {
+    let path = std::env::var_os("ANURA3D_KERNEL")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("target/anura3d-kernel/Anura3D.out")
+        });
+    path.is_file().then_some(path)
+}
+
+/// The kernel for the test `name`, or `None` after saying that it skips: CI
+/// sets `A3D_INIT_REQUIRE_KERNEL`, and there a missing kernel fails instead.
+#[allow(clippy::print_stderr)] // the skip must be visible in the test output
+pub fn anura3d_kernel_or_skip(name: &str) -> Option<PathBuf> {
+    let kernel = anura3d_kernel();
+    if kernel.is_none() {
+        assert!(
+            std::env::var_os("A3D_INIT_REQUIRE_KERNEL").is_none(),
+            "A3D_INIT_REQUIRE_KERNEL is set but there is no Anura3D kernel at target/anura3d-kernel/Anura3D.out (or $ANURA3D_KERNEL)"
+        );
+        eprintln!(
+            "SKIPPED {name}: no Anura3D kernel (set ANURA3D_KERNEL or run .ci/run, which builds it with gfortran)"
+        );
+    }
+    kernel
+}

@@ -4,6 +4,7 @@
 //! The enums have names (`name`, `FromStr`, `Display`); the CLI's argument
 //! enums convert into them.
 
+pub use super::equilibrium::EquilibriumOptions;
 use crate::formats::material_map::MaterialMap;
 use crate::kernel::KernelKind;
 use crate::kernel::mapper::{MapSettings, OutsidePolicy};
@@ -77,12 +78,18 @@ named!(Outside, "outside policy", { Error => "error", Nearest => "nearest", Skip
 /// Where the MPs' total stress comes from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
 pub enum StressSource {
-    /// `fem` when the FEM file has total stresses, otherwise `geostatic`.
+    /// `fem` when the FEM file has total stresses; otherwise `equilibrium`
+    /// when the ground surface is not flat (and the model can be solved),
+    /// else `geostatic`.
     Auto,
     /// Map the FEM total stresses.
     Fem,
     /// Overburden of the GOM materials along the vertical, σh = K0·σ'v + S·p.
     Geostatic,
+    /// The state at rest under gravity in the runner's discrete equations,
+    /// pore pressures held: σ = σ' + S·p with σ' from an elastic (and, where
+    /// needed, elastoplastic) solve on Anura3D's own discretisation.
+    Equilibrium,
     /// Zero total stress (warned).
     Zero,
 }
@@ -91,6 +98,7 @@ named!(StressSource, "stress source", {
     Auto => "auto",
     Fem => "fem",
     Geostatic => "geostatic",
+    Equilibrium => "equilibrium",
     Zero => "zero",
 });
 
@@ -137,6 +145,8 @@ pub struct MapConfig {
     pub material_map: Option<MaterialMap>,
     /// MPM-MIXED models: element means or per-MP values.
     pub mixed_state: MixedState,
+    /// How `equilibrium` solves (ν from K0, tolerance, iterations).
+    pub equilibrium: EquilibriumOptions,
     /// Keep the FEM fields in [`super::Mapped::fem`] after mapping (for
     /// `fem.vtu`); without it they are freed once copied for the kernel (memory).
     pub keep_fem_fields: bool,
@@ -152,6 +162,7 @@ impl Default for MapConfig {
             stress: StressSource::Auto,
             material_map: None,
             mixed_state: MixedState::Mean,
+            equilibrium: EquilibriumOptions::default(),
             keep_fem_fields: true,
         }
     }
@@ -185,7 +196,7 @@ mod tests {
         let e = "Fem".parse::<StressSource>().unwrap_err();
         assert_eq!(
             e.to_string(),
-            "stress source `Fem`: expected auto, fem, geostatic, zero"
+            "stress source `Fem`: expected auto, fem, geostatic, equilibrium, zero"
         );
     }
 }

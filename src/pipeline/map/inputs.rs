@@ -54,16 +54,31 @@ pub fn check_fem(project: &Project, fem: &LoadedFem) -> Result<(), PipelineError
     Ok(())
 }
 
-/// The stress source `requested` comes to for these nodes: `auto` is `fem`
-/// when they have total stresses and `geostatic` otherwise. `fem` needs
+/// The stress source a mapping uses, and why.
+#[derive(Clone, Debug, PartialEq)]
+pub struct ResolvedSource {
+    pub source: StressSource,
+    /// Why: `requested`, or what `auto` saw.
+    pub because: String,
+}
+
+/// The stress source `requested` comes to for these nodes on `project`:
+/// `auto` is `fem` when they have total stresses; with pore pressures only it
+/// is `equilibrium` when the ground surface is not flat
+/// ([`crate::state::ground`]) and the model can be solved, else `geostatic`
+/// (the column formula is in equilibrium on flat ground). `fem` needs
 /// total-stress columns, every other source a pore-water pressure column.
 pub fn stress_source(
     requested: StressSource,
+    project: &Project,
     fem: &LoadedFem,
-) -> Result<StressSource, PipelineError> {
-    let source = match requested {
-        StressSource::Auto if fem.nodes.has_total_stress() => StressSource::Fem,
-        StressSource::Auto => StressSource::Geostatic,
+) -> Result<ResolvedSource, PipelineError> {
+    let resolved = match requested {
+        StressSource::Auto if fem.nodes.has_total_stress() => ResolvedSource {
+            source: StressSource::Fem,
+            because: "auto: the FEM files have total stresses".into(),
+        },
+        StressSource::Auto => auto_without_stress(project),
         StressSource::Fem if !fem.nodes.has_total_stress() => {
             return Err(input_err!(
                 "stress source `fem`: the FEM files have no total stress columns (sxx, syy, sxy{})",
@@ -74,14 +89,49 @@ pub fn stress_source(
                 }
             ));
         }
-        s => s,
+        s => ResolvedSource {
+            source: s,
+            because: "requested".into(),
+        },
     };
-    if source != StressSource::Fem && fem.nodes.field(crate::model::Quantity::Pwp).is_none() {
+    if resolved.source != StressSource::Fem
+        && fem.nodes.field(crate::model::Quantity::Pwp).is_none()
+    {
         return Err(input_err!(
             "{}: the stress source `{}` needs a pore-water pressure column",
             fem.paths[0].display(),
-            source
+            resolved.source
         ));
     }
-    Ok(source)
+    Ok(resolved)
+}
+
+/// `auto` for a FEM with pore pressures only: `geostatic` on flat ground,
+/// `equilibrium` elsewhere unless the model cannot be solved.
+fn auto_without_stress(project: &Project) -> ResolvedSource {
+    let model = &project.model;
+    let ground =
+        crate::state::ground::ground_surface(&model.mesh, |e| model.element_material[e] > 0);
+    let seen = format!(
+        "auto: the FEM gives pore pressure only and {}",
+        ground.describe()
+    );
+    if ground.flat {
+        return ResolvedSource {
+            source: StressSource::Geostatic,
+            because: format!("{seen}, where the geostatic column formula is in equilibrium"),
+        };
+    }
+    match super::equilibrium::unsupported(project) {
+        None => ResolvedSource {
+            source: StressSource::Equilibrium,
+            because: seen,
+        },
+        Some(why) => ResolvedSource {
+            source: StressSource::Geostatic,
+            because: format!(
+                "{seen}, but {why}: geostatic, which is not in equilibrium on this ground"
+            ),
+        },
+    }
 }

@@ -10,7 +10,8 @@
 //!    FEM's reach;
 //! 4. [`interpolate`] maps the FEM fields onto the MPs with the kernel;
 //! 5. [`stress`] derives the MPs' states (pwp, total stress from the FEM, the
-//!    overburden or zero);
+//!    overburden or zero), or [`equilibrium`] solves for the stress at rest
+//!    under gravity;
 //! 6. [`mixed`] collapses MPM-MIXED elements to their mean state;
 //! 7. [`plausibility`] warns about implausible pwp and refuses non-finite values;
 //! 8. [`report`] builds report.json.
@@ -28,6 +29,7 @@ use crate::kernel::Kernel;
 use crate::model::MpState;
 
 pub mod config;
+pub mod equilibrium;
 pub mod inputs;
 pub mod interpolate;
 pub mod mixed;
@@ -39,7 +41,9 @@ pub mod stress;
 
 pub use super::report::{InputFile, MapReport, MaterialCount, Smoothing};
 pub use crate::formats::material_map::{MaterialMap, MaterialRef};
-pub use config::{MapConfig, MixedState, Outside, SmoothingLength, StressSource};
+pub use config::{
+    EquilibriumOptions, MapConfig, MixedState, Outside, SmoothingLength, StressSource, UnknownName,
+};
 pub use interpolate::FemCloud;
 pub use place::Placement;
 pub use smoothing::ChosenH;
@@ -73,7 +77,11 @@ pub fn map(
     let dim = project.n_dim();
 
     inputs::check_fem(&project, &fem)?;
-    let source = inputs::stress_source(config.stress, &fem)?;
+    let resolved = inputs::stress_source(config.stress, &project, &fem)?;
+    let source = resolved.source;
+    if config.stress == StressSource::Auto {
+        notes.push(format!("stress source {source}: {}", resolved.because));
+    }
     let t = Instant::now();
     let chosen = smoothing::choose_h(&fem.nodes, config.kernel, &config.h, source)?;
     if let SmoothingLength::Calibrate { .. } = config.h {
@@ -127,7 +135,7 @@ pub fn map(
     }
     // The FEM values' row-major copy is no longer needed.
     drop(sampler);
-    let assumed = stress::assumed_defaults(&project, source, &quantities);
+    let mut assumed = stress::assumed_defaults(&project, source, &quantities);
     notes.extend(assumed.iter().map(stress::default_note));
     warnings.extend(stress.warnings);
     notes.push(report::mapf_note(dim).into());
@@ -135,6 +143,23 @@ pub fn map(
     let null_points = interpolate::null_points(&result);
     warnings.extend(interpolate::null_point_warning(null_points, config.outside));
     stress::zero_skipped(&mut states, &result.status);
+    let equilibrium_report = if source == StressSource::Equilibrium {
+        let t = Instant::now();
+        let report = equilibrium::equilibrium_stress(
+            &project,
+            &mut states,
+            config.mixed_state,
+            &config.equilibrium,
+            resolved.because,
+        )?;
+        timings.push(("equilibrium stress".to_string(), ms(t)));
+        notes.extend(equilibrium::notes(&report));
+        assumed.extend(equilibrium::assumed_defaults(&report));
+        warnings.extend(equilibrium::warnings(&report));
+        Some(report)
+    } else {
+        None
+    };
     let diagnostics = interpolate::diagnostics(&result);
     drop(result);
     if source != StressSource::Zero {
@@ -164,6 +189,7 @@ pub fn map(
         mixed_state: collapse.applied,
         states: &states,
         assumed_defaults: assumed,
+        equilibrium: equilibrium_report,
         notes,
         warnings,
         timings_ms: timings,

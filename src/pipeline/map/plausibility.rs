@@ -26,7 +26,7 @@ pub fn check_finite(states: &[MpState]) -> Result<(), PipelineError> {
         .iter()
         .position(|s| !s.pwp.is_finite() || s.total.iter().any(|v| !v.is_finite()))
     {
-        Some(bad) => Err(PipelineError::Input(format!(
+        Some(bad) => Err(PipelineError::Numerical(format!(
             "MP {} got a non-finite value; nothing was written",
             bad + 1
         ))),

@@ -68,6 +68,8 @@ pub struct ReportInputs<'a> {
     pub states: &'a [MpState],
     /// The material defaults the states rely on.
     pub assumed_defaults: Vec<AssumedDefault>,
+    /// The equilibrium solve, when it gave the stress.
+    pub equilibrium: Option<super::equilibrium::EquilibriumReport>,
     pub notes: Vec<String>,
     pub warnings: Vec<String>,
     pub timings_ms: Vec<(String, f64)>,
@@ -136,6 +138,7 @@ pub fn build_report(r: ReportInputs<'_>) -> MapReport {
         pwp_range: range(r.states.iter().map(|s| s.pwp)),
         sigma_yy_range: range(r.states.iter().map(|s| s.total[1])),
         assumed_defaults: r.assumed_defaults,
+        equilibrium: r.equilibrium,
         notes: r.notes,
         warnings: r.warnings,
         timings_ms: r.timings_ms,

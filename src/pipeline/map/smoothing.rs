@@ -86,7 +86,7 @@ pub fn choose_h(
                     .sqrt()
             });
             if diagonal > 0.0 && kernel.support() * h > 2.0 * diagonal {
-                return Err(PipelineError::Input(format!(
+                return Err(PipelineError::Option(format!(
                     "smoothing length h = {h} m: the kernel support {:.4} m is more than twice the FEM's extent ({diagonal:.4} m across), so every MP would average every node; give an h near the node spacing l = {spacing:.4} m, or calibrate h",
                     kernel.support() * h
                 )));
@@ -101,7 +101,7 @@ pub fn choose_h(
             chosen(*h, "given with --h".to_string())
         }
         SmoothingLength::Metres(h) => {
-            return Err(PipelineError::Input(format!(
+            return Err(PipelineError::Option(format!(
                 "smoothing length h = {h}: h must be a positive number of metres"
             )));
         }
