@@ -379,8 +379,9 @@ fn fredlund_krahn_circle_dry_and_with_a_water_table_within_one_percent() {
 /// Arai & Tagyo (1985) example 3 (Slide2 verification #16): ground
 /// (0,15)–(18,15)–(48,35)–(66,35), base y = 0, c′ = 41.65 kPa, φ′ = 15°,
 /// γ = 18.82 kN/m³, water table (0,15)–(18,15)–(30,23)–(48,29)–(66,32).
-/// Published Bishop 1.138 (A&T); modern circular searches find 1.112–1.120
-/// (Slide 1.118): the test holds the circular search to 3 % of 1.138.
+/// Published 1.138 (A&T; the data as tabulated in the Slide2 verification
+/// manual, not re-checked against the paper here): the test holds the
+/// circular Bishop search to 3 % of it (it finds 1.115).
 #[test]
 fn arai_tagyo_water_table_slope_near_the_published_factor() {
     let domain = Domain::from_polygons(vec![Region {
@@ -408,13 +409,23 @@ fn arai_tagyo_water_table_slope_near_the_published_factor() {
         gamma_w: 9.81,
     };
     let p = problem(&domain, &materials, &water);
-    let a = search(&p, Method::Bishop);
-    within(
-        "Arai & Tagyo 3 Bishop circular",
-        a.circular.factor,
-        1.138,
-        0.03,
-    );
+    let bishop = search(&p, Method::Bishop).circular.factor;
+    within("Arai & Tagyo 3 Bishop circular", bishop, 1.138, 0.03);
+    // The rigorous methods over circles agree with Bishop's to a percent or
+    // two. (A sign change of the residual at a pole of the slice recursion,
+    // taken for a root, once gave Spencer 0.910 and half-sine M–P 0.432
+    // here.)
+    for method in [
+        MP,
+        Method::MorgensternPrice(Interslice::Constant),
+        Method::Spencer,
+    ] {
+        let f = search(&p, method).circular.factor;
+        assert!(
+            (f / bishop - 1.0).abs() < 0.02,
+            "{method:?}: {f:.4} against Bishop {bishop:.4}"
+        );
+    }
 }
 
 #[test]

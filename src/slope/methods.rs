@@ -291,8 +291,14 @@ fn factor_root(
         }
     }
     let (a, ga, b, gb) = bracket?;
-    brent(a, ga, b, gb, tolerance, |f| g(f, sweeps))
+    let root = brent(a, ga, b, gb, tolerance, |f| g(f, sweeps))?;
+    // A sign change can be a pole (the sweep's E divides by 1 − d·λf/m_α,
+    // which passes zero): a root leaves a small residual, a pole a large one.
+    (g(root, sweeps)?.abs() <= ROOT_RESIDUAL).then_some(root)
 }
+
+/// The largest residual (over Σ W) accepted at a root in F.
+const ROOT_RESIDUAL: f64 = 1e-6;
 
 /// Brent's method on a bracket [a, b] with g(a)·g(b) ≤ 0.
 fn brent(
