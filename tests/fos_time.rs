@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 
 use a3d_init::formats::fem_csv::CsvOptions;
 use a3d_init::pipeline::fos_time::{self, FosTimeOptions, SeriesInput};
+use a3d_init::pipeline::output::Destination;
 
 const GAMMA_W: f64 = 9.81;
 
@@ -27,11 +28,13 @@ fn clay_top(x: f64) -> f64 {
 }
 
 /// The fixture's stand-in field scaled in time: the perched table at
-/// `rise` times its shape above the clay, suction capped at `cap` kPa
-/// (GeoStudio sign: positive in compression).
-fn pwp(x: f64, y: f64, rise: f64, cap: f64) -> f64 {
+/// `rise` times its shape above the clay, at most at the ground `top` (a
+/// seepage face: limit equilibrium here has no ponded-water load, so water
+/// above the ground would be outside what it models), suction capped at
+/// `cap` kPa (GeoStudio sign: positive in compression).
+fn pwp(x: f64, y: f64, top: f64, rise: f64, cap: f64) -> f64 {
     let t = ((x - 0.5) / 5.5).clamp(0.0, 1.0);
-    let table = clay_top(x) + rise * (0.05 + 0.45 * t * t);
+    let table = (clay_top(x) + rise * (0.05 + 0.45 * t * t)).min(top);
     if y <= table {
         GAMMA_W * (table - y)
     } else {
@@ -48,19 +51,30 @@ fn series(dir: &Path, n: usize) -> Vec<(f64, PathBuf)> {
     let rows: Vec<Vec<String>> = lines
         .map(|l| l.split(',').map(str::to_string).collect())
         .collect();
+    let xy = |r: &[String]| -> (f64, f64) { (r[1].parse().unwrap(), r[2].parse().unwrap()) };
+    // The ground: the highest node of each column of the regular grid.
+    let mut tops: Vec<(f64, f64)> = Vec::new();
+    for r in &rows {
+        let (x, y) = xy(r);
+        match tops.iter_mut().find(|t| (t.0 - x).abs() < 1e-9) {
+            Some(t) => t.1 = t.1.max(y),
+            None => tops.push((x, y)),
+        }
+    }
+    let top = |x: f64| tops.iter().find(|t| (t.0 - x).abs() < 1e-9).unwrap().1;
     (0..n)
         .map(|k| {
             let s = k as f64 / (n - 1) as f64;
             let (time, rise, cap) = (2.0 * 3600.0 * s, 1.8 * s, 6.0 - 4.5 * (1.25 * s).min(1.0));
             let mut out = header.clone();
             for r in &rows {
-                let (x, y): (f64, f64) = (r[1].parse().unwrap(), r[2].parse().unwrap());
+                let (x, y) = xy(r);
                 out.push_str(&format!(
                     "\n{},{},{},{},{}",
                     r[0],
                     r[1],
                     r[2],
-                    pwp(x, y, rise, cap),
+                    pwp(x, y, top(x), rise, cap),
                     r[4]
                 ));
             }
@@ -74,7 +88,7 @@ fn series(dir: &Path, n: usize) -> Vec<(f64, PathBuf)> {
 #[test]
 fn fs_over_time_of_a_rising_water_table_is_monotone_and_crosses_one() {
     let tmp = tempfile::tempdir().unwrap();
-    let files = series(tmp.path(), 16);
+    let files = series(tmp.path(), 40);
     let input = SeriesInput::Tables {
         files,
         csv: CsvOptions::default(),
@@ -86,15 +100,20 @@ fn fs_over_time_of_a_rising_water_table_is_monotone_and_crosses_one() {
         ..FosTimeOptions::default()
     };
     let out = tmp.path().join("fos_time");
-    let (report, dir) =
-        fos_time::fos_time(&fixture("slope"), &input, &options, &out, false).unwrap();
+    let (report, dir) = fos_time::fos_time(
+        &fixture("slope"),
+        &input,
+        &options,
+        Destination::new(Some(&out), false),
+    )
+    .unwrap();
     let saved: Vec<(f64, f64)> = report
         .curve
         .iter()
         .filter(|p| p.kind == "saved")
         .map(|p| (p.time, p.factor))
         .collect();
-    assert_eq!(saved.len(), 16);
+    assert_eq!(saved.len(), 40);
     // Monotone within 0.01, over the whole curve (bisected points included).
     for w in report.curve.windows(2) {
         assert!(

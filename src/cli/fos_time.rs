@@ -12,6 +12,7 @@ use anyhow::{Context, bail};
 use super::args::{FemArgs, LeArgs, MethodArg};
 use super::print::wrote;
 use crate::pipeline::fos_time::{self, FosTimeOptions, SeriesInput};
+use crate::pipeline::output::Destination;
 
 #[derive(Debug, clap::Args)]
 pub struct FosTimeArgs {
@@ -95,13 +96,8 @@ pub fn run(args: FosTimeArgs) -> anyhow::Result<()> {
         srm: !args.no_srm,
         srm_damping: args.damping,
     };
-    let out = match args.out {
-        Some(out) => out,
-        None => crate::formats::project::discover(&args.mpm)?
-            .dir
-            .join("fos_time"),
-    };
-    let (report, target) = fos_time::fos_time(&args.mpm, &input, &options, &out, args.force)?;
+    let to = Destination::new(args.out.as_deref(), args.force);
+    let (report, target) = fos_time::fos_time(&args.mpm, &input, &options, to)?;
     say!(
         "curve      {} saved times, {} bisected, by {} in {:.2} s",
         report.curve.iter().filter(|p| p.kind == "saved").count(),

@@ -26,7 +26,7 @@ use plotters::style::RGBColor;
 use super::PipelineError;
 use super::fem::{FemOptions, LoadedFem};
 use super::map::{MapConfig, Outside, StressSource};
-use super::output::{OutputDir, ReadLog};
+use super::output::{Destination, OutputDir, ReadLog};
 use super::plot::{self, Series};
 use super::slope::{self as le, LeOptions, LeReport, Section};
 use super::{Project, runner};
@@ -479,13 +479,13 @@ pub fn fos_time(
     model: &Path,
     input: &SeriesInput,
     options: &FosTimeOptions,
-    out: &Path,
-    force: bool,
+    to: Destination<'_>,
 ) -> Result<(FosTimeReport, PathBuf), PipelineError> {
     let reads = ReadLog::start();
     let project = Project::load(model)?;
     let series = load_series(input)?;
-    let dir = OutputDir::create(out, force, &reads)?;
+    let target = to.or(|| project.files.dir.join("fos_time"));
+    let dir = OutputDir::create(&target, to.replace, &reads)?;
     let report = fos_over_time(&project, &series, options)?;
     let json = serde_json::to_string_pretty(&report)
         .map_err(|e| PipelineError::Output(format!("fos_time.json: {e}")))?;
