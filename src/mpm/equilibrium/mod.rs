@@ -9,9 +9,9 @@
 //! weight in a multiphase analysis; σ′ alone with the dry or buoyant weight
 //! in a one-phase one). This module finds σ′ that makes that balance hold
 //! exactly: it assembles the stiffness K = Σ V Bᵀ D B with the MPs as
-//! quadrature points ([`system`]: the same grid, fixities, B, volumes and
+//! quadrature points (`system`: the same grid, fixities, B, volumes and
 //! masses as the runner), solves K u = f_ext − f_pore once with a sparse
-//! Cholesky factor ([`sparse`]) for gravity switched on from a stress-free
+//! Cholesky factor (`sparse`) for gravity switched on from a stress-free
 //! state, σ′ = D B u, and, where that leaves MPs outside their yield surface,
 //! continues with an implicit load ramp and the runner's return map
 //! ([`solve`]). The outcome names the residual reached (measured as `verify`
