@@ -294,6 +294,13 @@ pub fn analyse(
             )
             .collect::<Vec<_>>()
             .join(", ");
+        if counts.generated == 0 {
+            // Entry–exit pairs need an entry higher than the exit: a level
+            // ground has none, and no slope to be unstable.
+            return Err(SlopeError::NoSurface(format!(
+                "no trial circle could be formed ({space}); is the ground level?"
+            )));
+        }
         return Err(SlopeError::NoSurface(format!(
             "of {} trial circles ({space}): {reasons}",
             counts.generated
