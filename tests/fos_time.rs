@@ -126,6 +126,12 @@ fn fs_over_time_of_a_rising_water_table_is_monotone_and_crosses_one() {
         );
     }
     assert!(saved[0].1 > 1.2, "{saved:?}");
+    // The table stops at the ground: no water stands above it.
+    assert!(
+        report.notes.iter().all(|n| !n.contains("ponding")),
+        "{:?}",
+        report.notes
+    );
     let c = report.crossing.as_ref().expect("the curve crosses 1");
     assert!(c.factor <= 1.0 && c.bracket.1 - c.bracket.0 <= 5.0, "{c:?}");
     // The saved factor just before the crossing is above 1, the one after at

@@ -448,3 +448,19 @@ fn grid_search_finds_the_entry_exit_minimum_on_acads_1a() {
     .unwrap();
     within("ACADS 1(a) grid Bishop", grid.circular.factor, 1.00, 0.02);
 }
+
+/// Water above the ground is named, not silently analysed: the ACADS 1(a)
+/// section under a level water table 1 m above its crest warns (the most,
+/// about 108 kPa, at the toe); the same table 1 m below the toe does not.
+#[test]
+fn ponding_above_the_ground_is_warned_of() {
+    let domain = acads_1a();
+    let table = |y: f64| WaterTable {
+        line: vec![[20.0, y], [70.0, y]],
+        gamma_w: 9.81,
+    };
+    let warning = a3d_init::pipeline::slope::ponding(&domain, &table(36.0)).unwrap();
+    assert!(warning.contains("ponding"), "{warning}");
+    assert!(a3d_init::pipeline::slope::ponding(&domain, &table(24.0)).is_none());
+    assert!(a3d_init::pipeline::slope::ponding(&domain, &Dry).is_none());
+}

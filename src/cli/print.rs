@@ -261,6 +261,9 @@ pub fn le_report(le: &crate::pipeline::slope::LeReport) {
         );
     }
     say!("runtime    {:.2} s", le.runtime_s);
+    for w in &le.warnings {
+        say_err!("  warning: {w}");
+    }
 }
 
 /// A strength-reduction analysis: the method, the materials, every trial and

@@ -316,7 +316,16 @@ pub fn fos_over_time(
         .map(|w| w[1].0 - w[0].0)
         .fold(f64::INFINITY, f64::min);
     let tolerance = options.bisect_tolerance.unwrap_or(0.01 * narrowest);
-    let mut notes = Vec::new();
+    let mut notes: Vec<String> = series
+        .iter()
+        .zip(&reports)
+        .find_map(|((t, _), r)| {
+            r.warnings
+                .first()
+                .map(|w| format!("from t = {t} s on, {w}"))
+        })
+        .into_iter()
+        .collect();
     let mut at_crossing: Option<(LeReport, Field)> = None;
     let crossing = {
         let k = saved.iter().position(|&(_, f)| f <= 1.0);

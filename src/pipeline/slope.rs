@@ -117,6 +117,9 @@ pub struct LeReport {
     pub ground: Vec<[f64; 2]>,
     pub gravity: f64,
     pub runtime_s: f64,
+    /// What the result does not account for (water ponding above the
+    /// ground).
+    pub warnings: Vec<String>,
 }
 
 fn strength_of(m: &Material) -> Option<Strength> {
@@ -389,7 +392,37 @@ pub fn analyse(
         ground: section.domain.ground().to_vec(),
         gravity: section.gravity,
         runtime_s: started.elapsed().as_secs_f64(),
+        warnings: ponding(&section.domain, field).into_iter().collect(),
         analysis,
+    })
+}
+
+/// Water pressure (kPa, positive in compression) at the ground above which
+/// the field is taken to stand above the ground: 0.5 kPa, 5 cm of water.
+pub const PONDING_KPA: f64 = 0.5;
+
+/// A warning when the pore pressure at the ground is compressive (above
+/// [`PONDING_KPA`]) somewhere: water stands above the ground there, and its
+/// weight and thrust are not loads on the section here (slope programs add
+/// a ponded reservoir as a surface load).
+pub fn ponding(domain: &Domain, field: &dyn slope::PoreField) -> Option<String> {
+    let (x0, x1) = domain.x_range();
+    let n = 200;
+    let (mut worst, mut at) = (PONDING_KPA, None);
+    for i in 0..=n {
+        let x = x0 + (x1 - x0) * (i as f64 + 0.5) / (n as f64 + 1.0);
+        let Some(y) = domain.ground_y(x) else {
+            continue;
+        };
+        let u = -field.sample(x, y).pwp;
+        if u > worst {
+            (worst, at) = (u, Some(x));
+        }
+    }
+    at.map(|x| {
+        format!(
+            "the pore pressure at the ground is compressive (water ponding above it), up to {worst:.2} kPa at x = {x:.3} m: its weight and thrust are not surface loads in this analysis, so the factor does not account for them"
+        )
     })
 }
 
