@@ -24,6 +24,7 @@ macro_rules! say_err {
 
 pub mod args;
 mod bench;
+mod bench_fos;
 pub mod calibrate;
 mod demo;
 mod diff;

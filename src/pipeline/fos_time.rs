@@ -282,6 +282,32 @@ fn point(time: f64, kind: &'static str, r: &LeReport) -> CurvePoint {
     }
 }
 
+/// The section of `project` with every element saturated (the unit weights
+/// then follow each field's pore pressures).
+fn series_section(project: &Project) -> Result<Section, PipelineError> {
+    let gravity = project
+        .cps
+        .as_ref()
+        .map_or(crate::model::DEFAULT_GRAVITY, CpsDocument::gravity);
+    le::build_section(
+        &project.model,
+        gravity,
+        &vec![1.0; project.model.mesh.n_elements()],
+    )
+}
+
+/// The limit-equilibrium factor of one FEM field on `project`, as one point
+/// of [`fos_over_time`] computes it (writes nothing).
+pub fn factor_of_field(
+    project: &Project,
+    fem: &LoadedFem,
+    options: &LeOptions,
+) -> Result<LeReport, PipelineError> {
+    let section = series_section(project)?;
+    let f = field(&section, fem, 0.0)?;
+    factor_of(project, &section, &f, options)
+}
+
 /// FS(t) over `series` on `project` (writes nothing).
 pub fn fos_over_time(
     project: &Project,
@@ -289,15 +315,7 @@ pub fn fos_over_time(
     options: &FosTimeOptions,
 ) -> Result<FosTimeReport, PipelineError> {
     let started = Instant::now();
-    let gravity = project
-        .cps
-        .as_ref()
-        .map_or(crate::model::DEFAULT_GRAVITY, CpsDocument::gravity);
-    let section = le::build_section(
-        &project.model,
-        gravity,
-        &vec![1.0; project.model.mesh.n_elements()],
-    )?;
+    let section = series_section(project)?;
     let fields: Vec<Field> = series
         .iter()
         .map(|(t, fem)| field(&section, fem, *t))
