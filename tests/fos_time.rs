@@ -144,3 +144,20 @@ fn fs_over_time_of_a_rising_water_table_is_monotone_and_crosses_one() {
     let csv = std::fs::read_to_string(dir.join("fos_vs_time.csv")).unwrap();
     assert_eq!(csv.lines().count(), report.curve.len() + 1);
 }
+
+/// A `.gsz` series is every saved step of its analysis, in time order, each
+/// with its time (the shipped SEEP/W column: 51 steps, 0 to 129,600 s).
+#[test]
+fn a_gsz_series_is_every_saved_step_with_its_time() {
+    let input = SeriesInput::Gsz {
+        path: fixture("geostudio-gsz-internal/1d-unsaturated-column/1D_unsaturated_column.gsz"),
+        analysis: None,
+        csv: CsvOptions::default(),
+    };
+    let series = fos_time::load_series(&input).unwrap();
+    assert_eq!(series.len(), 51);
+    assert_eq!(series[0].0, 0.0);
+    assert_eq!(series[50].0, 129_600.0);
+    assert!(series.windows(2).all(|w| w[1].0 > w[0].0));
+    assert!(series.iter().all(|(_, f)| f.nodes.len() == 306));
+}
