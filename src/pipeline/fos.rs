@@ -343,10 +343,8 @@ fn trials_plot(path: &Path, report: &FosReport) -> Result<(), PipelineError> {
 pub fn srm_factor_line(report: &FosReport) -> String {
     match (report.outcome, report.lower, report.upper) {
         (FosOutcome::Bracketed, Some(lo), Some(hi)) => format!(
-            "FS = {:.2} ± {:.2} (settles at F = {lo:.4}, not at F = {hi:.4}; {} trials)",
-            report.factor,
-            0.5 * (hi - lo),
-            report.iterations
+            "FS = {:.3} (interpolated between F = {lo:.4}, which settles, and F = {hi:.4}, which does not; {} trials)",
+            report.factor, report.iterations
         ),
         (FosOutcome::AboveRange, Some(lo), _) => format!(
             "FS > {lo} (still settles at the largest F tried; {} trials)",
