@@ -27,6 +27,7 @@ pub mod mpm;
 pub mod pipeline;
 pub mod place;
 pub mod progress;
+pub mod slope;
 pub mod state;
 #[cfg(any(test, feature = "testkit"))]
 pub mod testkit;

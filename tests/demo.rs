@@ -42,9 +42,9 @@ fn demo_runs_the_whole_chain() {
         "verify/verify.json",
         "verify/verify_history.svg",
         "fos_zero_pwp/fos.json",
-        "fos_zero_pwp/fos_mechanism.svg",
+        "fos_zero_pwp/fos_surface.svg",
         "fos_mapped/fos.json",
-        "fos_mapped/fos_mechanism.svg",
+        "fos_mapped/fos_surface.svg",
     ] {
         let text = std::fs::read_to_string(out.join(f)).unwrap_or_default();
         assert!(text.len() > 1000, "{f} is written");
@@ -58,7 +58,7 @@ fn demo_runs_the_whole_chain() {
         let factor = fos["factor"].as_f64().unwrap();
         let line = stdout.lines().find(|l| l.contains(label)).unwrap_or("");
         assert!(
-            line.contains(&format!("FS = {factor:.2}")),
+            line.contains(&format!("FS = {factor:.3}")),
             "{label} FS {factor} printed: {stdout}"
         );
     }

@@ -60,12 +60,8 @@ fn show(report: &FosReport) -> String {
         .iter()
         .map(|t| {
             format!(
-                "F={:.4} {:?} u={:.3e} du3={:?} du4={:?}",
-                t.factor,
-                t.end,
-                t.max_displacement,
-                t.third_quarter_movement,
-                t.last_quarter_movement
+                "F={:.4} {:?} δ={:.3e} u={:.3e}",
+                t.factor, t.end, t.measure, t.max_displacement
             )
         })
         .collect();
@@ -258,4 +254,41 @@ fn fos_command_without_inputs_is_a_usage_error() {
             "{stderr}"
         );
     }
+}
+
+/// Smoothness (#31): the seeping layer with every pore pressure 1 % higher.
+/// Limit equilibrium moves the factor by (γsat − 1.01 γw)/(γsat − γw) − 1
+/// (about −1 %); strength reduction must move it by as much, within half a
+/// percentage point, and never by the 5–10 % jumps of a settle/does-not-
+/// settle criterion on a start out of balance.
+#[test]
+fn one_percent_more_pore_pressure_moves_the_factor_by_about_one_percent() {
+    let (model, points, states, settings) = layer(true);
+    let settings = FosSettings {
+        tolerance: 0.002,
+        ..settings
+    };
+    let wetter: Vec<MpState> = states
+        .iter()
+        .map(|s| MpState {
+            pwp: 1.01 * s.pwp,
+            ..*s
+        })
+        .collect();
+    let base = strength_reduction(&model, &points, &states, &settings).unwrap();
+    let wet = strength_reduction(&model, &points, &wetter, &settings).unwrap();
+    let gamma_sat = model.materials[0].gamma_at_saturation(1.0, G);
+    let gamma_w = a3d_init::model::gamma_water(G);
+    let expected = (gamma_sat - 1.01 * gamma_w) / (gamma_sat - gamma_w) - 1.0;
+    let change = wet.factor / base.factor - 1.0;
+    assert!(
+        (change - expected).abs() < 0.005,
+        "FS {:.4} → {:.4}: {:+.2} % against {:+.2} %\n{}\n{}",
+        base.factor,
+        wet.factor,
+        100.0 * change,
+        100.0 * expected,
+        show(&base),
+        show(&wet)
+    );
 }

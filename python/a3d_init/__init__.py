@@ -331,6 +331,7 @@ def fos(
     *,
     model: Optional[PathLike] = None,
     state: Optional[PathLike] = None,
+    method: str = "srm",
     damping: Optional[float] = None,
     tolerance: float = 0.01,
     window: Optional[float] = None,
@@ -338,11 +339,23 @@ def fos(
     out: Optional[PathLike] = None,
     force: bool = False,
 ) -> Dict[str, Any]:
-    """``a3d-init fos``: the factor of safety by strength reduction on the
-    state Anura3D will hold. Returns fos.json as a dict (``factor``,
-    ``trials``, …) with ``folder`` added."""
+    """``a3d-init fos``: the factor of safety on the state Anura3D will hold,
+    by strength reduction (``method="srm"``, the default here) or by a method
+    of slices (``"morgenstern-price"``, ``"spencer"``, ``"bishop"``,
+    ``"janbu"``, ``"ordinary"``; the command line's default is
+    Morgenstern–Price). Returns fos.json as a dict (``factor``, ``method``,
+    ``trials`` or ``critical_surface``, …) with ``folder`` added."""
     report, written = _native.fos(
-        _path(folder), _path(model), _path(state), damping, tolerance, window, zero_pwp, _path(out), force
+        _path(folder),
+        _path(model),
+        _path(state),
+        method,
+        damping,
+        tolerance,
+        window,
+        zero_pwp,
+        _path(out),
+        force,
     )
     result = json.loads(report)
     result["folder"] = written

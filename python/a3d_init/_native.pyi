@@ -120,6 +120,7 @@ def fos(
     folder: Optional[_Path] = None,
     model: Optional[_Path] = None,
     state: Optional[_Path] = None,
+    method: str = "srm",
     damping: Optional[float] = None,
     tolerance: float = 0.01,
     window: Optional[float] = None,
@@ -127,4 +128,5 @@ def fos(
     out: Optional[_Path] = None,
     force: bool = False,
 ) -> Tuple[str, str]:
-    """``a3d-init fos`` (strength reduction): (fos.json text, folder written)."""
+    """``a3d-init fos`` (``method``: ``"srm"``, strength reduction, or a method
+    of slices such as ``"morgenstern-price"``): (fos.json text, folder written)."""

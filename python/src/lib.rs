@@ -25,12 +25,13 @@ use a3d_init::kernel::loo::Norm;
 use a3d_init::kernel::mapper::{self, MapSettings, NodeCloud, OutsidePolicy};
 use a3d_init::pipeline::check::VerifyOptions;
 use a3d_init::pipeline::fem::FemOptions;
-use a3d_init::pipeline::fos::FosOptions;
+use a3d_init::pipeline::fos::{FosMethod, FosOptions};
 use a3d_init::pipeline::map::{EquilibriumOptions, MapConfig, SmoothingLength, UnknownName};
 use a3d_init::pipeline::mapping::MapJob;
 use a3d_init::pipeline::output::Destination;
 use a3d_init::pipeline::start::StateSource;
 use a3d_init::pipeline::{self, ErrorKind, PipelineError};
+use a3d_init::slope::Method;
 
 create_exception!(
     _native,
@@ -553,16 +554,36 @@ fn verify(
     Ok((json(&outcome)?, written))
 }
 
-/// `fos` (strength reduction on the state Anura3D will hold): (report as
-/// JSON, folder written).
+/// The factor-of-safety method by its command-line name.
+fn fos_method(name: &str) -> PyResult<FosMethod> {
+    if name == "srm" {
+        return Ok(FosMethod::Srm);
+    }
+    Method::ALL
+        .into_iter()
+        .find(|m| m.name() == name)
+        .map(FosMethod::Le)
+        .ok_or_else(|| {
+            let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
+            PyValueError::new_err(format!(
+                "method: expected one of {} or 'srm', got {name:?}",
+                names.join(", ")
+            ))
+        })
+}
+
+/// `fos` (limit equilibrium by `method`, or strength reduction with
+/// `method="srm"`, on the state Anura3D will hold): (fos.json as JSON, folder
+/// written).
 #[pyfunction]
-#[pyo3(signature = (folder=None, model=None, state=None, damping=None, tolerance=0.01, window=None, zero_pwp=false, out=None, force=false))]
+#[pyo3(signature = (folder=None, model=None, state=None, method="srm", damping=None, tolerance=0.01, window=None, zero_pwp=false, out=None, force=false))]
 #[allow(clippy::too_many_arguments)]
 fn fos(
     py: Python<'_>,
     folder: Option<PathBuf>,
     model: Option<PathBuf>,
     state: Option<PathBuf>,
+    method: &str,
     damping: Option<f64>,
     tolerance: f64,
     window: Option<f64>,
@@ -572,14 +593,17 @@ fn fos(
 ) -> PyResult<(String, PathBuf)> {
     let source = source(folder, model, state)?;
     let options = FosOptions {
+        method: fos_method(method)?,
         damping,
         tolerance,
         window,
         zero_pwp,
+        ..FosOptions::default()
     };
-    let (report, written) = py
+    let (analysis, written) = py
         .detach(|| pipeline::fos::fos(&source, &options, Destination::new(out.as_deref(), force)))
         .map_err(py_err)?;
+    let report = pipeline::fos::json(&analysis).map_err(py_err)?;
     Ok((json(&report)?, written))
 }
 

@@ -173,3 +173,169 @@ impl StateInputs {
         }
     }
 }
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum MethodArg {
+    /// Morgenstern & Price (1965), the seed paper's method (SLOPE/W).
+    MorgensternPrice,
+    /// Spencer (1967): parallel interslice forces.
+    Spencer,
+    /// Bishop's simplified method (1955).
+    Bishop,
+    /// Janbu's simplified method with his correction factor f₀.
+    Janbu,
+    /// The ordinary method of slices (Fellenius).
+    Ordinary,
+    /// Strength reduction on the built-in explicit MPM runner.
+    Srm,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum IntersliceArg {
+    HalfSine,
+    Constant,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SuctionArg {
+    /// Bishop's effective stress with χ = S (as the runner and Anura3D).
+    Bishop,
+    /// Fredlund's φᵇ (`--phi-b`, default φ′/2 of each material).
+    PhiB,
+    /// Suction ignored.
+    None,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum SearchArg {
+    /// Circles through entry and exit points on the ground.
+    EntryExit,
+    /// Circles from a grid of centres and tangent radii.
+    Grid,
+}
+
+/// Limit-equilibrium options shared by `fos` and `fos-time`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct LeArgs {
+    /// Interslice force function of Morgenstern–Price.
+    #[arg(long, value_enum, default_value_t = IntersliceArg::HalfSine)]
+    pub interslice: IntersliceArg,
+    /// How suction adds to the strength.
+    #[arg(long, value_enum, default_value_t = SuctionArg::Bishop)]
+    pub suction: SuctionArg,
+    /// φᵇ in degrees for `--suction phi-b` (default φ′/2 of each material).
+    #[arg(long, value_name = "DEG")]
+    pub phi_b: Option<f64>,
+    /// How trial circles are generated.
+    #[arg(long, value_enum, default_value_t = SearchArg::EntryExit)]
+    pub search: SearchArg,
+    /// Entry range on the ground (the higher end), `X1:X2` in m (default: the whole ground).
+    #[arg(long, value_name = "X1:X2")]
+    pub entry: Option<String>,
+    /// Exit range on the ground (the lower end), `X1:X2` in m.
+    #[arg(long, value_name = "X1:X2")]
+    pub exit: Option<String>,
+    /// Grid of centres for `--search grid`, `X1:X2:Y1:Y2` in m.
+    #[arg(long, value_name = "X1:X2:Y1:Y2")]
+    pub grid: Option<String>,
+    /// Elevations the radii of `--search grid` reach down to, `Y1:Y2` in m.
+    #[arg(long, value_name = "Y1:Y2")]
+    pub tangents: Option<String>,
+    /// About this many trial circles.
+    #[arg(long, default_value_t = 5000)]
+    pub trials: usize,
+    /// Keep the best circle (no non-circular refinement).
+    #[arg(long)]
+    pub no_refine: bool,
+    /// Slices per surface.
+    #[arg(long, default_value_t = 30)]
+    pub slices: usize,
+    /// Shallowest surface in m (default 5 % of the ground's height range).
+    #[arg(long, value_name = "M")]
+    pub min_depth: Option<f64>,
+    /// Smoothing length of the pore-pressure interpolation in m (default: the spacing rule).
+    #[arg(long = "le-h", value_name = "M")]
+    pub h: Option<f64>,
+}
+
+/// `a:b:…` as `n` numbers.
+fn numbers<const N: usize>(text: &str, flag: &str) -> anyhow::Result<[f64; N]> {
+    let v: Vec<f64> = text
+        .split(':')
+        .map(|s| s.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("{flag} `{text}`: expected {N} numbers separated by `:`"))?;
+    let a: [f64; N] = v
+        .try_into()
+        .map_err(|_| anyhow::anyhow!("{flag} `{text}`: expected {N} numbers separated by `:`"))?;
+    if a.iter().any(|x| !x.is_finite()) {
+        bail!("{flag} `{text}`: the numbers must be finite");
+    }
+    Ok(a)
+}
+
+impl LeArgs {
+    /// The method of slices `method` names (`None` for `srm`).
+    pub fn method(&self, method: MethodArg) -> Option<crate::slope::Method> {
+        use crate::slope::{Interslice, Method};
+        let interslice = match self.interslice {
+            IntersliceArg::HalfSine => Interslice::HalfSine,
+            IntersliceArg::Constant => Interslice::Constant,
+        };
+        Some(match method {
+            MethodArg::MorgensternPrice => Method::MorgensternPrice(interslice),
+            MethodArg::Spencer => Method::Spencer,
+            MethodArg::Bishop => Method::Bishop,
+            MethodArg::Janbu => Method::Janbu,
+            MethodArg::Ordinary => Method::Ordinary,
+            MethodArg::Srm => return None,
+        })
+    }
+
+    /// The library's limit-equilibrium options (method: Morgenstern–Price
+    /// unless `method` names another).
+    pub fn options(&self, method: MethodArg) -> anyhow::Result<crate::pipeline::slope::LeOptions> {
+        use crate::slope::{CircleSearch, SearchSettings, Suction};
+        let range = |t: &Option<String>, flag: &str| -> anyhow::Result<Option<(f64, f64)>> {
+            t.as_deref()
+                .map(|t| numbers::<2>(t, flag).map(|[a, b]| (a.min(b), a.max(b))))
+                .transpose()
+        };
+        let circles = match self.search {
+            SearchArg::EntryExit => CircleSearch::EntryExit {
+                entry: range(&self.entry, "--entry")?,
+                exit: range(&self.exit, "--exit")?,
+            },
+            SearchArg::Grid => CircleSearch::Grid {
+                centres: self
+                    .grid
+                    .as_deref()
+                    .map(|t| numbers::<4>(t, "--grid"))
+                    .transpose()?,
+                tangents: range(&self.tangents, "--tangents")?,
+            },
+        };
+        if self.trials == 0 {
+            bail!("--trials must be at least 1");
+        }
+        let defaults = crate::pipeline::slope::LeOptions::default();
+        Ok(crate::pipeline::slope::LeOptions {
+            method: self.method(method).unwrap_or(defaults.method),
+            suction: match self.suction {
+                SuctionArg::Bishop => Suction::Bishop,
+                SuctionArg::PhiB => Suction::PhiB(self.phi_b),
+                SuctionArg::None => Suction::Ignored,
+            },
+            search: SearchSettings {
+                circles,
+                trials: self.trials,
+                refine: !self.no_refine,
+                ..SearchSettings::default()
+            },
+            n_slices: self.slices,
+            min_depth: self.min_depth,
+            h: self.h,
+            ..defaults
+        })
+    }
+}

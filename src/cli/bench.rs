@@ -38,7 +38,8 @@ pub struct BenchArgs {
     #[arg(long, value_enum, default_value_t = SearchArg::Grid)]
     pub search: SearchArg,
     /// Folder for the generated case and the output of `e2e` (default: a
-    /// temporary folder, removed afterwards).
+    /// temporary folder, removed afterwards); for `fos`, the slope's model
+    /// folder with its `sand-nodes.csv` (default `fixtures/slope`).
     #[arg(long)]
     pub dir: Option<std::path::PathBuf>,
     /// Write `fem.vtu` in `e2e` too.
@@ -75,6 +76,10 @@ pub enum BenchWhat {
     /// element; `--dim 3`: tetrahedral_old, 4 MPs per element): assembly,
     /// factorisation, elastic solve, plastic iterations, peak memory.
     Equilibrium,
+    /// Limit equilibrium on the shipped slope (`--dir`, default
+    /// `fixtures/slope`): one Morgenstern–Price factor with the default
+    /// search, and FS(t) over 40 generated node tables.
+    Fos,
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
@@ -196,6 +201,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         }
         BenchWhat::E2e => e2e(&args)?,
         BenchWhat::Equilibrium => equilibrium(&args)?,
+        BenchWhat::Fos => super::bench_fos::fos(&args)?,
         BenchWhat::Csv => {
             let text = generated_fem_csv(args.nodes, 3);
             let mb = text.len() as f64 / 1e6;

@@ -1,27 +1,40 @@
 //! `a3d-init fos`: arguments and printing around [`pipeline::fos::fos`], the
-//! factor of safety by strength reduction on the built-in runner, on the same
-//! state `verify` judges (for a map folder, the state Anura3D will hold).
+//! factor of safety of the state `verify` judges (for a map folder, the state
+//! Anura3D will hold): by limit equilibrium (`--method`, default
+//! Morgenstern–Price) or by strength reduction on the built-in runner
+//! (`--method srm`).
 
 use std::path::PathBuf;
 use std::time::Instant;
 
-use super::args::StateInputs;
+use super::args::{LeArgs, MethodArg, StateInputs};
 use super::print;
 use crate::pipeline::output::Destination;
-use crate::pipeline::{self, fos::FosOptions};
+use crate::pipeline::{
+    self,
+    fos::{FosMethod, FosOptions},
+};
 
 #[derive(Debug, clap::Args)]
 pub struct FosArgs {
     #[command(flatten)]
     pub inputs: StateInputs,
-    /// Local damping α of the trial runs (default: the CPS
-    /// `$$HOMOGENEOUS_LOCAL_DAMPING`, else 0.75).
+    /// Method: a method of slices (limit equilibrium), or strength reduction.
+    #[arg(long, value_enum, default_value_t = MethodArg::MorgensternPrice)]
+    pub method: MethodArg,
+    #[command(flatten)]
+    pub le: LeArgs,
+    /// With a method of slices, run strength reduction too and compare.
+    #[arg(long)]
+    pub with_srm: bool,
+    /// Strength reduction: local damping α of the trial runs (default: the
+    /// CPS `$$HOMOGENEOUS_LOCAL_DAMPING`, else 0.75).
     #[arg(long)]
     pub damping: Option<f64>,
-    /// Half-width of the final bracket on F.
+    /// Strength reduction: half-width of the final bracket on F.
     #[arg(long, default_value_t = 0.01)]
     pub tolerance: f64,
-    /// Time window of one trial (s); default max(20 T₀, 4 √(H/g)).
+    /// Strength reduction: time window of one trial (s).
     #[arg(long)]
     pub window: Option<f64>,
     /// Set every pore pressure to zero (σ′ = σ) before the analysis.
@@ -36,14 +49,21 @@ pub struct FosArgs {
 
 pub fn run(args: FosArgs) -> anyhow::Result<()> {
     let started = Instant::now();
+    let method = match args.le.method(args.method) {
+        Some(m) => FosMethod::Le(m),
+        None => FosMethod::Srm,
+    };
     let options = FosOptions {
+        method,
+        le: args.le.options(args.method)?,
+        with_srm: args.with_srm,
         damping: args.damping,
         tolerance: args.tolerance,
         window: args.window,
         zero_pwp: args.zero_pwp,
     };
     let to = Destination::new(args.out.as_deref(), args.force);
-    let (report, target) = pipeline::fos::fos(&args.inputs.source()?, &options, to)?;
-    print::fos_report(&report, &target, started.elapsed().as_secs_f64());
+    let (analysis, target) = pipeline::fos::fos(&args.inputs.source()?, &options, to)?;
+    print::fos_report(&analysis, &target, started.elapsed().as_secs_f64());
     Ok(())
 }

@@ -24,10 +24,12 @@ macro_rules! say_err {
 
 pub mod args;
 mod bench;
+mod bench_fos;
 pub mod calibrate;
 mod demo;
 mod diff;
 mod fos;
+mod fos_time;
 mod inspect;
 pub mod map;
 mod print;
@@ -64,8 +66,10 @@ pub enum Command {
     Demo(demo::DemoArgs),
     /// Check with the built-in explicit MPM solver that a mapped state is in equilibrium under gravity.
     Verify(verify::VerifyArgs),
-    /// Factor of safety of a mapped state by strength reduction on the built-in MPM solver.
+    /// Factor of safety of a mapped state: limit equilibrium (methods of slices) or strength reduction on the built-in MPM solver.
     Fos(fos::FosArgs),
+    /// Factor of safety over a time series of FEM fields (limit equilibrium), and the first time it falls to 1.
+    FosTime(fos_time::FosTimeArgs),
     /// Keep the explicit MPM solver going for a given time, with snapshots (run-out demonstration).
     Run(verify::RunArgs),
 }
@@ -205,5 +209,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Demo(args) => demo::run(args),
         Command::Run(args) => verify::run_run(args),
         Command::Fos(args) => fos::run(args),
+        Command::FosTime(args) => fos_time::run(args),
     }
 }

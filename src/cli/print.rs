@@ -8,6 +8,7 @@ use std::path::Path;
 use crate::mpm;
 use crate::mpm::fos::FosReport;
 use crate::pipeline::check::VerifyOutcome;
+use crate::pipeline::fos::FosAnalysis;
 
 /// The `wrote      DIR/ (a, b, c)` line a command prints once its folder is written.
 pub fn wrote(target: &Path, files: &[&str]) -> String {
@@ -164,11 +165,114 @@ pub fn run_report(r: &mpm::RunReport) {
     );
 }
 
-/// Prints a strength-reduction analysis: the factor, the method, the
-/// materials, every trial and the mechanism.
-pub fn fos_report(report: &FosReport, target: &Path, elapsed: f64) {
+/// Prints a factor-of-safety analysis: the factor of the method asked, then
+/// what limit equilibrium and strength reduction found, and their comparison.
+pub fn fos_report(analysis: &FosAnalysis, target: &Path, elapsed: f64) {
     use crate::pipeline::fos::{factor_line, file_names};
-    say!("factor     {}", factor_line(report));
+    say!("factor     {}", factor_line(analysis));
+    if let Some(le) = &analysis.limit_equilibrium {
+        le_report(le);
+    }
+    if let Some(why) = &analysis.limit_equilibrium_skipped {
+        say!("limit equilibrium not run: {why}");
+    }
+    if let Some(report) = &analysis.strength_reduction {
+        srm_report(report);
+    }
+    if let Some(c) = &analysis.comparison {
+        say!(
+            "compare    strength reduction {:.3} / {} {:.3} = {:.3}; limit equilibrium on Davis-reduced strengths (non-associated flow, ψ < φ′) reaches 1 at F = {}",
+            c.strength_reduction,
+            c.limit_equilibrium_method,
+            c.limit_equilibrium,
+            c.ratio,
+            c.limit_equilibrium_davis
+                .map_or("(not computed)".to_string(), |f| format!("{f:.3}"))
+        );
+    }
+    say!("{} in {elapsed:.1} s", wrote(target, &file_names(analysis)));
+}
+
+/// A limit-equilibrium analysis: method, search, suction, materials.
+pub fn le_report(le: &crate::pipeline::slope::LeReport) {
+    let a = &le.analysis;
+    let counts = &a.search.counts;
+    say!(
+        "method     {} ({}), tolerance {:e} on F; {} slices, surfaces at least {:.3} m deep",
+        le.method,
+        le.interslice
+            .map_or("no interslice function".to_string(), |f| format!(
+                "interslice {f:?}"
+            )),
+        le.tolerance,
+        a.n_slices,
+        a.min_depth
+    );
+    say!(
+        "search     {}: {} trial circles, {} solved, {} did not converge, {} rejected ({})",
+        a.search.space,
+        counts.generated,
+        counts.solved,
+        counts.not_converged,
+        counts.rejected.iter().map(|r| r.1).sum::<usize>(),
+        counts
+            .rejected
+            .iter()
+            .map(|(why, n)| format!("{n} {why}"))
+            .collect::<Vec<_>>()
+            .join("; ")
+    );
+    if let Some(c) = &a.circular.circle {
+        say!(
+            "circle     FS = {:.4} at centre ({:.3}, {:.3}), R = {:.3}",
+            a.circular.factor,
+            c.xc,
+            c.yc,
+            c.r
+        );
+    }
+    if let Some(r) = &a.search.polyline_refinement {
+        say!(
+            "refined    FS = {:.4} after {} surfaces moving {} polyline vertices",
+            r.end_factor,
+            r.evaluations,
+            a.search.polyline_segments.map_or(0, |m| m + 1)
+        );
+    }
+    say!("suction    {}", le.suction_rule);
+    say!(
+        "pwp        {} ({} points), {} kernel, h = {:.4} m, raster {:.4} m",
+        le.pore_field.source,
+        le.pore_field.points,
+        le.pore_field.kernel,
+        le.pore_field.h,
+        le.pore_field.raster_spacing
+    );
+    let unbreakable: Vec<String> = le
+        .materials
+        .iter()
+        .filter(|m| m.strength.is_none())
+        .map(|m| format!("{} {} ({})", m.index, m.name, m.model))
+        .collect();
+    if !unbreakable.is_empty() {
+        say!(
+            "unbreakable {} (no Mohr–Coulomb strength: no surface crosses them)",
+            unbreakable.join(", ")
+        );
+    }
+    say!("runtime    {:.2} s", le.runtime_s);
+    for w in &le.warnings {
+        say_err!("  warning: {w}");
+    }
+}
+
+/// A strength-reduction analysis: the method, the materials, every trial and
+/// the mechanism.
+pub fn srm_report(report: &FosReport) {
+    say!(
+        "strength reduction: {}",
+        crate::pipeline::fos::srm_factor_line(report)
+    );
     say!(
         "method     strength reduction: tan φ′/F, c′/F, ψ ≤ φ′_F; pwp frozen; {} MPs, window {:.2} s per trial, dt = {:.3e} s, damping α = {}",
         report.n_points,
@@ -206,5 +310,4 @@ pub fn fos_report(report: &FosReport, target: &Path, elapsed: f64) {
             m.points_in_motion
         );
     }
-    say!("{} in {elapsed:.1} s", wrote(target, &file_names(report)));
 }

@@ -60,7 +60,7 @@ pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
         let started = Instant::now();
         let options = FosOptions {
             damping: args.damping,
-            ..FosOptions::default()
+            ..FosOptions::srm()
         };
         let (report, target) = pipeline::fos::fos(&source, &options, args.destination())?;
         print::fos_report(&report, &target, started.elapsed().as_secs_f64());

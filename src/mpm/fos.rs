@@ -12,30 +12,40 @@
 //!   reduced friction allows (an associated material stays associated).
 //!
 //! Every other material model (linear elasticity, strain-softening
-//! Mohr–Coulomb) is left as it is and named in the report. The run starts from
-//! the given state (effective stress, frozen pore pressure and saturation) and
-//! settles under gravity with local damping; F < 1 strengthens the materials.
+//! Mohr–Coulomb) is left as it is and named in the report.
 //!
-//! Criterion ("settles" versus "does not settle"), on a time window W that
-//! defaults to max(20 T₀, 4 √(H/g)) with T₀ = 4H/c the fundamental-period
-//! estimate of the runner and H the height of the active elements:
+//! **Start (#31).** A mapped state is seldom in equilibrium on the runner's
+//! mesh (a geostatic stress under a slope is not), and a trial that starts out
+//! of balance moves for reasons that have nothing to do with F. So the state
+//! first settles for one window with every strength divided by
+//! [`FosSettings::settle_factor`] (0.5: doubled, so that a slope near failure
+//! still settles); its effective stresses, on the original MP positions, with
+//! the frozen pore pressures, are the start of every trial.
 //!
-//! * **does not settle** as soon as any MP has moved more than
-//!   [`FosSettings::failure_fraction`] × H, or an MP leaves the mesh;
-//! * otherwise, at t = W, with Δu₃ and Δu₄ the largest MP movements over the
-//!   third and the fourth quarter of the window and q = Δu₄/Δu₃: the motion
-//!   **settles** when Δu₄ ≤ [`FosSettings::noise_fraction`] × H (at rest);
-//!   it **does not settle** when q > [`FosSettings::growth_ratio`] (0.9: the
-//!   motion is not dying out; a mechanism keeps moving as fast or faster,
-//!   q ≥ 1), or when the decaying motion, extrapolated geometrically,
-//!   u∞ = u(W) + Δu₄·q/(1 − q), would still pass the failure displacement;
-//!   it **settles** otherwise.
+//! **Measure (#31).** A trial runs the fixed window W = max(20 T₀, 4 √(H/g))
+//! (T₀ = 4H/c the fundamental-period estimate, H the height of the active
+//! elements) from that start; its measure δ(F) is the
+//! [`FosSettings::quantile`] (0.98) quantile of the MPs' displacement
+//! magnitudes at the end of the window. δ is a continuous function of the
+//! state and of F, and grows with F: slowly while the reduced strength still
+//! carries the slope, steeply where a mechanism forms. A trial **settles**
+//! when δ < δ* = [`FosSettings::failure_fraction`] × H (0.003 H: 12 mm on a
+//! 4 m slope, on the steep part of δ(F) of the shipped slope). The rate of
+//! motion late in the window, which the former criterion used, is not
+//! monotone in F there (motion comes in bursts as the mechanism forms) and
+//! was the second source of scatter. A trial whose largest displacement
+//! passes H/10 stops early and does not settle. MPs that leave the mesh are
+//! frozen by the runner.
 //!
-//! The factor is bracketed from F = [`FosSettings::start`] by multiplying or
-//! dividing by [`FosSettings::step`] (1.25: slopes of interest lie near
-//! F = 1, and every settling trial costs a full window), then bisected until
-//! the bracket (last settling F, first F that does not settle) is at most
-//! 2 × [`FosSettings::tolerance`] wide; the reported factor is its midpoint.
+//! **Factor.** F is bracketed from [`FosSettings::start`] by multiplying or
+//! dividing by [`FosSettings::step`], then the bracket (last settling F,
+//! first F that does not) is narrowed by safeguarded regula falsi on
+//! g(F) = ln δ(F) − ln δ* to at most 2 × [`FosSettings::tolerance`]; the
+//! factor is the root of g interpolated linearly between the bracket's ends.
+//! The factor is therefore continuous in the inputs: a 1 % change of the
+//! pore pressures moves it by about as much, where the former settle /
+//! does-not-settle window criterion (a ratio of quarter-window movements and
+//! an extrapolation, on a start out of balance) jumped by 5–10 %.
 //! The mechanism kept is the state at the end of the smallest F that did not
 //! settle.
 //!
@@ -44,9 +54,9 @@
 //! τ/σ′n = sin φ′_F on planes parallel to the surface (Davis 1968), not at
 //! tan φ′_F, so its factor is lower than limit equilibrium's (φ′ = 35°,
 //! β = 20°: 1.79 instead of 1.92); with ψ = φ′ the two agree. The tests check
-//! both. Each trial starts from the same state, so the
-//! result is bit-identical for any number of threads (the runner is). This
-//! file does no I/O and prints nothing.
+//! both. Each trial starts from the same state, so the result is
+//! bit-identical for any number of threads (the runner is). This file does no
+//! I/O and prints nothing.
 
 use super::Simulation;
 use super::run::model_height;
@@ -70,7 +80,7 @@ pub enum FosError {
 pub struct FosSettings {
     /// Gravity, damping and Courant number of every trial run;
     /// `max_steps` caps the steps of one trial (a trial that hits it is judged
-    /// on what it has, as at the end of its window).
+    /// on what it has).
     pub run: RunSettings,
     /// Half-width of the final bracket (default 0.01).
     pub tolerance: f64,
@@ -84,15 +94,15 @@ pub struct FosSettings {
     pub f_max: f64,
     /// Time window W of one trial (s); `None` = max(20 T₀, 4 √(H/g)).
     pub window: Option<f64>,
-    /// A trial does not settle once an MP has moved this fraction of H
-    /// (default 0.01).
+    /// δ* over H: a trial whose measure reaches it does not settle
+    /// (default 0.003).
     pub failure_fraction: f64,
-    /// Largest accepted ratio q of the last-quarter movement to the
-    /// third-quarter movement, in (0, 1) (default 0.9).
-    pub growth_ratio: f64,
-    /// Last-quarter movement below this fraction of H always counts as
-    /// settled (default 1e-4).
-    pub noise_fraction: f64,
+    /// The quantile of the MPs' displacements that is the measure δ
+    /// (default 0.98).
+    pub quantile: f64,
+    /// The settle phase divides the strengths by this (default 0.5);
+    /// `None`: no settle phase, trials start from the given state.
+    pub settle_factor: Option<f64>,
     /// Pairs of 0-based mesh nodes (primary, secondary) that share their
     /// degrees of freedom, for periodic test models; empty for Anura3D
     /// models.
@@ -113,9 +123,9 @@ impl Default for FosSettings {
             f_min: 1.0 / 64.0,
             f_max: 64.0,
             window: None,
-            failure_fraction: 0.01,
-            growth_ratio: 0.9,
-            noise_fraction: 1e-4,
+            failure_fraction: 0.003,
+            quantile: 0.98,
+            settle_factor: Some(0.5),
             tied_nodes: Vec::new(),
         }
     }
@@ -146,14 +156,14 @@ impl FosSettings {
         if self.window.is_some_and(|w| !positive(w)) {
             return bad("window must be > 0".into());
         }
-        if !(positive(self.failure_fraction) && positive(self.noise_fraction)) {
-            return bad("failure_fraction and noise_fraction must be > 0".into());
+        if !positive(self.failure_fraction) {
+            return bad("failure_fraction must be > 0".into());
         }
-        if !(self.growth_ratio > 0.0 && self.growth_ratio < 1.0) {
-            return bad(format!(
-                "growth_ratio {} must lie in (0, 1)",
-                self.growth_ratio
-            ));
+        if !(self.quantile > 0.0 && self.quantile <= 1.0) {
+            return bad(format!("quantile {} must lie in (0, 1]", self.quantile));
+        }
+        if self.settle_factor.is_some_and(|f| !positive(f)) {
+            return bad("settle_factor must be > 0".into());
         }
         Ok(())
     }
@@ -162,17 +172,12 @@ impl FosSettings {
 /// How one trial ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub enum TrialEnd {
-    /// The motion died out within the window.
+    /// δ < δ* at the end of the window.
     Settled,
-    /// The second-half movement exceeded the growth limit.
-    Growing,
-    /// An MP moved more than the failure displacement.
-    DisplacementLimit,
-    /// The motion decays, but so slowly that its geometric extrapolation
-    /// passes the failure displacement.
-    ProjectedLimit,
-    /// An MP left the mesh.
-    LostPoints,
+    /// δ ≥ δ* at the end of the window.
+    Moving,
+    /// Stopped early: an MP moved more than H/10.
+    Runaway,
 }
 
 /// One trial factor and what the run did.
@@ -184,13 +189,28 @@ pub struct Trial {
     pub steps: usize,
     /// Simulated time at the end (s).
     pub time: f64,
+    /// The measure δ: the quantile of the MPs' displacements at the end
+    /// (m); infinite for a runaway trial.
+    pub measure: f64,
     /// Largest MP displacement at the end (m).
     pub max_displacement: f64,
-    /// Largest MP movement from W/2 to 3W/4 and from 3W/4 to W (m); `None`
-    /// when the run stopped earlier.
-    pub third_quarter_movement: Option<f64>,
-    pub last_quarter_movement: Option<f64>,
     /// MPs that yielded at some step.
+    pub plastic_points: usize,
+    /// MPs that left the mesh (frozen).
+    pub lost_points: usize,
+}
+
+/// The settle phase.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Settle {
+    /// Strengths divided by this.
+    pub factor: f64,
+    pub time: f64,
+    pub steps: usize,
+    /// Out-of-balance force ratio at the first and the last step.
+    pub initial_residual_ratio: f64,
+    pub final_residual_ratio: f64,
+    pub max_displacement: f64,
     pub plastic_points: usize,
 }
 
@@ -203,7 +223,7 @@ pub struct MaterialNote {
     pub model: String,
 }
 
-/// Where the bisection ended.
+/// Where the search ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub enum FosOutcome {
     /// F lies in [lower, upper], at most 2 × tolerance wide.
@@ -244,8 +264,8 @@ pub struct Mechanism {
 /// The result of [`strength_reduction`].
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct FosReport {
-    /// The factor of safety: the midpoint of [lower, upper] when bracketed,
-    /// else the bound that was reached.
+    /// The factor of safety: the root of ln δ − ln δ* interpolated in the
+    /// final bracket, else the bound that was reached.
     pub factor: f64,
     /// Largest F that settled (`None` when none did).
     pub lower: Option<f64>,
@@ -255,6 +275,10 @@ pub struct FosReport {
     /// Number of trial runs.
     pub iterations: usize,
     pub trials: Vec<Trial>,
+    /// The settle phase, when there was one.
+    pub settle: Option<Settle>,
+    /// δ*: the threshold on the measure (m).
+    pub threshold: f64,
     pub reduced_materials: Vec<MaterialNote>,
     pub unreduced_materials: Vec<MaterialNote>,
     /// Window W of each trial (s), height H (m), time step (s).
@@ -311,30 +335,38 @@ pub fn strength_reduction(
     });
     let limits = Limits {
         window,
-        failure: settings.failure_fraction * height,
-        noise: settings.noise_fraction * height,
-        growth_ratio: settings.growth_ratio,
+        threshold: settings.failure_fraction * height,
+        runaway: 0.1 * height,
+        quantile: settings.quantile,
+    };
+    let (start, settle) = match settings.settle_factor {
+        Some(f) => {
+            let (s, note) = settle_phase(model, points, states, settings, window, f)?;
+            (s, Some(note))
+        }
+        None => (states.to_vec(), None),
     };
 
-    let mut trials = Vec::new();
+    let mut trials: Vec<Trial> = Vec::new();
     let mut mechanism: Option<Mechanism> = None;
-    let mut lower: Option<f64> = None;
-    let mut upper: Option<f64> = None;
-    let mut run_trial = |factor: f64| -> Result<bool, FosError> {
+    let mut run_trial = |factor: f64| -> Result<Trial, FosError> {
         let reduced = reduced_model(model, factor);
-        let (trial, simulation) = trial(&reduced, points, states, settings, &limits, factor)?;
+        let (trial, simulation) = trial(&reduced, points, &start, settings, &limits, factor)?;
         trials.push(trial);
         if !trial.settled && mechanism.as_ref().is_none_or(|m| factor < m.factor) {
             mechanism = Some(capture(&simulation, factor));
         }
-        Ok(trial.settled)
+        Ok(trial)
     };
 
     // Bracket.
+    let mut lower: Option<Trial> = None;
+    let mut upper: Option<Trial> = None;
     let mut factor = settings.start;
     let outcome = loop {
-        if run_trial(factor)? {
-            lower = Some(factor);
+        let t = run_trial(factor)?;
+        if t.settled {
+            lower = Some(t);
             if upper.is_some() {
                 break FosOutcome::Bracketed;
             }
@@ -343,7 +375,7 @@ pub fn strength_reduction(
             }
             factor = (settings.step * factor).min(settings.f_max);
         } else {
-            upper = Some(factor);
+            upper = Some(t);
             if lower.is_some() {
                 break FosOutcome::Bracketed;
             }
@@ -353,32 +385,45 @@ pub fn strength_reduction(
             factor = (factor / settings.step).max(settings.f_min);
         }
     };
-    // Bisect.
+    // Narrow by safeguarded regula falsi on g = ln δ − ln δ*.
+    let g = |t: &Trial| (t.measure.clamp(1e-12 * height, 1e3 * height) / limits.threshold).ln();
+    let root = |lo: &Trial, hi: &Trial| {
+        let (gl, gh) = (g(lo), g(hi));
+        if gh > gl {
+            lo.factor + (hi.factor - lo.factor) * (-gl / (gh - gl)).clamp(0.0, 1.0)
+        } else {
+            0.5 * (lo.factor + hi.factor)
+        }
+    };
     if let (FosOutcome::Bracketed, Some(mut lo), Some(mut hi)) = (outcome, lower, upper) {
-        while hi - lo > 2.0 * settings.tolerance {
-            let mid = 0.5 * (lo + hi);
-            if run_trial(mid)? {
-                lo = mid;
+        while hi.factor - lo.factor > 2.0 * settings.tolerance {
+            let width = hi.factor - lo.factor;
+            let mid = root(&lo, &hi).clamp(lo.factor + 0.1 * width, hi.factor - 0.1 * width);
+            let t = run_trial(mid)?;
+            if t.settled {
+                lo = t;
             } else {
-                hi = mid;
+                hi = t;
             }
         }
         lower = Some(lo);
         upper = Some(hi);
     }
-    let factor = match (outcome, lower, upper) {
-        (FosOutcome::Bracketed, Some(lo), Some(hi)) => 0.5 * (lo + hi),
-        (FosOutcome::AboveRange, Some(lo), _) => lo,
-        (_, _, Some(hi)) => hi,
+    let factor = match (outcome, &lower, &upper) {
+        (FosOutcome::Bracketed, Some(lo), Some(hi)) => root(lo, hi),
+        (FosOutcome::AboveRange, Some(lo), _) => lo.factor,
+        (_, _, Some(hi)) => hi.factor,
         _ => f64::NAN,
     };
     Ok(FosReport {
         factor,
-        lower,
-        upper,
+        lower: lower.map(|t| t.factor),
+        upper: upper.map(|t| t.factor),
         outcome,
         iterations: trials.len(),
         trials,
+        settle,
+        threshold: limits.threshold,
         reduced_materials,
         unreduced_materials,
         window,
@@ -392,9 +437,9 @@ pub fn strength_reduction(
 
 struct Limits {
     window: f64,
-    failure: f64,
-    noise: f64,
-    growth_ratio: f64,
+    threshold: f64,
+    runaway: f64,
+    quantile: f64,
 }
 
 /// The materials used by MPs, split into reduced (Mohr–Coulomb) and left alone.
@@ -438,14 +483,72 @@ fn reduced_model(model: &AnuraModel, factor: f64) -> AnuraModel {
     reduced
 }
 
-/// Largest |a_i − b_i| over the MPs.
-fn largest_difference(a: &[[f64; 3]], b: &[[f64; 3]]) -> f64 {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| {
-            ((x[0] - y[0]).powi(2) + (x[1] - y[1]).powi(2) + (x[2] - y[2]).powi(2)).sqrt()
+/// The `quantile` quantile of the MPs' displacement magnitudes.
+fn measure(simulation: &Simulation, quantile: f64) -> f64 {
+    let mut d: Vec<f64> = simulation
+        .displacements()
+        .iter()
+        .map(|u| (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt())
+        .collect();
+    if d.is_empty() {
+        return 0.0;
+    }
+    let k = ((quantile * d.len() as f64).ceil() as usize).clamp(1, d.len()) - 1;
+    *d.select_nth_unstable_by(k, f64::total_cmp).1
+}
+
+/// One window at strengths divided by `factor`; the effective stresses at the
+/// end, with the frozen pore pressures, as total stresses on the original
+/// MPs.
+fn settle_phase(
+    model: &AnuraModel,
+    points: &[MaterialPoint],
+    states: &[MpState],
+    settings: &FosSettings,
+    window: f64,
+    factor: f64,
+) -> Result<(Vec<MpState>, Settle), FosError> {
+    let reduced = reduced_model(model, factor);
+    let mut simulation = Simulation::new(&reduced, points, states, &settings.run)?;
+    simulation.tie_nodes(&settings.tied_nodes)?;
+    let dt = simulation.time_step();
+    let mut first = None;
+    let mut last = f64::NAN;
+    let mut plastic = 0;
+    while simulation.steps() < settings.run.max_steps && simulation.time() < window - 1e-9 * dt {
+        let outcome = simulation.step();
+        if outcome.residual_ratio.is_nan() || !outcome.kinetic_energy.is_finite() {
+            return Err(MpmError::Unstable {
+                step: simulation.steps(),
+            }
+            .into());
+        }
+        first.get_or_insert(outcome.residual_ratio);
+        last = outcome.residual_ratio;
+        plastic = outcome.plastic;
+    }
+    let stresses = simulation.effective_stresses();
+    let settled = states
+        .iter()
+        .zip(&stresses)
+        .map(|(s, sigma)| {
+            let mut total = *sigma;
+            for c in total.iter_mut().take(3) {
+                *c += s.saturation * s.pwp;
+            }
+            MpState { total, ..*s }
         })
-        .fold(0.0, f64::max)
+        .collect();
+    let note = Settle {
+        factor,
+        time: simulation.time(),
+        steps: simulation.steps(),
+        initial_residual_ratio: first.unwrap_or(f64::NAN),
+        final_residual_ratio: last,
+        max_displacement: simulation.displacement_stats().0,
+        plastic_points: plastic,
+    };
+    Ok((settled, note))
 }
 
 /// Runs one trial factor on the reduced model.
@@ -461,11 +564,8 @@ fn trial(
     simulation.tie_nodes(&settings.tied_nodes)?;
     let dt = simulation.time_step();
     let reached = |simulation: &Simulation, t: f64| simulation.time() >= t - 1e-9 * dt;
-    // Displacements at W/2 and 3W/4.
-    let mut half: Option<Vec<[f64; 3]>> = None;
-    let mut three_quarters: Option<Vec<[f64; 3]>> = None;
     let mut plastic = 0;
-    let mut early = None;
+    let mut runaway = false;
     while simulation.steps() < settings.run.max_steps && !reached(&simulation, limits.window) {
         let outcome = simulation.step();
         let step = simulation.steps();
@@ -473,46 +573,22 @@ fn trial(
             return Err(MpmError::Unstable { step }.into());
         }
         plastic = outcome.plastic;
-        if half.is_none() && reached(&simulation, 0.5 * limits.window) {
-            half = Some(simulation.displacements());
-        }
-        if three_quarters.is_none() && reached(&simulation, 0.75 * limits.window) {
-            three_quarters = Some(simulation.displacements());
-        }
-        if step.is_multiple_of(8) || reached(&simulation, limits.window) {
-            if simulation.lost_points() > 0 {
-                early = Some(TrialEnd::LostPoints);
-                break;
-            }
-            if simulation.displacement_stats().0 > limits.failure {
-                early = Some(TrialEnd::DisplacementLimit);
-                break;
-            }
+        if step.is_multiple_of(32) && simulation.displacement_stats().0 > limits.runaway {
+            runaway = true;
+            break;
         }
     }
-    let end_displacements = simulation.displacements();
-    let max_displacement = simulation.displacement_stats().0;
-    let quarters = match (&half, &three_quarters) {
-        (Some(h), Some(q)) if early.is_none() => Some((
-            largest_difference(q, h),
-            largest_difference(&end_displacements, q),
-        )),
-        _ => None,
+    let delta = if runaway {
+        f64::INFINITY
+    } else {
+        measure(&simulation, limits.quantile)
     };
-    let end = match (early, quarters) {
-        (Some(end), _) => end,
-        // Window not completed (step cap): no evidence that it settled.
-        (None, None) => TrialEnd::Growing,
-        (None, Some((_, fourth))) if fourth <= limits.noise => TrialEnd::Settled,
-        (None, Some((third, fourth))) if fourth > limits.growth_ratio * third => TrialEnd::Growing,
-        (None, Some((third, fourth))) => {
-            let q = fourth / third;
-            if max_displacement + fourth * q / (1.0 - q) > limits.failure {
-                TrialEnd::ProjectedLimit
-            } else {
-                TrialEnd::Settled
-            }
-        }
+    let end = if runaway {
+        TrialEnd::Runaway
+    } else if delta < limits.threshold {
+        TrialEnd::Settled
+    } else {
+        TrialEnd::Moving
     };
     let trial = Trial {
         factor,
@@ -520,10 +596,10 @@ fn trial(
         end,
         steps: simulation.steps(),
         time: simulation.time(),
-        max_displacement,
-        third_quarter_movement: quarters.map(|q| q.0),
-        last_quarter_movement: quarters.map(|q| q.1),
+        measure: delta,
+        max_displacement: simulation.displacement_stats().0,
         plastic_points: plastic,
+        lost_points: simulation.lost_points(),
     };
     Ok((trial, simulation))
 }

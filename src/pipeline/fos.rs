@@ -1,11 +1,20 @@
-//! `fos` as a library call: the factor of safety by strength reduction on the
-//! built-in runner ([`crate::mpm::fos`]), with the pore pressures frozen, on
-//! the same start `verify` judges ([`super::start`]: for a map folder, the
-//! state Anura3D will hold). Writes `fos.json` (every trial, the materials
-//! reduced and left alone), `fos_trials.svg` (largest displacement per trial
-//! F) and, where a mechanism formed, `fos_mechanism.svg` (displacement
-//! magnitude at the first F that did not settle) and `fos_mechanism.vtu` (the
-//! same MPs with displacement, velocity and an `in_motion` flag).
+//! `fos` as a library call: the factor of safety of the state `verify` judges
+//! ([`super::start`]: for a map folder, the state Anura3D will hold), by limit
+//! equilibrium ([`super::slope`], the default: Morgenstern–Price, the seed
+//! paper's method) or by strength reduction on the built-in runner
+//! ([`crate::mpm::fos`], `FosMethod::Srm`), pore pressures frozen. Where both
+//! run (strength reduction always runs the default limit equilibrium beside
+//! it; a limit-equilibrium method runs strength reduction when asked) the
+//! report compares them, with the limit-equilibrium factor on Davis-reduced
+//! strengths for the non-associated flow rule.
+//!
+//! Writes `fos.json` (the method's report at the top level, `factor` and
+//! `method` first; the other analysis under `limit_equilibrium` or
+//! `strength_reduction`; the comparison), for limit equilibrium
+//! `fos_surface.svg` (the critical surface over the pore pressure), for
+//! strength reduction `fos_trials.svg` (largest displacement per trial F)
+//! and, where a mechanism formed, `fos_mechanism.svg` and
+//! `fos_mechanism.vtu`.
 
 use std::path::{Path, PathBuf};
 
@@ -15,21 +24,48 @@ use super::PipelineError;
 use super::output::{Destination, OutputDir, ReadLog};
 use super::plot::{self, Series};
 use super::runner;
+use super::slope::{LeOptions, LeReport};
 use super::start::{Start, StateSource};
 use crate::formats::cps::CpsDocument;
 use crate::formats::vtu;
 use crate::model::{AnuraModel, MaterialPoint, MpState};
 use crate::mpm::fos::{FosOutcome, FosReport, FosSettings, strength_reduction};
+use crate::slope::{Interslice, Method};
+
+/// Which factor of safety.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub enum FosMethod {
+    /// Limit equilibrium by a method of slices.
+    Le(Method),
+    /// Strength reduction on the built-in runner.
+    Srm,
+}
+
+impl FosMethod {
+    pub fn name(self) -> &'static str {
+        match self {
+            FosMethod::Le(m) => m.name(),
+            FosMethod::Srm => "srm",
+        }
+    }
+}
 
 /// How `fos` runs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct FosOptions {
-    /// Local damping α of the trial runs (`None`: the CPS
-    /// `$$HOMOGENEOUS_LOCAL_DAMPING`, else [`runner::DEFAULT_DAMPING`]).
+    pub method: FosMethod,
+    /// Limit equilibrium (its `method` is replaced by [`FosOptions::method`]
+    /// when that is a method of slices).
+    pub le: LeOptions,
+    /// With a method of slices, run strength reduction too and compare.
+    pub with_srm: bool,
+    /// Strength reduction: local damping α of the trial runs (`None`: the
+    /// CPS `$$HOMOGENEOUS_LOCAL_DAMPING`, else [`runner::DEFAULT_DAMPING`]).
     pub damping: Option<f64>,
-    /// Half-width of the final bracket on F.
+    /// Strength reduction: half-width of the final bracket on F.
     pub tolerance: f64,
-    /// Time window of one trial (s); `None`: max(20 T₀, 4 √(H/g)).
+    /// Strength reduction: time window of one trial (s); `None`: the
+    /// runner's default.
     pub window: Option<f64>,
     /// Every pore pressure set to zero (σ′ = σ) before the analysis.
     pub zero_pwp: bool,
@@ -38,6 +74,9 @@ pub struct FosOptions {
 impl Default for FosOptions {
     fn default() -> Self {
         FosOptions {
+            method: FosMethod::Le(Method::MorgensternPrice(Interslice::HalfSine)),
+            le: LeOptions::default(),
+            with_srm: false,
             damping: None,
             tolerance: 0.01,
             window: None,
@@ -47,6 +86,15 @@ impl Default for FosOptions {
 }
 
 impl FosOptions {
+    /// Strength reduction as `verify --fos` runs it: these options with the
+    /// method `srm`.
+    pub fn srm() -> FosOptions {
+        FosOptions {
+            method: FosMethod::Srm,
+            ..FosOptions::default()
+        }
+    }
+
     /// Strength-reduction settings from the CPS (gravity, Courant number,
     /// local damping) and these options.
     pub fn settings(&self, cps: Option<&CpsDocument>) -> FosSettings {
@@ -56,6 +104,45 @@ impl FosOptions {
         s.window = self.window;
         s
     }
+
+    /// The limit-equilibrium options with the method asked (the default
+    /// method beside strength reduction).
+    fn le_options(&self) -> LeOptions {
+        let mut le = self.le.clone();
+        if let FosMethod::Le(m) = self.method {
+            le.method = m;
+        }
+        le
+    }
+}
+
+/// Strength reduction beside limit equilibrium on the same state.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Comparison {
+    pub limit_equilibrium_method: &'static str,
+    pub limit_equilibrium: f64,
+    pub strength_reduction: f64,
+    /// SRM over LE.
+    pub ratio: f64,
+    /// The limit-equilibrium factor on Davis-reduced strengths (on the
+    /// critical surface): what a continuum with the materials' dilatancy
+    /// should give; `None` when it could not be computed.
+    pub limit_equilibrium_davis: Option<f64>,
+    pub note: String,
+}
+
+/// What `fos` found.
+#[derive(Clone, Debug, PartialEq)]
+pub struct FosAnalysis {
+    pub method: FosMethod,
+    /// The factor of the method asked.
+    pub factor: f64,
+    pub limit_equilibrium: Option<LeReport>,
+    pub strength_reduction: Option<FosReport>,
+    pub comparison: Option<Comparison>,
+    /// Why limit equilibrium did not run beside strength reduction.
+    pub limit_equilibrium_skipped: Option<String>,
+    pub n_points: usize,
 }
 
 /// The states with every pore pressure set to zero (σ′ = σ; weights kept).
@@ -78,20 +165,91 @@ pub fn analyse(
     })
 }
 
-/// The files [`write()`] leaves for `report`, in order.
-pub fn file_names(report: &FosReport) -> Vec<&'static str> {
-    let mut files = vec!["fos.json", "fos_trials.svg"];
-    if report.mechanism.is_some() {
-        files.extend(["fos_mechanism.svg", "fos_mechanism.vtu"]);
+/// The files [`write()`] leaves for `analysis`, in order.
+pub fn file_names(analysis: &FosAnalysis) -> Vec<&'static str> {
+    let mut files = vec!["fos.json"];
+    if analysis.limit_equilibrium.is_some() {
+        files.push("fos_surface.svg");
+    }
+    if let Some(report) = &analysis.strength_reduction {
+        files.push("fos_trials.svg");
+        if report.mechanism.is_some() {
+            files.extend(["fos_mechanism.svg", "fos_mechanism.vtu"]);
+        }
     }
     files
 }
 
-/// Writes the report's files into `dir`'s staging folder.
-pub fn write(report: &FosReport, dir: &OutputDir<'_>) -> Result<(), PipelineError> {
-    let json = serde_json::to_string_pretty(report)
+/// `fos.json`: the asked method's report at the top level with `method`,
+/// the other analysis and the comparison beside it.
+pub fn json(analysis: &FosAnalysis) -> Result<serde_json::Value, PipelineError> {
+    let value = |v: Result<serde_json::Value, serde_json::Error>| {
+        v.map_err(|e| PipelineError::Output(format!("fos.json: {e}")))
+    };
+    let le = analysis
+        .limit_equilibrium
+        .as_ref()
+        .map(|r| value(serde_json::to_value(r)))
+        .transpose()?;
+    let srm = analysis
+        .strength_reduction
+        .as_ref()
+        .map(|r| value(serde_json::to_value(r)))
+        .transpose()?;
+    let (main, other_key, other) = match analysis.method {
+        FosMethod::Srm => (srm, "limit_equilibrium", le),
+        FosMethod::Le(_) => (le, "strength_reduction", srm),
+    };
+    let mut object = serde_json::Map::new();
+    object.insert("factor".into(), analysis.factor.into());
+    object.insert("method".into(), analysis.method.name().into());
+    if let Some(serde_json::Value::Object(m)) = main {
+        for (k, v) in m {
+            object.entry(k).or_insert(v);
+        }
+    }
+    if let Some(o) = other {
+        object.insert(other_key.into(), o);
+    }
+    if let Some(c) = &analysis.comparison {
+        object.insert("comparison".into(), value(serde_json::to_value(c))?);
+    }
+    if let Some(why) = &analysis.limit_equilibrium_skipped {
+        object.insert("limit_equilibrium_skipped".into(), why.clone().into());
+    }
+    Ok(serde_json::Value::Object(object))
+}
+
+/// Writes the analysis' files into `dir`'s staging folder; `field` is the
+/// pore pressure per MP (x, y, pwp) for the surface plot.
+pub fn write(
+    analysis: &FosAnalysis,
+    field: &[(f64, f64, f64)],
+    ground: &[[f64; 2]],
+    dir: &OutputDir<'_>,
+) -> Result<(), PipelineError> {
+    let text = serde_json::to_string_pretty(&json(analysis)?)
         .map_err(|e| PipelineError::Output(format!("fos.json: {e}")))?;
-    dir.write("fos.json", |w| w.write_all(json.as_bytes()))?;
+    dir.write("fos.json", |w| w.write_all(text.as_bytes()))?;
+    if let Some(le) = &analysis.limit_equilibrium {
+        super::slope::write_surface_plot(
+            &dir.path("fos_surface.svg"),
+            &format!(
+                "Critical slip surface: {} FS = {:.3} ({})",
+                le.method, le.factor, le.surface_kind
+            ),
+            le,
+            field,
+            ground,
+        )?;
+    }
+    match &analysis.strength_reduction {
+        Some(report) => write_srm(report, dir),
+        None => Ok(()),
+    }
+}
+
+fn write_srm(report: &FosReport, dir: &OutputDir<'_>) -> Result<(), PipelineError> {
     trials_plot(&dir.path("fos_trials.svg"), report)?;
     let Some(m) = &report.mechanism else {
         return Ok(());
@@ -180,14 +338,13 @@ fn trials_plot(path: &Path, report: &FosReport) -> Result<(), PipelineError> {
     )
 }
 
-/// One line: the factor with its bracket, or the bound reached.
-pub fn factor_line(report: &FosReport) -> String {
+/// One line: the strength-reduction factor with its bracket, or the bound
+/// reached.
+pub fn srm_factor_line(report: &FosReport) -> String {
     match (report.outcome, report.lower, report.upper) {
         (FosOutcome::Bracketed, Some(lo), Some(hi)) => format!(
-            "FS = {:.2} ± {:.2} (settles at F = {lo:.4}, not at F = {hi:.4}; {} trials)",
-            report.factor,
-            0.5 * (hi - lo),
-            report.iterations
+            "FS = {:.3} (interpolated between F = {lo:.4}, which settles, and F = {hi:.4}, which does not; {} trials)",
+            report.factor, report.iterations
         ),
         (FosOutcome::AboveRange, Some(lo), _) => format!(
             "FS > {lo} (still settles at the largest F tried; {} trials)",
@@ -200,8 +357,112 @@ pub fn factor_line(report: &FosReport) -> String {
     }
 }
 
+/// One line: a limit-equilibrium factor with its method and surface.
+pub fn le_factor_line(report: &LeReport) -> String {
+    let both = match (report.force_factor, report.moment_factor, report.lambda) {
+        (Some(ff), Some(fm), Some(l)) => format!(", F_f = {ff:.4}, F_m = {fm:.4} at λ = {l:.4}"),
+        _ => String::new(),
+    };
+    format!(
+        "FS = {:.3} ({}, {} surface{both}; best circle {:.3})",
+        report.factor, report.method, report.surface_kind, report.analysis.circular.factor
+    )
+}
+
+/// One line for the method asked.
+pub fn factor_line(analysis: &FosAnalysis) -> String {
+    match (
+        &analysis.method,
+        &analysis.limit_equilibrium,
+        &analysis.strength_reduction,
+    ) {
+        (FosMethod::Srm, _, Some(r)) => srm_factor_line(r),
+        (FosMethod::Le(_), Some(r), _) => le_factor_line(r),
+        _ => format!("FS = {}", analysis.factor),
+    }
+}
+
+/// The analyses `options` asks for on `states` (writes nothing).
+pub fn analyse_state(
+    start: &Start,
+    states: &[MpState],
+    options: &FosOptions,
+) -> Result<FosAnalysis, PipelineError> {
+    let project = &start.project;
+    let gravity = project
+        .cps
+        .as_ref()
+        .map_or(crate::model::DEFAULT_GRAVITY, CpsDocument::gravity);
+    let le_options = options.le_options();
+    let run_srm = options.method == FosMethod::Srm || options.with_srm;
+    let le =
+        super::slope::analyse_state(&project.model, gravity, &start.points, states, &le_options);
+    let (limit_equilibrium, skipped) = match (le, options.method) {
+        (Ok(r), _) => (Some(r), None),
+        // Beside strength reduction, limit equilibrium is a comparison only.
+        (Err(e), FosMethod::Srm) => (None, Some(e.to_string())),
+        (Err(e), FosMethod::Le(_)) => return Err(e),
+    };
+    let strength_reduction = if run_srm {
+        let settings = options.settings(project.cps.as_ref());
+        Some(analyse(&project.model, &start.points, states, &settings)?)
+    } else {
+        None
+    };
+    let comparison = match (&limit_equilibrium, &strength_reduction) {
+        (Some(le), Some(srm)) => Some(compare(start, states, gravity, &le_options, le, srm)),
+        _ => None,
+    };
+    let factor = match options.method {
+        FosMethod::Srm => strength_reduction.as_ref().map_or(f64::NAN, |r| r.factor),
+        FosMethod::Le(_) => limit_equilibrium.as_ref().map_or(f64::NAN, |r| r.factor),
+    };
+    Ok(FosAnalysis {
+        method: options.method,
+        factor,
+        limit_equilibrium,
+        strength_reduction,
+        comparison,
+        limit_equilibrium_skipped: skipped,
+        n_points: start.points.len(),
+    })
+}
+
+fn compare(
+    start: &Start,
+    states: &[MpState],
+    gravity: f64,
+    options: &LeOptions,
+    le: &LeReport,
+    srm: &FosReport,
+) -> Comparison {
+    let davis = super::slope::davis_factor(
+        &start.project.model,
+        gravity,
+        &start.points,
+        states,
+        options,
+        &le.critical_surface,
+        le.analysis.critical.axis,
+    )
+    .ok();
+    Comparison {
+        limit_equilibrium_method: le.method,
+        limit_equilibrium: le.factor,
+        strength_reduction: srm.factor,
+        ratio: srm.factor / le.factor,
+        limit_equilibrium_davis: davis,
+        note: "Strength reduction divides tan φ′ and c′ by F and keeps ψ_F = min(ψ, φ′_F); \
+               with ψ < φ′ the continuum fails before limit equilibrium says (Davis 1968): \
+               limit equilibrium on the strengths c* = β·c′_F, tan φ* = β·tan φ′_F, \
+               β = cos ψ_F cos φ′_F/(1 − sin ψ_F sin φ′_F), on the critical surface, \
+               reaches 1 at the factor given as limit_equilibrium_davis"
+            .into(),
+    }
+}
+
 /// Analyses `states` and writes the outputs into `out` (replaced under
-/// `force`); returns the report and the folder written.
+/// `force`); returns the analysis and the folder written.
 pub fn analyse_into(
     start: &Start,
     states: &[MpState],
@@ -209,13 +470,23 @@ pub fn analyse_into(
     out: &Path,
     force: bool,
     reads: &ReadLog,
-) -> Result<(FosReport, PathBuf), PipelineError> {
+) -> Result<(FosAnalysis, PathBuf), PipelineError> {
     // The output is checked before the analysis: a refusal comes at once.
     let dir = OutputDir::create(out, force, reads)?;
-    let settings = options.settings(start.project.cps.as_ref());
-    let report = analyse(&start.project.model, &start.points, states, &settings)?;
-    write(&report, &dir)?;
-    Ok((report, dir.commit()?))
+    let analysis = analyse_state(start, states, options)?;
+    let field: Vec<(f64, f64, f64)> = start
+        .points
+        .iter()
+        .zip(states)
+        .map(|(p, s)| (p.position[0], p.position[1], s.pwp))
+        .collect();
+    let ground = analysis
+        .limit_equilibrium
+        .as_ref()
+        .map(|r| r.ground.clone())
+        .unwrap_or_default();
+    write(&analysis, &field, &ground, &dir)?;
+    Ok((analysis, dir.commit()?))
 }
 
 /// `fos`: loads the state `source` names (for a map folder, the state Anura3D
@@ -225,7 +496,7 @@ pub fn fos(
     source: &StateSource,
     options: &FosOptions,
     to: Destination<'_>,
-) -> Result<(FosReport, PathBuf), PipelineError> {
+) -> Result<(FosAnalysis, PathBuf), PipelineError> {
     let (reads, start, target) = runner::begin(source, to, "fos")?;
     let states = if options.zero_pwp {
         without_pore_pressure(start.states())
@@ -235,14 +506,15 @@ pub fn fos(
     analyse_into(&start, &states, options, &target, to.replace, &reads)
 }
 
-/// The demo's two analyses of one start: with every pore pressure set to
-/// zero, and with the mapped pore pressures. Writes `fos_zero_pwp/` and
-/// `fos_mapped/` under `target`; returns both reports with their folders.
+/// The demo's two analyses of one start (limit equilibrium, Morgenstern–
+/// Price): with every pore pressure set to zero, and with the mapped pore
+/// pressures. Writes `fos_zero_pwp/` and `fos_mapped/` under `target`;
+/// returns both with their folders.
 pub fn zero_and_mapped(
     start: &Start,
     target: &Path,
     reads: &ReadLog,
-) -> Result<[(FosReport, PathBuf); 2], PipelineError> {
+) -> Result<[(FosAnalysis, PathBuf); 2], PipelineError> {
     let options = FosOptions::default();
     let zero = analyse_into(
         start,

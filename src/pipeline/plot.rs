@@ -185,6 +185,26 @@ pub fn field_map(
     label: &str,
     points: &[(f64, f64, f64)],
 ) -> Result<(), PipelineError> {
+    field_map_with(path, title, label, points, &[])
+}
+
+/// A polyline drawn over a field map (a slip surface, the ground).
+pub struct Overlay<'a> {
+    pub label: &'a str,
+    pub points: Vec<(f64, f64)>,
+    pub color: RGBColor,
+    /// Stroke width in pixels.
+    pub width: u32,
+}
+
+/// [`field_map`] with polylines drawn over the dots, and their legend.
+pub fn field_map_with(
+    path: &Path,
+    title: &str,
+    label: &str,
+    points: &[(f64, f64, f64)],
+    overlays: &[Overlay<'_>],
+) -> Result<(), PipelineError> {
     let (mut x0, mut x1, mut y0, mut y1) = (
         f64::INFINITY,
         f64::NEG_INFINITY,
@@ -199,6 +219,12 @@ pub fn field_map(
         y1 = y1.max(y);
         v0 = v0.min(v);
         v1 = v1.max(v);
+    }
+    for &(x, y) in overlays.iter().flat_map(|o| o.points.iter()) {
+        x0 = x0.min(x);
+        x1 = x1.max(x);
+        y0 = y0.min(y);
+        y1 = y1.max(y);
     }
     if !v0.is_finite() {
         (v0, v1) = (0.0, 1.0);
@@ -228,6 +254,21 @@ pub fn field_map(
                 .iter()
                 .map(|&(x, y, v)| Circle::new((x, y), 2, colour((v - v0) / (v1 - v0)).filled())),
         )?;
+        for o in overlays {
+            let style = o.color.stroke_width(o.width);
+            chart
+                .draw_series(LineSeries::new(o.points.clone(), style))?
+                .label(o.label)
+                .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
+        }
+        if !overlays.is_empty() {
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.8))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 14))
+                .draw()?;
+        }
         let mut cb = ChartBuilder::on(&bar)
             .margin_top(60)
             .margin_bottom(60)

@@ -1,0 +1,207 @@
+//! FS(t) by limit equilibrium over a time series of FEM fields (#31), on the
+//! shipped slope: a synthetic series whose pore pressures rise monotonically
+//! (a perched water table rising over the clay, suction falling) gives a
+//! factor of safety that falls monotonically (within 0.01), crosses 1, and is
+//! bisected in time to the tolerance asked; the files are written.
+
+mod common;
+use common::*;
+
+use std::path::{Path, PathBuf};
+
+use a3d_init::formats::fem_csv::CsvOptions;
+use a3d_init::pipeline::fos_time::{self, FosTimeOptions, SeriesInput};
+use a3d_init::pipeline::output::Destination;
+
+const GAMMA_W: f64 = 9.81;
+
+fn clay_top(x: f64) -> f64 {
+    let slope = 32f64.to_radians().tan();
+    let x_toe = 0.5 + 2.9 / slope;
+    if x <= 0.5 {
+        2.9
+    } else if x >= x_toe {
+        0.0
+    } else {
+        2.9 - slope * (x - 0.5)
+    }
+}
+
+/// The fixture's stand-in field scaled in time: the perched table at
+/// `rise` times its shape above the clay, at most at the ground `top` (a
+/// seepage face: limit equilibrium here has no ponded-water load, so water
+/// above the ground would be outside what it models), suction capped at
+/// `cap` kPa (GeoStudio sign: positive in compression).
+fn pwp(x: f64, y: f64, top: f64, rise: f64, cap: f64) -> f64 {
+    let t = ((x - 0.5) / 5.5).clamp(0.0, 1.0);
+    let table = (clay_top(x) + rise * (0.05 + 0.45 * t * t)).min(top);
+    if y <= table {
+        GAMMA_W * (table - y)
+    } else {
+        -(GAMMA_W * (y - table)).min(cap)
+    }
+}
+
+/// Node tables at `n` times over 2 h, the table rising from 0 to 1.8 times
+/// the stand-in's and the suction cap falling from 6 to 1.5 kPa.
+fn series(dir: &Path, n: usize) -> Vec<(f64, PathBuf)> {
+    let text = std::fs::read_to_string(fixture("slope/sand-nodes.csv")).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap().to_string();
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    let xy = |r: &[String]| -> (f64, f64) { (r[1].parse().unwrap(), r[2].parse().unwrap()) };
+    // The ground: the highest node of each column of the regular grid.
+    let mut tops: Vec<(f64, f64)> = Vec::new();
+    for r in &rows {
+        let (x, y) = xy(r);
+        match tops.iter_mut().find(|t| (t.0 - x).abs() < 1e-9) {
+            Some(t) => t.1 = t.1.max(y),
+            None => tops.push((x, y)),
+        }
+    }
+    let top = |x: f64| tops.iter().find(|t| (t.0 - x).abs() < 1e-9).unwrap().1;
+    (0..n)
+        .map(|k| {
+            let s = k as f64 / (n - 1) as f64;
+            let (time, rise, cap) = (2.0 * 3600.0 * s, 1.8 * s, 6.0 - 4.5 * (1.25 * s).min(1.0));
+            let mut out = header.clone();
+            for r in &rows {
+                let (x, y) = xy(r);
+                out.push_str(&format!(
+                    "\n{},{},{},{},{}",
+                    r[0],
+                    r[1],
+                    r[2],
+                    pwp(x, y, top(x), rise, cap),
+                    r[4]
+                ));
+            }
+            let path = dir.join(format!("t{k:02}.csv"));
+            std::fs::write(&path, out).unwrap();
+            (time, path)
+        })
+        .collect()
+}
+
+#[test]
+fn fs_over_time_of_a_rising_water_table_is_monotone_and_crosses_one() {
+    let tmp = tempfile::tempdir().unwrap();
+    let files = series(tmp.path(), 40);
+    let input = SeriesInput::Tables {
+        files,
+        csv: CsvOptions::default(),
+        mesh: None,
+        vtu: Default::default(),
+    };
+    let options = FosTimeOptions {
+        srm: false,
+        bisect_tolerance: Some(5.0),
+        ..FosTimeOptions::default()
+    };
+    let out = tmp.path().join("fos_time");
+    let (report, dir) = fos_time::fos_time(
+        &fixture("slope"),
+        &input,
+        &options,
+        Destination::new(Some(&out), false),
+    )
+    .unwrap();
+    let saved: Vec<(f64, f64)> = report
+        .curve
+        .iter()
+        .filter(|p| p.kind == "saved")
+        .map(|p| (p.time, p.factor))
+        .collect();
+    assert_eq!(saved.len(), 40);
+    // Monotone within 0.01, over the whole curve (bisected points included).
+    for w in report.curve.windows(2) {
+        assert!(
+            w[1].factor <= w[0].factor + 0.01,
+            "FS rises from {:.4} at {} s to {:.4} at {} s",
+            w[0].factor,
+            w[0].time,
+            w[1].factor,
+            w[1].time
+        );
+    }
+    assert!(saved[0].1 > 1.2, "{saved:?}");
+    // The table stops at the ground: no water stands above it.
+    assert!(
+        report.notes.iter().all(|n| !n.contains("ponding")),
+        "{:?}",
+        report.notes
+    );
+    let c = report.crossing.as_ref().expect("the curve crosses 1");
+    assert!(c.factor <= 1.0 && c.bracket.1 - c.bracket.0 <= 5.0, "{c:?}");
+    // The saved factor just before the crossing is above 1, the one after at
+    // or below 1.
+    let k = saved.iter().position(|s| s.1 <= 1.0).unwrap();
+    assert!(saved[k - 1].0 <= c.bracket.0 && c.time <= saved[k].0);
+    for f in fos_time::file_names(&report) {
+        assert!(dir.join(f).is_file(), "{f}");
+    }
+    let csv = std::fs::read_to_string(dir.join("fos_vs_time.csv")).unwrap();
+    assert_eq!(csv.lines().count(), report.curve.len() + 1);
+}
+
+/// A `.gsz` series is every saved step of its analysis, in time order, each
+/// with its time (the shipped SEEP/W column: 51 steps, 0 to 129,600 s).
+#[test]
+fn a_gsz_series_is_every_saved_step_with_its_time() {
+    let input = SeriesInput::Gsz {
+        path: fixture("geostudio-gsz-internal/1d-unsaturated-column/1D_unsaturated_column.gsz"),
+        analysis: None,
+        csv: CsvOptions::default(),
+    };
+    let series = fos_time::load_series(&input).unwrap();
+    assert_eq!(series.len(), 51);
+    assert_eq!(series[0].0, 0.0);
+    assert_eq!(series[50].0, 129_600.0);
+    assert!(series.windows(2).all(|w| w[1].0 > w[0].0));
+    assert!(series.iter().all(|(_, f)| f.nodes.len() == 306));
+}
+
+/// The shipped OpenGeoSys rain series (#26) read as a `.pvd`: every output
+/// at its time, limit equilibrium on each, and the first FS ≤ 1 bisected
+/// between two saved outputs.
+#[test]
+fn fs_over_time_of_the_shipped_ogs_rain_crosses_one_between_two_outputs() {
+    let tmp = tempfile::tempdir().unwrap();
+    let input = SeriesInput::Pvd {
+        path: fixture("slope/ogs/results/rain.pvd"),
+        vtu: Default::default(),
+    };
+    let options = FosTimeOptions {
+        srm: false,
+        bisect_tolerance: Some(5.0),
+        ..FosTimeOptions::default()
+    };
+    let (report, _) = fos_time::fos_time(
+        &fixture("slope"),
+        &input,
+        &options,
+        Destination::new(Some(&tmp.path().join("fos_time")), false),
+    )
+    .unwrap();
+    let saved: Vec<(f64, f64)> = report
+        .curve
+        .iter()
+        .filter(|p| p.kind == "saved")
+        .map(|p| (p.time, p.factor))
+        .collect();
+    let outputs = a3d_init::formats::fem_vtu::pvd::read(&fixture("slope/ogs/results/rain.pvd"))
+        .unwrap()
+        .outputs;
+    assert_eq!(saved.len(), outputs.len());
+    assert!(saved.iter().zip(&outputs).all(|(s, o)| s.0 == o.time));
+    // Dry sand at the start stands; the saturated slope at the end does not.
+    assert!(saved[0].1 > 1.2, "FS at t = 0: {}", saved[0].1);
+    assert!(saved.last().unwrap().1 < 1.0);
+    let crossing = report.crossing.as_ref().expect("FS falls to 1");
+    let before = saved.iter().rev().find(|s| s.0 < crossing.time).unwrap();
+    let after = saved.iter().find(|s| s.0 >= crossing.time).unwrap();
+    assert!(before.1 > 1.0 && after.1 <= 1.0, "{before:?} {after:?}");
+    assert!(crossing.time - before.0 > 0.0 && after.0 - crossing.time >= 0.0);
+}

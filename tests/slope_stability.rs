@@ -1,0 +1,466 @@
+//! Limit equilibrium (`a3d_init::slope`) against closed forms and published
+//! results (#31): the infinite slope, dry and with seepage parallel to the
+//! surface; a Bishop factor computed by hand for a given circle; and the
+//! slope-stability verification problems that commercial programs are checked
+//! against (ACADS, Giam & Donald 1989; Fredlund & Krahn 1977; Arai & Tagyo
+//! 1985). Sources of every number are in `docs/slope-stability.md`.
+
+use a3d_init::slope::{
+    self, CircleSearch, Domain, Dry, Interslice, Method, PoreField, PoreSample, Problem, Region,
+    SearchSettings, SlopeMaterial, Strength, Suction, Surface, WaterTable,
+};
+
+fn material(name: &str, c: f64, phi: f64) -> SlopeMaterial {
+    SlopeMaterial {
+        name: name.into(),
+        strength: Some(Strength {
+            cohesion: c,
+            friction_angle: phi,
+            phi_b: None,
+        }),
+    }
+}
+
+fn problem<'a>(
+    domain: &'a Domain,
+    materials: &'a [SlopeMaterial],
+    field: &'a dyn PoreField,
+) -> Problem<'a> {
+    Problem {
+        domain,
+        materials,
+        field,
+        suction: Suction::Bishop,
+        n_slices: 40,
+        min_depth: 0.0,
+        tolerance: 1e-7,
+    }
+}
+
+const MP: Method = Method::MorgensternPrice(Interslice::HalfSine);
+
+// ---------------------------------------------------------------------------
+// Closed forms.
+
+/// A band of thickness `t` (vertical) under a uniform slope of angle β,
+/// 100 m long.
+fn infinite_slope(beta_deg: f64, t: f64, gamma: f64) -> Domain {
+    let tan = beta_deg.to_radians().tan();
+    let l = 100.0;
+    Domain::from_polygons(vec![Region {
+        polygon: vec![[0.0, l * tan], [0.0, l * tan - t], [l, -t], [l, 0.0]],
+        material: 0,
+        unit_weight: gamma,
+    }])
+    .unwrap()
+}
+
+/// A surface at vertical depth `d` parallel to the ground from x = 10 to 90,
+/// with vertical ends.
+fn parallel_surface(domain: &Domain, d: f64) -> Surface {
+    let g = |x: f64| domain.ground_y(x).unwrap();
+    Surface::polyline(
+        domain,
+        vec![
+            [10.0, g(10.0)],
+            [10.0, g(10.0) - d],
+            [90.0, g(90.0) - d],
+            [90.0, g(90.0)],
+        ],
+        None,
+    )
+    .unwrap()
+}
+
+/// Seepage parallel to the surface with the water table at the ground:
+/// u = γw·z·cos²β at vertical depth z.
+struct ParallelSeepage {
+    beta: f64,
+    gamma_w: f64,
+    top: f64,
+}
+
+impl PoreField for ParallelSeepage {
+    fn sample(&self, x: f64, y: f64) -> PoreSample {
+        let z = (self.top - x * self.beta.tan()) - y;
+        PoreSample {
+            pwp: -self.gamma_w * z.max(0.0) * self.beta.cos().powi(2),
+            saturation: 1.0,
+        }
+    }
+}
+
+#[test]
+fn infinite_slope_dry_every_method_within_half_a_percent() {
+    let (beta, phi) = (25.0_f64, 35.0_f64);
+    let domain = infinite_slope(beta, 8.0, 19.0);
+    let materials = [material("sand", 0.0, phi)];
+    let p = problem(&domain, &materials, &Dry);
+    let surface = parallel_surface(&domain, 1.0);
+    let exact = phi.to_radians().tan() / beta.to_radians().tan();
+    for method in Method::ALL {
+        let (_, s) = slope::evaluate_surface(&p, method, &surface).unwrap();
+        assert!(s.converged, "{method:?}");
+        let err = (s.factor - exact).abs() / exact;
+        assert!(err < 0.005, "{method:?}: {} vs {exact} ({err:e})", s.factor);
+    }
+}
+
+#[test]
+fn infinite_slope_with_parallel_seepage_every_method_within_half_a_percent() {
+    let (beta, phi, gamma, gamma_w) = (20.0_f64, 33.0_f64, 20.0, 9.81);
+    let domain = infinite_slope(beta, 8.0, gamma);
+    let materials = [material("sand", 0.0, phi)];
+    let field = ParallelSeepage {
+        beta: beta.to_radians(),
+        gamma_w,
+        top: 100.0 * beta.to_radians().tan(),
+    };
+    let p = problem(&domain, &materials, &field);
+    let surface = parallel_surface(&domain, 1.0);
+    let exact = (gamma - gamma_w) / gamma * phi.to_radians().tan() / beta.to_radians().tan();
+    for method in Method::ALL {
+        let (_, s) = slope::evaluate_surface(&p, method, &surface).unwrap();
+        let err = (s.factor - exact).abs() / exact;
+        assert!(err < 0.005, "{method:?}: {} vs {exact} ({err:e})", s.factor);
+    }
+}
+
+/// Bishop's simplified method by hand: slices of equal width between the
+/// circle's ground crossings (both on a planar face, so no extra slice
+/// boundary), weight γ·b·(ground − base) at the slice middle, chord bases,
+/// and the fixed point F = Σ[c·b + W·tan φ]/m_α / Σ W·sin α.
+#[test]
+fn bishop_factor_matches_a_hand_computation() {
+    let (c, phi, gamma) = (8.0, 28.0_f64, 18.5);
+    let domain = infinite_slope(30.0, 40.0, gamma);
+    let materials = [material("clay", c, phi)];
+    let p = Problem {
+        n_slices: 25,
+        ..problem(&domain, &materials, &Dry)
+    };
+    let circle = slope::Circle {
+        xc: 45.0,
+        yc: 52.0,
+        r: 30.0,
+    };
+    let surface = circle.trace(&domain, 25).unwrap();
+    let (_, s) = slope::evaluate_surface(&p, Method::Bishop, &surface).unwrap();
+
+    // The hand computation.
+    let tan30 = 30f64.to_radians().tan();
+    let ground = |x: f64| 100.0 * tan30 - x * tan30;
+    let arc = |x: f64| circle.yc - (circle.r * circle.r - (x - circle.xc).powi(2)).sqrt();
+    // Crossings of y = ground(x) with the lower arc, by bisection.
+    let crossing = |mut a: f64, mut b: f64| {
+        for _ in 0..200 {
+            let m = 0.5 * (a + b);
+            if (ground(a) - arc(a)) * (ground(m) - arc(m)) <= 0.0 {
+                b = m;
+            } else {
+                a = m;
+            }
+        }
+        0.5 * (a + b)
+    };
+    let xa = crossing(circle.xc - circle.r + 1e-9, circle.xc);
+    let xb = crossing(circle.xc, circle.xc + circle.r - 1e-9);
+    let n = 25;
+    let b = (xb - xa) / n as f64;
+    let tan_phi = phi.to_radians().tan();
+    let mut rows = Vec::new();
+    for i in 0..n {
+        let (x0, x1) = (xa + i as f64 * b, xa + (i + 1) as f64 * b);
+        let (y0, y1) = (arc(x0), arc(x1));
+        let xm = 0.5 * (x0 + x1);
+        let w = gamma * b * (ground(xm) - 0.5 * (y0 + y1));
+        // The mass moves toward +x (the toe is on the right): α is measured
+        // positive where the base falls toward the toe.
+        let alpha = -((y1 - y0) / b).atan();
+        // The base is the chord: its shear acts at the distance of the chord
+        // from the centre, R·cos(δ/2) with δ the angle the chord subtends.
+        let chord = ((x1 - x0).powi(2) + (y1 - y0).powi(2)).sqrt();
+        let arm = (circle.r * circle.r - 0.25 * chord * chord).sqrt();
+        rows.push((w, alpha, arm));
+    }
+    // Moments about the centre: Σ S·arm = Σ W·arm·sin α, with
+    // S = (c·b + W·tan φ)/m_α for Bishop's N.
+    let mut f = 1.0_f64;
+    for _ in 0..200 {
+        let resisting: f64 = rows
+            .iter()
+            .map(|&(w, a, r)| r * (c * b + w * tan_phi) / (a.cos() + a.sin() * tan_phi / f))
+            .sum();
+        let driving: f64 = rows.iter().map(|&(w, a, r)| r * w * a.sin()).sum();
+        f = resisting / driving;
+    }
+    assert!(
+        (s.factor - f).abs() < 1e-6 * f,
+        "engine {} vs hand {f}",
+        s.factor
+    );
+}
+
+// ---------------------------------------------------------------------------
+// Published verification problems.
+
+/// ACADS 1(a) (Giam & Donald 1989; Slide2 verification #1; SLOPE/W
+/// verification §2.1): ground (20,25)–(30,25)–(50,35)–(70,35), base y = 20,
+/// c′ = 3 kPa, φ′ = 19.6°, γ = 20 kN/m³, dry. Referee FS = 1.00.
+fn acads_1a() -> Domain {
+    Domain::from_polygons(vec![Region {
+        polygon: vec![
+            [20.0, 20.0],
+            [70.0, 20.0],
+            [70.0, 35.0],
+            [50.0, 35.0],
+            [30.0, 25.0],
+            [20.0, 25.0],
+        ],
+        material: 0,
+        unit_weight: 20.0,
+    }])
+    .unwrap()
+}
+
+fn search(p: &Problem<'_>, method: Method) -> slope::Analysis {
+    slope::analyse(p, method, &SearchSettings::default()).unwrap()
+}
+
+fn within(what: &str, got: f64, referee: f64, tolerance: f64) {
+    let err = (got - referee) / referee;
+    assert!(
+        err.abs() <= tolerance,
+        "{what}: {got:.4} against the referee {referee} ({:+.2} %)",
+        100.0 * err
+    );
+}
+
+#[test]
+fn acads_1a_simple_slope_within_two_percent_of_the_referee() {
+    let domain = acads_1a();
+    let materials = [material("soil", 3.0, 19.6)];
+    let p = problem(&domain, &materials, &Dry);
+    for method in [MP, Method::Spencer, Method::Bishop] {
+        let a = search(&p, method);
+        within(
+            &format!("ACADS 1(a) {method:?} circular"),
+            a.circular.factor,
+            1.00,
+            0.02,
+        );
+        // The non-circular refinement can only lower the factor.
+        assert!(a.critical.factor <= a.circular.factor + 1e-12);
+        assert!(
+            a.circular.factor - a.critical.factor < 0.05 * a.circular.factor,
+            "{method:?}: non-circular {:.4} vs circular {:.4}",
+            a.critical.factor,
+            a.circular.factor
+        );
+    }
+}
+
+/// A layered infinite slope: a band of soil 1 (γ₁, thickness t₁ measured
+/// vertically) over soil 2 (γ₂), both parallel to the ground; a surface
+/// parallel to the ground at vertical depth d > t₁ lies in soil 2, whose
+/// strength alone acts on it, under the weight of both. Per unit horizontal
+/// width W = γ₁t₁ + γ₂(d − t₁); on the base σ = W cos²β, τ = W sin β cos β,
+/// so F = c₂/(W sin β cos β) + tan φ₂/tan β. (The ACADS layered problem,
+/// 1(c), is not used: its interface coordinates could not be confirmed from
+/// a public source; see docs/slope-stability.md.)
+#[test]
+fn layered_infinite_slope_every_method_within_half_a_percent() {
+    let (beta, t1, d) = (22.0_f64, 2.0, 3.5);
+    let (gamma1, gamma2) = (17.0, 21.0);
+    let (c2, phi2) = (4.0, 26.0_f64);
+    let tan = beta.to_radians().tan();
+    let l = 100.0;
+    let ground = |x: f64| (l - x) * tan;
+    let domain = Domain::from_polygons(vec![
+        Region {
+            polygon: vec![
+                [0.0, ground(0.0)],
+                [0.0, ground(0.0) - t1],
+                [l, -t1],
+                [l, 0.0],
+            ],
+            material: 0,
+            unit_weight: gamma1,
+        },
+        Region {
+            polygon: vec![
+                [0.0, ground(0.0) - t1],
+                [0.0, ground(0.0) - 8.0],
+                [l, -8.0],
+                [l, -t1],
+            ],
+            material: 1,
+            unit_weight: gamma2,
+        },
+    ])
+    .unwrap();
+    // Soil 1 is much stronger: were its strength used at the base, the
+    // factor would be far off.
+    let materials = [material("upper", 30.0, 40.0), material("lower", c2, phi2)];
+    let p = problem(&domain, &materials, &Dry);
+    let surface = parallel_surface(&domain, d);
+    let w = gamma1 * t1 + gamma2 * (d - t1);
+    let (sb, cb) = beta.to_radians().sin_cos();
+    let exact = c2 / (w * sb * cb) + phi2.to_radians().tan() / tan;
+    for method in Method::ALL {
+        let (_, s) = slope::evaluate_surface(&p, method, &surface).unwrap();
+        assert!(s.converged, "{method:?}");
+        // Janbu's empirical correction f₀ = 1 + b₁(d/L − 1.4(d/L)²) raises a
+        // c–φ soil's factor by 2 % at d/L = 3.5/80: the closed form is the
+        // uncorrected factor's.
+        let factor = match method {
+            Method::Janbu => {
+                let f0 = s.janbu_f0.unwrap();
+                assert!((s.factor - f0 * s.force_factor.unwrap()).abs() < 1e-12);
+                s.force_factor.unwrap()
+            }
+            _ => s.factor,
+        };
+        let err = (factor - exact).abs() / exact;
+        assert!(err < 0.005, "{method:?}: {factor} vs {exact} ({err:e})");
+    }
+}
+
+/// Fredlund & Krahn (1977): ground (0,60)–(60,60)–(140,20)–(180,20) ft, base
+/// y = 0, c′ = 600 psf, φ′ = 20°, γ = 120 pcf, the circle (120, 90), R = 80;
+/// dry and with the piezometric line (0,40)–(140,20)–(180,20), γw = 62.4 pcf.
+/// Their factors: dry ordinary 1.928, Bishop 2.080, Spencer 2.073, M–P 2.076;
+/// piezometric line 1.693, 1.834, 1.830, 1.832.
+#[test]
+fn fredlund_krahn_circle_dry_and_with_a_water_table_within_one_percent() {
+    let domain = Domain::from_polygons(vec![Region {
+        polygon: vec![
+            [0.0, 0.0],
+            [180.0, 0.0],
+            [180.0, 20.0],
+            [140.0, 20.0],
+            [60.0, 60.0],
+            [0.0, 60.0],
+        ],
+        material: 0,
+        unit_weight: 120.0,
+    }])
+    .unwrap();
+    let materials = [material("F&K soil", 600.0, 20.0)];
+    let circle = slope::Circle {
+        xc: 120.0,
+        yc: 90.0,
+        r: 80.0,
+    };
+    let surface = circle.trace(&domain, 40).unwrap();
+    let water = WaterTable {
+        line: vec![[0.0, 40.0], [140.0, 20.0], [180.0, 20.0]],
+        gamma_w: 62.4,
+    };
+    let cases: [(&dyn PoreField, [f64; 4]); 2] = [
+        (&Dry, [1.928, 2.080, 2.073, 2.076]),
+        (&water, [1.693, 1.834, 1.830, 1.832]),
+    ];
+    for (field, published) in cases {
+        let p = problem(&domain, &materials, field);
+        let methods = [
+            Method::Ordinary,
+            Method::Bishop,
+            Method::Spencer,
+            Method::MorgensternPrice(Interslice::Constant),
+        ];
+        for (method, reference) in methods.into_iter().zip(published) {
+            let (_, s) = slope::evaluate_surface(&p, method, &surface).unwrap();
+            within(&format!("F&K {method:?}"), s.factor, reference, 0.01);
+        }
+    }
+}
+
+/// Arai & Tagyo (1985) example 3 (Slide2 verification #16): ground
+/// (0,15)–(18,15)–(48,35)–(66,35), base y = 0, c′ = 41.65 kPa, φ′ = 15°,
+/// γ = 18.82 kN/m³, water table (0,15)–(18,15)–(30,23)–(48,29)–(66,32).
+/// Published 1.138 (A&T; the data as tabulated in the Slide2 verification
+/// manual, not re-checked against the paper here): the test holds the
+/// circular Bishop search to 3 % of it (it finds 1.115).
+#[test]
+fn arai_tagyo_water_table_slope_near_the_published_factor() {
+    let domain = Domain::from_polygons(vec![Region {
+        polygon: vec![
+            [0.0, 0.0],
+            [66.0, 0.0],
+            [66.0, 35.0],
+            [48.0, 35.0],
+            [18.0, 15.0],
+            [0.0, 15.0],
+        ],
+        material: 0,
+        unit_weight: 18.82,
+    }])
+    .unwrap();
+    let materials = [material("soil", 41.65, 15.0)];
+    let water = WaterTable {
+        line: vec![
+            [0.0, 15.0],
+            [18.0, 15.0],
+            [30.0, 23.0],
+            [48.0, 29.0],
+            [66.0, 32.0],
+        ],
+        gamma_w: 9.81,
+    };
+    let p = problem(&domain, &materials, &water);
+    let bishop = search(&p, Method::Bishop).circular.factor;
+    within("Arai & Tagyo 3 Bishop circular", bishop, 1.138, 0.03);
+    // The rigorous methods over circles agree with Bishop's to a percent or
+    // two. (A sign change of the residual at a pole of the slice recursion,
+    // taken for a root, once gave Spencer 0.910 and half-sine M–P 0.432
+    // here.)
+    for method in [
+        MP,
+        Method::MorgensternPrice(Interslice::Constant),
+        Method::Spencer,
+    ] {
+        let f = search(&p, method).circular.factor;
+        assert!(
+            (f / bishop - 1.0).abs() < 0.02,
+            "{method:?}: {f:.4} against Bishop {bishop:.4}"
+        );
+    }
+}
+
+#[test]
+fn grid_search_finds_the_entry_exit_minimum_on_acads_1a() {
+    let domain = acads_1a();
+    let materials = [material("soil", 3.0, 19.6)];
+    let p = problem(&domain, &materials, &Dry);
+    let grid = slope::analyse(
+        &p,
+        Method::Bishop,
+        &SearchSettings {
+            circles: CircleSearch::Grid {
+                centres: None,
+                tangents: None,
+            },
+            refine: false,
+            ..SearchSettings::default()
+        },
+    )
+    .unwrap();
+    within("ACADS 1(a) grid Bishop", grid.circular.factor, 1.00, 0.02);
+}
+
+/// Water above the ground is named, not silently analysed: the ACADS 1(a)
+/// section under a level water table 1 m above its crest warns (the most,
+/// about 108 kPa, at the toe); the same table 1 m below the toe does not.
+#[test]
+fn ponding_above_the_ground_is_warned_of() {
+    let domain = acads_1a();
+    let table = |y: f64| WaterTable {
+        line: vec![[20.0, y], [70.0, y]],
+        gamma_w: 9.81,
+    };
+    let warning = a3d_init::pipeline::slope::ponding(&domain, &table(36.0)).unwrap();
+    assert!(warning.contains("ponding"), "{warning}");
+    assert!(a3d_init::pipeline::slope::ponding(&domain, &table(24.0)).is_none());
+    assert!(a3d_init::pipeline::slope::ponding(&domain, &Dry).is_none());
+}
