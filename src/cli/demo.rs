@@ -1,22 +1,25 @@
 //! `a3d-init demo`: the paper's application end to end on the shipped slope
-//! fixture (`fixtures/slope/`), composed of library calls: inspect → calibrate
-//! h → map (the stress solved for equilibrium) → verify, with the geostatic
-//! map of the same slope beside it for comparison → factors of safety,
-//! leaving a ready-to-run Anura3D project with plots of the mapped fields
-//! (cf. the paper's Fig. 9), the calibration curve and the verify history. The pore pressures are a
-//! documented stand-in field, not a SEEP/W result. Everything printed is what
-//! was run and measured.
+//! fixture (`fixtures/slope/`), composed of library calls: the rain computed
+//! by OpenGeoSys (`fixtures/slope/ogs/`) → FS(t) by limit equilibrium and the
+//! failure time → the OGS output at that time: calibrate h → map (the stress
+//! solved for equilibrium) → verify, with the geostatic map of the same slope
+//! beside it for comparison → factors of safety, leaving a ready-to-run
+//! Anura3D project with plots of the mapped fields (cf. the paper's Fig. 9),
+//! the FS(t) curve, the calibration curve and the verify history. Everything
+//! printed is what was run and measured.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use anyhow::bail;
 
-use super::args::FemArgs;
 use super::print::wrote;
+use crate::formats::gsz::StepChoice;
 use crate::kernel::KernelKind;
 use crate::model::{MpState, Quantity};
 use crate::pipeline::check::{self, VerifyOptions};
+use crate::pipeline::fem::FemOptions;
+use crate::pipeline::fos_time::{self, FosTimeOptions, SeriesInput};
 use crate::pipeline::map::{MapConfig, SmoothingLength, StressSource};
 use crate::pipeline::mapping::{self, MapJob};
 use crate::pipeline::output::{Destination, OutputDir, ReadLog};
@@ -31,7 +34,7 @@ pub struct DemoArgs {
     /// Replace an existing output folder.
     #[arg(long)]
     pub force: bool,
-    /// Skip step 5, the two factors of safety (strength reduction, about 30 s).
+    /// Skip step 6, the two factors of safety of the mapped state.
     #[arg(long)]
     pub no_fos: bool,
 }
@@ -63,10 +66,10 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     let started = Instant::now();
     let reads = ReadLog::start();
     let dir = fixture_dir()?;
-    let fem_file = dir.join("sand-nodes.csv");
+    let pvd = dir.join("ogs/results/rain.pvd");
     say!("a3d-init demo: the rainfall-loaded slope of the seed paper (Lora et al. 2016)");
     say!(
-        "  NOTE: the pore pressures are a documented STAND-IN field (fixtures/slope/README.md), not SEEP/W results."
+        "  FEM stage: OpenGeoSys RichardsFlow, 150 mm/h on the sand layer, Table 1 (fixtures/slope/ogs/README.md)"
     );
 
     // 1. Inspect.
@@ -88,25 +91,71 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
             .join(", ")
     );
 
-    // 2. Calibrate h on the FEM pore pressures.
-    let fem_options = FemArgs::files(vec![fem_file.clone()]).options()?;
-    let fem = crate::pipeline::fem::load(&fem_options)?;
+    // 2. FS(t) over the OGS outputs by limit equilibrium; the failure time.
+    let series = fos_time::load_series(&SeriesInput::Pvd {
+        path: pvd.clone(),
+        vtu: Default::default(),
+    })?;
+    let curve = fos_time::fos_over_time(
+        &project,
+        &series,
+        &FosTimeOptions {
+            srm: false,
+            ..FosTimeOptions::default()
+        },
+    )?;
+    let Some(crossing) = &curve.crossing else {
+        bail!("FS(t) never falls to 1 on {}", pvd.display());
+    };
+    let (t_map, fem_at) = series
+        .iter()
+        .min_by(|a, b| {
+            (a.0 - crossing.time)
+                .abs()
+                .total_cmp(&(b.0 - crossing.time).abs())
+        })
+        .expect("a series has two outputs or more");
+    let fs_at = |t: f64| {
+        curve
+            .curve
+            .iter()
+            .find(|p| p.time == t)
+            .map_or(f64::NAN, |p| p.factor)
+    };
+    say!(
+        "2 FS(t)      {} OGS outputs over {:.1} h, {} ({:.1} s): FS = {:.3} at t = 0, first FS ≤ 1 at t = {:.3} h; paper (SLOPE/W on SEEP/W): 1.56 h, {:+.0} %",
+        series.len(),
+        series.last().map_or(0.0, |s| s.0) / 3600.0,
+        curve.method,
+        curve.limit_equilibrium_runtime_s,
+        fs_at(series[0].0),
+        crossing.time_h,
+        100.0 * (crossing.time_h / 1.56 - 1.0)
+    );
+
+    // 3. Calibrate h on the pore pressures of the output nearest that time.
     let outcome = calibrate::calibrate_h(
-        &fem.nodes,
+        &fem_at.nodes,
         &[Quantity::Pwp],
         KernelKind::Cubic,
         1,
         crate::kernel::loo::Norm::L1,
     )?;
     say!(
-        "2 calibrate  {} FEM nodes: h = {:.4} m, h/l = {:.3} (paper: h = 0.046 m on a 0.05 m mesh, h/l 0.7–1.0); LOO R² = {:.5}",
-        fem.nodes.len(),
+        "3 calibrate  OGS output t = {:.2} h (FS = {:.3}), {} FEM nodes: h = {:.4} m, h/l = {:.3} (paper: h = 0.046 m on a 0.05 m mesh, h/l 0.7–1.0); LOO R² = {:.5}",
+        t_map / 3600.0,
+        fs_at(*t_map),
+        fem_at.nodes.len(),
         outcome.h,
         outcome.h_over_l,
         outcome.stats.r2
     );
+    let fem_options = FemOptions {
+        step: StepChoice::Time(*t_map),
+        ..FemOptions::files(vec![pvd.clone()])
+    };
 
-    // 3. Map with that h, the stress solved for equilibrium.
+    // 4. Map with that h, the stress solved for equilibrium.
     let job = MapJob {
         model: dir.clone(),
         fem: fem_options,
@@ -117,6 +166,8 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
                 seed: 1,
             },
             stress: StressSource::Equilibrium,
+            // OGS's one material region is the sand layer.
+            material_map: Some("mat0=silty_sand".parse()?),
             ..MapConfig::default()
         },
         generate_cps: false,
@@ -136,7 +187,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     let plots: [FieldPlot<'_>; 3] = [
         (
             "pwp.svg",
-            "Mapped pore-water pressure (stand-in field)",
+            "Mapped pore-water pressure (OpenGeoSys at the failure time)",
             "pwp (kPa)",
             &|s| s.pwp,
         ),
@@ -158,11 +209,20 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         written.push(name.to_string());
     }
     written.push("calibration.svg".into());
+    fos_time::write_outputs(&out, &curve, &series)?;
+    for name in [
+        "fos_time.json",
+        "fos_vs_time.csv",
+        "fos_vs_time.svg",
+        "fos_crossing.svg",
+    ] {
+        written.push(name.to_string());
+    }
     let target = out.commit()?;
     let (pwp_lo, pwp_hi) = range(&mapped.states, |s| s.pwp);
     let (syy_lo, syy_hi) = range(&mapped.states, |s| s.total[1]);
     say!(
-        "3 map        {} MPs, pwp {pwp_lo:.2} .. {pwp_hi:.2} kPa, σyy {syy_lo:.2} .. {syy_hi:.2} kPa (Anura3D signs, {}); MAPF h = {:.2e} m",
+        "4 map        {} MPs, pwp {pwp_lo:.2} .. {pwp_hi:.2} kPa, σyy {syy_lo:.2} .. {syy_hi:.2} kPa (Anura3D signs, {}); MAPF h = {:.2e} m",
         pts.len(),
         mapped.report.stress_source,
         mapped.report.mapf_smoothing_length
@@ -183,7 +243,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         );
     }
 
-    // 4. Verify with the explicit MPM runner.
+    // 5. Verify with the explicit MPM runner.
     let source = StateSource::Folder(target.clone());
     let verify_dir = target.join("verify");
     let (outcome, verify_dir) = check::verify(
@@ -193,7 +253,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     )?;
     match &outcome.run {
         Some(r) => say!(
-            "4 verify     {}: initial residual {:.2e}, {} MPs yielded, max displacement {:.3} m after {:.3} s",
+            "5 verify     {}: initial residual {:.2e}, {} MPs yielded, max displacement {:.3} m after {:.3} s",
             if outcome.equilibrium {
                 "IN EQUILIBRIUM"
             } else {
@@ -204,7 +264,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
             r.max_displacement,
             r.time
         ),
-        None => say!("4 verify     NOT IN EQUILIBRIUM: the run could not start"),
+        None => say!("5 verify     NOT IN EQUILIBRIUM: the run could not start"),
     }
     for c in &outcome.causes {
         say!("             - {c}");
@@ -268,14 +328,14 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         ratio(&geostatic_outcome),
         ratio(&outcome)
     );
-    // 5. Factor of safety by strength reduction on the state Anura3D will
+    // 6. Factor of safety by strength reduction on the state Anura3D will
     // hold: zero pwp, then the mapped pwp.
     let mut fos_folders = Vec::new();
     if !args.no_fos {
         let start = Start::load(&source)?;
         let [(zero, zero_dir), (with_pwp, mapped_dir)] =
             fos::zero_and_mapped(&start, &target, &reads)?;
-        say!("5 fos        zero pwp:   {}", fos::factor_line(&zero));
+        say!("6 fos        zero pwp:   {}", fos::factor_line(&zero));
         say!("             mapped pwp: {}", fos::factor_line(&with_pwp));
         fos_folders.push((zero_dir, fos::file_names(&zero)));
         fos_folders.push((mapped_dir, fos::file_names(&with_pwp)));
@@ -300,6 +360,12 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     say!(
         "  run-out: a3d-init run {} --time 2 --snapshots 0.3,0.8,1.2,2.0",
         target.display()
+    );
+    say!(
+        "failure time: {:.3} h measured (OpenGeoSys rain, {} FS(t)) against the paper's 1.56 h ({:+.0} %; docs/slope.md)",
+        crossing.time_h,
+        curve.method,
+        100.0 * (crossing.time_h / 1.56 - 1.0)
     );
     Ok(())
 }

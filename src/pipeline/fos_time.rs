@@ -535,6 +535,17 @@ pub fn fos_time(
     let target = to.or(|| project.files.dir.join("fos_time"));
     let dir = OutputDir::create(&target, to.replace, &reads)?;
     let report = fos_over_time(&project, &series, options)?;
+    write_outputs(&dir, &report, &series)?;
+    Ok((report, dir.commit()?))
+}
+
+/// Writes `fos_time.json`, `fos_vs_time.csv`, `fos_vs_time.svg` and, with a
+/// crossing, `fos_crossing.svg` into `dir`.
+pub fn write_outputs(
+    dir: &OutputDir,
+    report: &FosTimeReport,
+    series: &[(f64, LoadedFem)],
+) -> Result<(), PipelineError> {
     let json = serde_json::to_string_pretty(&report)
         .map_err(|e| PipelineError::Output(format!("fos_time.json: {e}")))?;
     dir.write("fos_time.json", |w| w.write_all(json.as_bytes()))?;
@@ -559,9 +570,9 @@ pub fn fos_time(
         }
         Ok(())
     })?;
-    curve_plot(&dir.path("fos_vs_time.svg"), &report)?;
+    curve_plot(&dir.path("fos_vs_time.svg"), report)?;
     if let Some(c) = &report.crossing {
-        let field: Vec<(f64, f64, f64)> = crossing_field(&series, c.time);
+        let field: Vec<(f64, f64, f64)> = crossing_field(series, c.time);
         le::write_surface_plot(
             &dir.path("fos_crossing.svg"),
             &format!(
@@ -573,7 +584,7 @@ pub fn fos_time(
             &c.analysis.ground,
         )?;
     }
-    Ok((report, dir.commit()?))
+    Ok(())
 }
 
 /// The FEM nodes' pore pressure at `time`, interpolated between the saved
