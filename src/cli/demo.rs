@@ -34,7 +34,8 @@ pub struct DemoArgs {
     /// Replace an existing output folder.
     #[arg(long)]
     pub force: bool,
-    /// Skip step 6, the two factors of safety of the mapped state.
+    /// A quick look: skip step 6 (the factors of safety of the mapped state)
+    /// and stop verify after 2,000 explicit steps.
     #[arg(long)]
     pub no_fos: bool,
 }
@@ -48,6 +49,9 @@ fn fixture_dir() -> anyhow::Result<PathBuf> {
     }
     bail!("fixtures/slope not found: run the demo from the a3d-init repository")
 }
+
+/// Explicit steps of the demo's shorter verify runs.
+const SHORT_VERIFY_STEPS: usize = 2_000;
 
 /// A field plot: file name, title, colour-bar label and the quantity.
 type FieldPlot<'a> = (&'a str, &'a str, &'a str, &'a dyn Fn(&MpState) -> f64);
@@ -243,12 +247,23 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         );
     }
 
-    // 5. Verify with the explicit MPM runner.
+    // 5. Verify with the explicit MPM runner. The two comparisons (the
+    // intended state, the geostatic map) are judged at their first steps and
+    // run 2,000 steps; with --no-fos the main verify too.
+    let verify_short = VerifyOptions {
+        max_steps: SHORT_VERIFY_STEPS,
+        ..VerifyOptions::default()
+    };
+    let verify_main = if args.no_fos {
+        verify_short.clone()
+    } else {
+        VerifyOptions::default()
+    };
     let source = StateSource::Folder(target.clone());
     let verify_dir = target.join("verify");
     let (outcome, verify_dir) = check::verify(
         &source,
-        &VerifyOptions::default(),
+        &verify_main,
         Destination::new(Some(&verify_dir), true),
     )?;
     match &outcome.run {
@@ -287,19 +302,20 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
             model: target.clone(),
             state: target.join("mps.csv"),
         },
-        &VerifyOptions::default(),
+        &verify_short,
         Destination::new(Some(&target.join("verify-intended")), true),
     )?;
     if let Some(r) = &intended.run {
         say!(
-            "             the intended state (mps.csv, σ'zz as solved): {}, initial residual {:.2e}, max displacement {:.1e} m",
+            "             the intended state (mps.csv, σ'zz as solved): {}, initial residual {:.2e}, max displacement {:.1e} m after {} steps",
             if intended.equilibrium {
                 "IN EQUILIBRIUM"
             } else {
                 "NOT IN EQUILIBRIUM"
             },
             r.initial_residual_ratio,
-            r.max_displacement
+            r.max_displacement,
+            r.steps
         );
     }
     // The geostatic column formula on the same slope, for comparison.
@@ -315,7 +331,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         mapping::map(&geostatic_job, Destination::new(Some(&geostatic), true))?;
     let (geostatic_outcome, geostatic_verify) = check::verify(
         &StateSource::Folder(geostatic.clone()),
-        &VerifyOptions::default(),
+        &verify_short,
         Destination::new(None, true),
     )?;
     let ratio = |o: &check::VerifyOutcome| {
