@@ -267,11 +267,7 @@ pub fn read(
             scalar_array(path, tag, Role::Region)?;
             let ids = values(path, bytes, &xml, tag, xml.n_cells)?;
             let ids = kept_cell_ids(path, tag, &ids, &mesh)?;
-            let mut counts: BTreeMap<i64, usize> = BTreeMap::new();
-            for &id in &ids {
-                *counts.entry(id).or_default() += 1;
-            }
-            materials = counts.into_iter().collect();
+            materials = material_counts(&ids);
             used.insert(tag.name.clone(), "region (mat<id>)".into());
             Some(mesh.around(&ids))
         }
@@ -344,21 +340,7 @@ pub fn read(
     if let Some(w) = magnitude_warning(&nodes, pressure_assumed, &pressure_unit) {
         warnings.push(w);
     }
-    let arrays = array_list(&xml)
-        .into_iter()
-        .map(|(t, location)| info(t, location, used.get(&t.name).cloned()))
-        .collect();
     let vtu = VtuReport {
-        file: path.to_path_buf(),
-        series: None,
-        encoding: xml.encoding.clone(),
-        cells: mesh
-            .kinds
-            .iter()
-            .map(|(k, c)| (k.name().to_string(), *c))
-            .collect(),
-        materials,
-        arrays,
         units: units_text(
             &length_unit,
             length_assumed,
@@ -367,6 +349,7 @@ pub fn read(
         ),
         stress_rule,
         notes,
+        ..report(path, &xml, &mesh, &used, materials)
     };
     let report = FemReadReport {
         path: path.to_path_buf(),
@@ -559,13 +542,34 @@ pub fn describe(path: &Path, bytes: &[u8]) -> Result<VtuReport, FormatError> {
     if let Some(tag) = find(path, &xml, Role::Region, &[])? {
         let ids = values(path, bytes, &xml, tag, xml.n_cells)?;
         let ids = kept_cell_ids(path, tag, &ids, &mesh)?;
-        let mut counts: BTreeMap<i64, usize> = BTreeMap::new();
-        for id in ids {
-            *counts.entry(id).or_default() += 1;
-        }
-        materials = counts.into_iter().collect();
+        materials = material_counts(&ids);
     }
     Ok(VtuReport {
+        units: units_text("m", true, "Pa", true),
+        notes: mesh.notes.clone(),
+        ..report(path, &xml, &mesh, &used, materials)
+    })
+}
+
+/// Cell counts per `MaterialIDs` value, by value.
+fn material_counts(ids: &[i64]) -> Vec<(i64, usize)> {
+    let mut counts: BTreeMap<i64, usize> = BTreeMap::new();
+    for &id in ids {
+        *counts.entry(id).or_default() += 1;
+    }
+    counts.into_iter().collect()
+}
+
+/// What the file holds (encoding, cells, materials, arrays and the role each
+/// was read as); units, stress rule and notes left for the caller.
+fn report(
+    path: &Path,
+    xml: &VtuXml,
+    mesh: &Mesh,
+    used: &BTreeMap<String, String>,
+    materials: Vec<(i64, usize)>,
+) -> VtuReport {
+    VtuReport {
         file: path.to_path_buf(),
         series: None,
         encoding: xml.encoding.clone(),
@@ -575,14 +579,14 @@ pub fn describe(path: &Path, bytes: &[u8]) -> Result<VtuReport, FormatError> {
             .map(|(k, c)| (k.name().to_string(), *c))
             .collect(),
         materials,
-        arrays: array_list(&xml)
+        arrays: array_list(xml)
             .into_iter()
             .map(|(t, location)| info(t, location, used.get(&t.name).cloned()))
             .collect(),
-        units: units_text("m", true, "Pa", true),
+        units: String::new(),
         stress_rule: None,
-        notes: mesh.notes,
-    })
+        notes: Vec::new(),
+    }
 }
 
 #[cfg(test)]
