@@ -9,25 +9,13 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use a3d_init::formats::gom::write::model_to_text;
+use a3d_init::model::generate::slope_fixture_clay_top as clay_top;
 use a3d_init::model::generate::{self, MaterialSpec};
 use a3d_init::model::{AnuraModel, Dimension, ElementType, Mesh, RetentionCurve};
 
 const SAND: f64 = 0.6;
 const BASE: f64 = -0.5;
 const GAMMA_W: f64 = 9.81;
-
-/// Top of the compacted clay (m): crest at 2.9 m for x ≤ 0.5, a 32° slope, toe at 0.
-fn clay_top(x: f64) -> f64 {
-    let slope = 32f64.to_radians().tan();
-    let x_toe = 0.5 + 2.9 / slope;
-    if x <= 0.5 {
-        2.9
-    } else if x >= x_toe {
-        0.0
-    } else {
-        2.9 - slope * (x - 0.5)
-    }
-}
 
 /// Stand-in perched water table height above the clay (m): 0.05 m at the crest
 /// rising quadratically to 0.5 m at the right end (water collects at the toe).

@@ -10,76 +10,22 @@ use common::*;
 use std::path::{Path, PathBuf};
 
 use a3d_init::formats::fem_csv::CsvOptions;
+use a3d_init::model::generate;
 use a3d_init::pipeline::fos_time::{self, FosTimeOptions, SeriesInput};
 use a3d_init::pipeline::output::Destination;
 
-const GAMMA_W: f64 = 9.81;
-
-fn clay_top(x: f64) -> f64 {
-    let slope = 32f64.to_radians().tan();
-    let x_toe = 0.5 + 2.9 / slope;
-    if x <= 0.5 {
-        2.9
-    } else if x >= x_toe {
-        0.0
-    } else {
-        2.9 - slope * (x - 0.5)
-    }
-}
-
-/// The fixture's stand-in field scaled in time: the perched table at
-/// `rise` times its shape above the clay, at most at the ground `top` (a
-/// seepage face: limit equilibrium here has no ponded-water load, so water
-/// above the ground would be outside what it models), suction capped at
-/// `cap` kPa (GeoStudio sign: positive in compression).
-fn pwp(x: f64, y: f64, top: f64, rise: f64, cap: f64) -> f64 {
-    let t = ((x - 0.5) / 5.5).clamp(0.0, 1.0);
-    let table = (clay_top(x) + rise * (0.05 + 0.45 * t * t)).min(top);
-    if y <= table {
-        GAMMA_W * (table - y)
-    } else {
-        -(GAMMA_W * (y - table)).min(cap)
-    }
-}
-
 /// Node tables at `n` times over 2 h, the table rising from 0 to 1.8 times
-/// the stand-in's and the suction cap falling from 6 to 1.5 kPa.
+/// the stand-in's and the suction cap falling from 6 to 1.5 kPa
+/// ([`generate::rising_table_series`]).
 fn series(dir: &Path, n: usize) -> Vec<(f64, PathBuf)> {
     let text = std::fs::read_to_string(fixture("slope/sand-nodes.csv")).unwrap();
-    let mut lines = text.lines();
-    let header = lines.next().unwrap().to_string();
-    let rows: Vec<Vec<String>> = lines
-        .map(|l| l.split(',').map(str::to_string).collect())
-        .collect();
-    let xy = |r: &[String]| -> (f64, f64) { (r[1].parse().unwrap(), r[2].parse().unwrap()) };
-    // The ground: the highest node of each column of the regular grid.
-    let mut tops: Vec<(f64, f64)> = Vec::new();
-    for r in &rows {
-        let (x, y) = xy(r);
-        match tops.iter_mut().find(|t| (t.0 - x).abs() < 1e-9) {
-            Some(t) => t.1 = t.1.max(y),
-            None => tops.push((x, y)),
-        }
-    }
-    let top = |x: f64| tops.iter().find(|t| (t.0 - x).abs() < 1e-9).unwrap().1;
-    (0..n)
-        .map(|k| {
-            let s = k as f64 / (n - 1) as f64;
-            let (time, rise, cap) = (2.0 * 3600.0 * s, 1.8 * s, 6.0 - 4.5 * (1.25 * s).min(1.0));
-            let mut out = header.clone();
-            for r in &rows {
-                let (x, y) = xy(r);
-                out.push_str(&format!(
-                    "\n{},{},{},{},{}",
-                    r[0],
-                    r[1],
-                    r[2],
-                    pwp(x, y, top(x), rise, cap),
-                    r[4]
-                ));
-            }
+    generate::rising_table_series(&text, n)
+        .unwrap()
+        .into_iter()
+        .enumerate()
+        .map(|(k, (time, table))| {
             let path = dir.join(format!("t{k:02}.csv"));
-            std::fs::write(&path, out).unwrap();
+            std::fs::write(&path, table).unwrap();
             (time, path)
         })
         .collect()

@@ -363,3 +363,76 @@ pub fn structured_square_nodes(size: f64, l: f64) -> Vec<[f64; 3]> {
         .flat_map(|j| (0..=n).map(move |i| [i as f64 * step, j as f64 * step, 0.0]))
         .collect()
 }
+
+/// Top of the shipped slope's compacted clay (`fixtures/slope`, m): the crest
+/// at 2.9 m for x ≤ 0.5 m, a 32° face, the toe at 0.
+pub fn slope_fixture_clay_top(x: f64) -> f64 {
+    let slope = 32f64.to_radians().tan();
+    let x_toe = 0.5 + 2.9 / slope;
+    if x <= 0.5 {
+        2.9
+    } else if x >= x_toe {
+        0.0
+    } else {
+        2.9 - slope * (x - 0.5)
+    }
+}
+
+/// A rising-rain series on the shipped slope's sand nodes (the text of
+/// `fixtures/slope/sand-nodes.csv`: id, x, y, pwp, material): `n` node tables
+/// over 2 h, each with its time in s. A water table perched on the clay rises
+/// to 1.8 times its shape (0.05 + 0.45·t² of the way along the face), at most
+/// to the ground (the highest node of each column), and the suction above it
+/// is capped at 6 → 1.5 kPa; GeoStudio sign (positive in compression). The
+/// pore pressures rise monotonically in time at every node. Errors name the
+/// 1-based line.
+pub fn rising_table_series(nodes_csv: &str, n: usize) -> Result<Vec<(f64, String)>, String> {
+    const GAMMA_W: f64 = 9.81;
+    let mut lines = nodes_csv.lines();
+    let header = lines.next().unwrap_or_default();
+    let mut rows = Vec::new();
+    for (k, line) in lines.enumerate() {
+        let r: Vec<&str> = line.split(',').collect();
+        let num = |i: usize| -> Result<f64, String> {
+            r.get(i)
+                .and_then(|v| v.trim().parse().ok())
+                .ok_or_else(|| format!("line {}: expected x and y", k + 2))
+        };
+        let rest = r
+            .get(4..)
+            .ok_or_else(|| format!("line {}: expected 5 columns", k + 2))?;
+        rows.push((r[0], num(1)?, num(2)?, rest.join(",")));
+    }
+    let mut tops: Vec<(f64, f64)> = Vec::new();
+    for &(_, x, y, _) in &rows {
+        match tops.iter_mut().find(|t| (t.0 - x).abs() < 1e-9) {
+            Some(t) => t.1 = t.1.max(y),
+            None => tops.push((x, y)),
+        }
+    }
+    let top = |x: f64| {
+        tops.iter()
+            .find(|t| (t.0 - x).abs() < 1e-9)
+            .map_or(x, |t| t.1)
+    };
+    let steps = n.max(2) - 1;
+    Ok((0..n)
+        .map(|k| {
+            let s = k as f64 / steps as f64;
+            let (rise, cap) = (1.8 * s, 6.0 - 4.5 * (1.25 * s).min(1.0));
+            let mut out = header.to_string();
+            for (id, x, y, rest) in &rows {
+                let t = ((x - 0.5) / 5.5).clamp(0.0, 1.0);
+                let table =
+                    (slope_fixture_clay_top(*x) + rise * (0.05 + 0.45 * t * t)).min(top(*x));
+                let pwp = if *y <= table {
+                    GAMMA_W * (table - y)
+                } else {
+                    -(GAMMA_W * (y - table)).min(cap)
+                };
+                out.push_str(&format!("\n{id},{x},{y},{pwp},{rest}"));
+            }
+            (2.0 * 3600.0 * s, out)
+        })
+        .collect())
+}
