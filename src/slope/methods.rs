@@ -424,17 +424,12 @@ pub fn solve(set: &SliceSet, method: Method, tolerance: f64) -> Solution {
     }
 }
 
+/// A converged solution's frame; the caller fills in what it found.
 fn converged(iterations: usize) -> Solution {
     Solution {
-        factor: f64::NAN,
-        force_factor: None,
-        moment_factor: None,
-        lambda: None,
-        janbu_f0: None,
-        iterations,
         converged: true,
         failure: None,
-        min_m_alpha: f64::NAN,
+        ..Solution::failed("", iterations)
     }
 }
 
