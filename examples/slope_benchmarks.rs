@@ -9,103 +9,20 @@ use std::path::Path;
 use std::time::Instant;
 
 use a3d_init::pipeline::plot::{self, Overlay};
-use a3d_init::slope::{
-    self, Analysis, Domain, Dry, Interslice, Method, PoreField, Problem, Region, SearchSettings,
-    SlopeMaterial, Strength, Suction, WaterTable,
-};
+use a3d_init::slope::{self, Analysis, Interslice, Method, Problem, SearchSettings, Suction};
+use a3d_init::testkit::slopes::{self, Published};
 use plotters::style::RGBColor;
 
-fn material(name: &str, c: f64, phi: f64) -> SlopeMaterial {
-    SlopeMaterial {
-        name: name.into(),
-        strength: Some(Strength {
-            cohesion: c,
-            friction_angle: phi,
-            phi_b: None,
-        }),
-    }
-}
-
-struct Case {
-    name: &'static str,
-    file: &'static str,
-    domain: Domain,
-    materials: Vec<SlopeMaterial>,
-    field: Box<dyn PoreField>,
-    /// (method, published factor, source of the number)
-    published: Vec<(Method, f64, &'static str)>,
-}
-
-fn single(polygon: Vec<[f64; 2]>, gamma: f64) -> Domain {
-    Domain::from_polygons(vec![Region {
-        polygon,
-        material: 0,
-        unit_weight: gamma,
-    }])
-    .unwrap()
-}
-
-fn cases() -> Vec<Case> {
-    let mp = Method::MorgensternPrice(Interslice::HalfSine);
+fn cases() -> Vec<Published> {
     vec![
-        Case {
-            name: "ACADS 1(a) simple slope",
-            file: "acads-1a.svg",
-            domain: single(
-                vec![
-                    [20.0, 20.0],
-                    [70.0, 20.0],
-                    [70.0, 35.0],
-                    [50.0, 35.0],
-                    [30.0, 25.0],
-                    [20.0, 25.0],
-                ],
-                20.0,
-            ),
-            materials: vec![material("soil", 3.0, 19.6)],
-            field: Box::new(Dry),
-            published: vec![
-                (Method::Bishop, 1.00, "referee"),
-                (Method::Spencer, 1.00, "referee"),
-                (mp, 1.00, "referee"),
-                (Method::Janbu, 1.00, "referee"),
-                (Method::Ordinary, 1.00, "referee"),
-            ],
-        },
-        Case {
-            name: "Arai & Tagyo (1985) ex. 3, water table",
-            file: "arai-tagyo-3.svg",
-            domain: single(
-                vec![
-                    [0.0, 0.0],
-                    [66.0, 0.0],
-                    [66.0, 35.0],
-                    [48.0, 35.0],
-                    [18.0, 15.0],
-                    [0.0, 15.0],
-                ],
-                18.82,
-            ),
-            materials: vec![material("soil", 41.65, 15.0)],
-            field: Box::new(WaterTable {
-                line: vec![
-                    [0.0, 15.0],
-                    [18.0, 15.0],
-                    [30.0, 23.0],
-                    [48.0, 29.0],
-                    [66.0, 32.0],
-                ],
-                gamma_w: 9.81,
-            }),
-            published: vec![
-                (Method::Bishop, 1.138, "Arai & Tagyo"),
-                (Method::Spencer, 1.138, "Arai & Tagyo (Bishop)"),
-            ],
-        },
+        slopes::acads_1a(),
+        slopes::acads_1c(),
+        slopes::arai_tagyo_3(),
+        slopes::acads_3a(),
     ]
 }
 
-fn draw(case: &Case, a: &Analysis, path: &Path) {
+fn draw(case: &Published, a: &Analysis, path: &Path) {
     // Dots on a raster inside the regions, coloured by material.
     let (x0, x1) = case.domain.x_range();
     let (y0, y1) = (
@@ -186,11 +103,19 @@ fn main() {
             let a = slope::analyse(&problem, method, &SearchSettings::default()).unwrap();
             let t = started.elapsed().as_secs_f64();
             let d = |f: f64| format!("{:+.1} %", 100.0 * (f / published - 1.0));
+            let shown = if (published * 100.0).fract() == 0.0 {
+                format!("{published:.2}")
+            } else {
+                format!("{published}")
+            };
             println!(
-                "| {} | {} | {published} {source} | {:.3} | {} | {:.3} | {} | {t:.2} s |",
+                "| {} | {} | {shown} {source} | {:.3} | {} | {:.3} | {} | {t:.2} s |",
                 case.name,
                 match method {
-                    Method::MorgensternPrice(_) => "Morgenstern–Price (half-sine)",
+                    Method::MorgensternPrice(Interslice::HalfSine) =>
+                        "Morgenstern–Price (half-sine)",
+                    Method::MorgensternPrice(Interslice::Constant) =>
+                        "Morgenstern–Price (constant)",
                     Method::Spencer => "Spencer",
                     Method::Bishop => "Bishop",
                     Method::Janbu => "Janbu (f₀)",
@@ -201,7 +126,7 @@ fn main() {
                 a.critical.factor,
                 d(a.critical.factor)
             );
-            if i == 0 || matches!(method, Method::MorgensternPrice(_)) {
+            if i == 0 || method == slopes::MP {
                 let name = if i == 0 {
                     case.file.replace(".svg", "-bishop.svg")
                 } else {

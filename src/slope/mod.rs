@@ -12,6 +12,7 @@
 //!   simplified, Janbu's simplified with f₀, the ordinary method;
 //! * [`search`]: entry–exit and grid-and-radius circles in parallel, circle
 //!   and vertex-moving refinement;
+//! * [`composite`]: circles held up at material interfaces (weak layers);
 //! * [`series`]: the first time a factor falls to 1, bisected between saved
 //!   times.
 //!
@@ -19,6 +20,7 @@
 //! equations and references are in `docs/slope-stability.md`. This module
 //! does no I/O and never prints.
 
+pub mod composite;
 pub mod field;
 pub mod geometry;
 pub mod methods;
@@ -200,6 +202,9 @@ pub struct SearchReport {
     /// The non-circular refinement (vertex moves); `None` when not asked.
     pub polyline_refinement: Option<search::Refinement>,
     pub polyline_segments: Option<usize>,
+    /// The composite surfaces: the best circles clipped at each material
+    /// interface (with the non-circular refinement only).
+    pub composites: search::CompositeCounts,
 }
 
 /// The result of [`analyse`].
@@ -268,6 +273,9 @@ pub fn evaluate_surface(
 /// Circles refined from distinct places of the search.
 const STARTS: usize = 3;
 
+/// Best distinct circles clipped at each material interface.
+const COMPOSITE_CIRCLES: usize = 40;
+
 /// Searches the critical surface for `method`.
 pub fn analyse(
     problem: &Problem<'_>,
@@ -281,8 +289,14 @@ pub fn analyse(
     // The best circles of distinct places, each refined: the refinements
     // end in nearby local minima, and taking the lowest of several keeps the
     // answer from hopping between them when the inputs change slightly.
-    let (best, counts) =
-        search::best_circles(&list, &inputs, method, tol, problem.n_slices, STARTS);
+    let (mut best, counts) = search::best_circles(
+        &list,
+        &inputs,
+        method,
+        tol,
+        problem.n_slices,
+        STARTS.max(COMPOSITE_CIRCLES),
+    );
     if best.is_empty() {
         let reasons = counts
             .rejected
@@ -306,7 +320,10 @@ pub fn analyse(
             counts.generated
         )));
     }
+    let clipped = best.split_off(STARTS.min(best.len()));
+    let seeds: Vec<&(Surface, Solution)> = best.iter().chain(&clipped).collect();
     let mut circles: Vec<((Surface, Solution), search::Refinement)> = best
+        .clone()
         .into_iter()
         .map(|b| {
             search::refine_circle(
@@ -324,11 +341,18 @@ pub fn analyse(
     // The ordinary method satisfies no force equilibrium: moving a polyline's
     // vertices only exploits that, so it keeps to circles.
     let refine = settings.refine && method != Method::Ordinary;
+    let (composite, composites) = if refine {
+        search::best_composite(&seeds, &inputs, method, tol)
+    } else {
+        (None, search::CompositeCounts::default())
+    };
     let (critical, polyline_refinement) = if refine {
         circles
             .iter()
             .take(2)
-            .map(|(c, _)| search::refine_polyline(c, &inputs, method, tol, settings))
+            .map(|(c, _)| c)
+            .chain(composite.as_ref())
+            .map(|c| search::refine_polyline(c, &inputs, method, tol, settings))
             .min_by(|a, b| a.0.1.factor.total_cmp(&b.0.1.factor))
             .map(|(c, r)| (c, Some(r)))
             .unwrap_or((circle.clone(), None))
@@ -351,6 +375,7 @@ pub fn analyse(
             circle_refinement: Some(circle_refinement),
             polyline_refinement,
             polyline_segments: refine.then_some(settings.segments),
+            composites,
         },
         n_slices: problem.n_slices,
         min_depth: problem.min_depth,

@@ -9,6 +9,7 @@
 
 use rayon::prelude::*;
 
+use super::composite;
 use super::methods::{Method, Solution, solve};
 use super::slices::{SliceInputs, slice};
 use super::surface::{Circle, Reject, Surface};
@@ -262,6 +263,76 @@ pub fn best_circles(
     (best, counts)
 }
 
+/// What the composite surfaces came to.
+#[derive(Clone, Debug, Default, PartialEq, serde::Serialize)]
+pub struct CompositeCounts {
+    /// Material interfaces (x-monotone paths) of the section.
+    pub interfaces: usize,
+    /// Circles clipped.
+    pub circles: usize,
+    /// Composite surfaces formed (circles that dip below an interface).
+    pub formed: usize,
+    pub solved: usize,
+    /// The best composite's factor, before the vertex moves.
+    pub best_factor: Option<f64>,
+}
+
+/// Clips each seed circle at each material interface, exactly on it (the
+/// strength of the region above) and a hair below (the region below),
+/// evaluates the composites in parallel, and returns the best (the first in
+/// order on a tie) with the counts.
+pub fn best_composite(
+    seeds: &[&(Surface, Solution)],
+    inputs: &SliceInputs<'_>,
+    method: Method,
+    tol: f64,
+) -> (Option<(Surface, Solution)>, CompositeCounts) {
+    let domain = inputs.domain;
+    let lines = composite::interfaces(domain);
+    let height = domain
+        .ground()
+        .iter()
+        .map(|p| p[1])
+        .fold(f64::NEG_INFINITY, f64::max)
+        - domain.bottom();
+    let hair = 1e-4 * height;
+    let mut surfaces = Vec::new();
+    for (s, _) in seeds.iter().copied() {
+        let Some(c) = s.circle else { continue };
+        for line in &lines {
+            for drop in [0.0, hair] {
+                if let Some(clipped) = composite::clip(&c, s, line, drop, domain) {
+                    surfaces.push(clipped);
+                }
+            }
+        }
+    }
+    let formed = surfaces.len();
+    let solved: Vec<Option<(Surface, Solution)>> = surfaces
+        .into_par_iter()
+        .map(|s| match evaluate(s, inputs, method, tol) {
+            Trial::Solved(found) => Some(*found),
+            _ => None,
+        })
+        .collect();
+    let mut count = 0;
+    let mut best: Option<(Surface, Solution)> = None;
+    for found in solved.into_iter().flatten() {
+        count += 1;
+        if best.as_ref().is_none_or(|b| found.1.factor < b.1.factor) {
+            best = Some(found);
+        }
+    }
+    let counts = CompositeCounts {
+        interfaces: lines.len(),
+        circles: seeds.len(),
+        formed,
+        solved: count,
+        best_factor: best.as_ref().map(|b| b.1.factor),
+    };
+    (best, counts)
+}
+
 /// What a refinement did.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Refinement {
@@ -338,27 +409,20 @@ pub fn refine_circle(
     )
 }
 
-/// Moves the vertices of a polyline made from the circle to lower the factor.
+/// Moves the vertices of a polyline made from the surface (a circle, or a
+/// composite surface with the circle's centre as its axis) to lower the
+/// factor.
 pub fn refine_polyline(
-    circle: &(Surface, Solution),
+    start: &(Surface, Solution),
     inputs: &SliceInputs<'_>,
     method: Method,
     tol: f64,
     settings: &SearchSettings,
 ) -> ((Surface, Solution), Refinement) {
-    let (surface, solution) = circle;
+    let (surface, solution) = start;
     let start_factor = solution.factor;
-    let Some(c) = surface.circle else {
-        return (
-            circle.clone(),
-            Refinement {
-                evaluations: 0,
-                start_factor,
-                end_factor: start_factor,
-                final_step_ratio: 1.0,
-            },
-        );
-    };
+    let circle = surface.circle;
+    let [cx, cy] = surface.axis;
     let domain = inputs.domain;
     let m = settings.segments.max(3);
     let (xa, xb) = (
@@ -368,14 +432,18 @@ pub fn refine_polyline(
     let base: Vec<[f64; 2]> = (0..=m)
         .map(|i| {
             let x = xa + (xb - xa) * i as f64 / m as f64;
-            [x, c.lower(x)]
+            let y = match circle {
+                Some(c) => c.lower(x),
+                None => surface.y(x).unwrap_or(f64::NAN),
+            };
+            [x, y]
         })
         .collect();
     // Radial directions of the interior vertices.
     let dirs: Vec<[f64; 2]> = base
         .iter()
         .map(|p| {
-            let (dx, dy) = (p[0] - c.xc, p[1] - c.yc);
+            let (dx, dy) = (p[0] - cx, p[1] - cy);
             let l = (dx * dx + dy * dy).sqrt().max(f64::MIN_POSITIVE);
             [dx / l, dy / l]
         })
@@ -393,8 +461,8 @@ pub fn refine_polyline(
         }
         let s = Surface {
             points: pts,
-            axis: [c.xc, c.yc],
-            circle: Some(c),
+            axis: [cx, cy],
+            circle,
         };
         s.admissible(domain).then_some(s)
     };
@@ -408,7 +476,7 @@ pub fn refine_polyline(
     let mut offsets = vec![0.0; m + 1];
     let Some(mut best) = score(&offsets) else {
         return (
-            circle.clone(),
+            start.clone(),
             Refinement {
                 evaluations: 1,
                 start_factor,
@@ -422,15 +490,34 @@ pub fn refine_polyline(
     let step0 = chord / 25.0;
     let mut step = step0;
     let mut evaluations = 1;
+    // Moves of runs of neighbouring interior vertices together (half the
+    // polyline, a quarter, ... down to one vertex; the ends alone), so that a
+    // surface can settle onto a weak layer as a whole rather than through
+    // kinks that each raise the factor.
+    let mut runs: Vec<(usize, usize)> = Vec::new();
+    let mut w = (m - 1) / 2;
+    while w >= 1 {
+        let mut k = 1;
+        while k + w <= m {
+            runs.push((k, k + w));
+            k += w.div_ceil(2).max(1);
+        }
+        w /= 2;
+    }
+    runs.push((0, 1));
+    runs.push((m, m + 1));
+    runs.dedup();
     while step > chord / 2500.0 && evaluations < settings.max_refinements {
         let mut improved = false;
-        for k in 0..=m {
+        for &(k0, k1) in &runs {
             for d in [step, -step] {
                 if evaluations >= settings.max_refinements {
                     break;
                 }
                 let mut trial = offsets.clone();
-                trial[k] += d;
+                for o in &mut trial[k0..k1] {
+                    *o += d;
+                }
                 evaluations += 1;
                 if let Some(found) = score(&trial)
                     && found.1.factor < best.1.factor * (1.0 - 1e-12)
@@ -446,9 +533,9 @@ pub fn refine_polyline(
             step *= 0.5;
         }
     }
-    // A circle better than every polyline stays the answer.
+    // A start better than every polyline stays the answer.
     if solution.factor <= best.1.factor {
-        best = circle.clone();
+        best = start.clone();
     }
     let end_factor = best.1.factor;
     (

@@ -24,6 +24,8 @@
 //!
 //! Nothing here reads files; it is plain data construction.
 
+pub mod slopes;
+
 use crate::element::{Element, Simplex, TetOld, Tri3};
 use crate::model::generate;
 use crate::model::{AnuraModel, Dimension, ElementType, Material, MaterialPoint, Mesh, MpState};
