@@ -117,6 +117,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         materials: vec![generate::material(1, &sand), generate::material(2, &clay)],
         element_material,
         mp_counts: vec![(3, 0); n_el],
+        liquid_fixity: vec![[false; 3]; solid_fixity.len()],
         solid_fixity,
         damping: None,
     };

@@ -337,6 +337,7 @@ proptest! {
                 element_material: vec![1],
                 mp_counts: vec![(count, 0)],
                 solid_fixity: vec![[false; 3]; mesh.n_nodes()],
+                liquid_fixity: vec![[false; 3]; mesh.n_nodes()],
                 damping: None,
             };
             let mps = place_material_points(&model).unwrap();
@@ -364,6 +365,7 @@ fn axisymmetric_triangle(dimension: Dimension, x_shift: f64, count: u32) -> Anur
     };
     AnuraModel {
         solid_fixity: vec![[false; 3]; 3],
+        liquid_fixity: vec![[false; 3]; 3],
         mesh,
         materials: vec![],
         element_material: vec![1],

@@ -279,11 +279,13 @@ pub fn material(index: u32, spec: &MaterialSpec) -> Material {
 pub fn single_material_model(mesh: Mesh, spec: &MaterialSpec, mps_per_element: u32) -> AnuraModel {
     let n_el = mesh.n_elements();
     let solid_fixity = box_fixities(&mesh);
+    let n_nodes = mesh.n_nodes();
     AnuraModel {
         mesh,
         materials: vec![material(1, spec)],
         element_material: vec![1; n_el],
         mp_counts: vec![(mps_per_element, 0); n_el],
+        liquid_fixity: vec![[false; 3]; n_nodes],
         solid_fixity,
         damping: None,
     }

@@ -179,6 +179,11 @@ pub struct AnuraModel {
     /// Per node: fixed directions of the solid phase (x, y, z), OR-ed over all
     /// `$$START_FIXITY_*_SOLID` blocks.
     pub solid_fixity: Vec<[bool; 3]>,
+    /// Per node: fixed directions of the liquid phase's velocity, OR-ed over
+    /// all `$$START_FIXITY_*_LIQUID` blocks (all free when there are none).
+    /// The two-phase runner holds the liquid's velocity there at zero (an
+    /// impermeable boundary); a free boundary drains.
+    pub liquid_fixity: Vec<[bool; 3]>,
     /// Per element local damping factor (`$$STARTDAMPING`), when present.
     pub damping: Option<Vec<f64>>,
 }

@@ -167,6 +167,7 @@ fn finish(
         }],
         element_material: vec![1; n_elements],
         mp_counts: vec![(mps, 0); n_elements],
+        liquid_fixity: vec![[false; 3]; fixity.len()],
         solid_fixity: fixity,
         damping: None,
     }

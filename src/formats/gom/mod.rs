@@ -34,6 +34,12 @@ const SOLID_FIXITY_BLOCKS: [&str; 3] = [
     "$$START_FIXITY_POINT_SOLID",
 ];
 
+const LIQUID_FIXITY_BLOCKS: [&str; 3] = [
+    "$$START_FIXITY_SURFACE_LIQUID",
+    "$$START_FIXITY_LINE_LIQUID",
+    "$$START_FIXITY_POINT_LIQUID",
+];
+
 /// Facts about a GOM beyond the plain model: version, formulation, where things
 /// are in the file, and soft problems.
 #[derive(Debug, Clone, Default)]
@@ -315,6 +321,15 @@ impl GomDocument {
             }
         }
 
+        let mut liquid_fixity = vec![[false; 3]; n_nodes];
+        for keyword in LIQUID_FIXITY_BLOCKS {
+            if let Some(b) = self.block(keyword)
+                && let Err(e) = self.read_fixity(b, dimension.n_dim(), &mut liquid_fixity)
+            {
+                errors.push(e);
+            }
+        }
+
         let materials = match self.block("$$NUMBER_OF_MATERIALS") {
             Some(b) => {
                 let start = self.doc.blocks()[b].line;
@@ -363,6 +378,7 @@ impl GomDocument {
             element_material,
             mp_counts,
             solid_fixity,
+            liquid_fixity,
             damping,
         };
         Ok((model, info))

@@ -46,20 +46,19 @@ pub fn model_to_text(model: &AnuraModel, version: &str) -> String {
         s.push_str(&ids.join(" "));
         s.push('\n');
     }
-    let fixed: Vec<(usize, &[bool; 3])> = model
-        .solid_fixity
-        .iter()
-        .enumerate()
-        .filter(|(_, f)| f.iter().any(|&b| b))
-        .collect();
-    let _ = writeln!(s, "$$START_FIXITY_SURFACE_SOLID\n{}", fixed.len());
-    for (node, f) in fixed {
-        let flags: Vec<&str> = f
-            .iter()
-            .take(n_dim)
-            .map(|&b| if b { "1" } else { "0" })
-            .collect();
-        let _ = writeln!(s, "{} {}", node + 1, flags.join(" "));
+    write_fixity(
+        &mut s,
+        "$$START_FIXITY_SURFACE_SOLID",
+        &model.solid_fixity,
+        n_dim,
+    );
+    if model.liquid_fixity.iter().flatten().any(|&b| b) {
+        write_fixity(
+            &mut s,
+            "$$START_FIXITY_SURFACE_LIQUID",
+            &model.liquid_fixity,
+            n_dim,
+        );
     }
     let _ = writeln!(s, "$$NUMBER_OF_MATERIALS\n{}", model.materials.len());
     for m in &model.materials {
@@ -89,5 +88,24 @@ fn write_material(s: &mut String, m: &Material) {
     let _ = writeln!(s, "$$MATERIAL_TYPE\n{}", m.material_type);
     for (name, value) in &m.properties {
         let _ = writeln!(s, "{name}\n{value}");
+    }
+}
+
+/// A fixity block: the count of nodes with any direction fixed, then
+/// `node fx fy [fz]` for each.
+fn write_fixity(s: &mut String, keyword: &str, fixity: &[[bool; 3]], n_dim: usize) {
+    let fixed: Vec<(usize, &[bool; 3])> = fixity
+        .iter()
+        .enumerate()
+        .filter(|(_, f)| f.iter().any(|&b| b))
+        .collect();
+    let _ = writeln!(s, "{keyword}\n{}", fixed.len());
+    for (node, f) in fixed {
+        let flags: Vec<&str> = f
+            .iter()
+            .take(n_dim)
+            .map(|&b| if b { "1" } else { "0" })
+            .collect();
+        let _ = writeln!(s, "{} {}", node + 1, flags.join(" "));
     }
 }
