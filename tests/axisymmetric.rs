@@ -213,9 +213,12 @@ fn cc_axi_sample_confined_is_in_equilibrium() {
             );
         }
     }
-    for (node, fixed) in model.mesh.nodes.iter().zip(model.solid_fixity.iter_mut()) {
+    // The outer face on rollers, and impermeable: the sample's coupled
+    // material runs two-phase, and a free face would drain the column.
+    for (k, node) in model.mesh.nodes.iter().enumerate() {
         if (node[0] - 1.0).abs() < 1e-9 {
-            fixed[0] = true;
+            model.solid_fixity[k][0] = true;
+            model.liquid_fixity[k][0] = true;
         }
     }
     let points = place_material_points(&model).expect("sample places");

@@ -9,6 +9,7 @@
 //! Anura3D kernel (several hundred undamped steps, where built) are at the end.
 
 mod common;
+use common::kernel_run::kernel_displacement;
 use common::*;
 
 use std::path::{Path, PathBuf};
@@ -555,86 +556,6 @@ fn map_exits_1_when_no_equilibrium_exists() {
 }
 
 // ---- the real Anura3D kernel --------------------------------------------
-
-/// Runs the kernel undamped for `time` s on a copy of the map folder `out`
-/// and returns the largest MP displacement it reports (`_MPVector_001.vtk`,
-/// `displacement_solid`).
-fn kernel_displacement(bin: &Path, out: &Path, run: &Path, time: f64) -> f64 {
-    std::fs::create_dir_all(run).unwrap();
-    for entry in std::fs::read_dir(out).unwrap() {
-        let path = entry.unwrap().path();
-        let name = path.file_name().unwrap().to_str().unwrap().to_string();
-        if name.contains(".GOM") || name.ends_with(".MAPF") || name.contains(".OPD") {
-            std::fs::copy(&path, run.join(&name)).unwrap();
-        }
-        if name.ends_with(".CPS_001") {
-            let cps = std::fs::read_to_string(&path).unwrap();
-            let edited = edit_cps(&cps, time);
-            std::fs::write(run.join(&name), edited).unwrap();
-        }
-    }
-    let status = std::process::Command::new(bin)
-        .arg("slope")
-        .current_dir(run)
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .status()
-        .unwrap();
-    assert!(status.success() || run.join("slope_MPVector_001.vtk").is_file());
-    largest_vtk_displacement(&run.join("slope_MPVector_001.vtk"))
-}
-
-/// The CPS with `$$TIME_PER_LOADSTEP` `time`, no damping and a dynamic load
-/// step.
-fn edit_cps(cps: &str, time: f64) -> String {
-    let mut lines: Vec<String> = Vec::new();
-    let mut it = cps.lines();
-    while let Some(line) = it.next() {
-        let value = match line.trim() {
-            "$$TIME_PER_LOADSTEP" => Some(time.to_string()),
-            "$$QUASISTATIC_CONVERGENCE" => Some("0".into()),
-            "$$HOMOGENEOUS_LOCAL_DAMPING" => Some("0 0.0".into()),
-            _ => None,
-        };
-        lines.push(line.to_string());
-        if let Some(v) = value {
-            it.next();
-            lines.push(v);
-        }
-    }
-    let mut text = lines.join("\n") + "\n";
-    if !text.contains("$$TIME_PER_LOADSTEP") {
-        text = text.replace("$$END", &format!("$$TIME_PER_LOADSTEP\n{time}\n$$END"));
-    }
-    text
-}
-
-/// The largest `displacement_solid` of a big-endian legacy VTK written by
-/// Anura3D (`POINTS N DOUBLE`, then `VECTORS displacement_solid DOUBLE` and
-/// N·3 doubles).
-fn largest_vtk_displacement(path: &Path) -> f64 {
-    let data = std::fs::read(path).unwrap();
-    let find = |key: &[u8]| {
-        data.windows(key.len())
-            .position(|w| w == key)
-            .unwrap_or_else(|| panic!("{} in {}", String::from_utf8_lossy(key), path.display()))
-    };
-    let line_after = |at: usize| at + data[at..].iter().position(|&b| b == b'\n').unwrap();
-    let points = find(b"POINTS");
-    let header = std::str::from_utf8(&data[points..line_after(points)]).unwrap();
-    let count: usize = header.split_whitespace().nth(1).unwrap().parse().unwrap();
-    let start = line_after(find(b"VECTORS displacement_solid")) + 1;
-    data[start..start + count * 24]
-        .chunks(24)
-        .map(|c| {
-            let v: Vec<f64> = c
-                .chunks(8)
-                .map(|b| f64::from_be_bytes(b.try_into().unwrap()))
-                .collect();
-            (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt()
-        })
-        .fold(0.0, f64::max)
-}
 
 /// Sets a Mohr–Coulomb material's tensile strength (typed and verbatim).
 fn set_tensile_strength(m: &mut Material, value: f64) {

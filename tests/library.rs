@@ -105,6 +105,7 @@ fn map_verify_run_fos_diff_inspect_and_calibrate_run_without_the_cli() {
             time: 0.05,
             snapshots: vec![0.02],
             damping: None,
+            drained: false,
         },
         Destination::default(),
     )
@@ -117,6 +118,7 @@ fn map_verify_run_fos_diff_inspect_and_calibrate_run_without_the_cli() {
             time: f64::NAN,
             snapshots: vec![],
             damping: None,
+            drained: false,
         },
         Destination::new(None, true),
     )

@@ -310,14 +310,23 @@ def verify(
     damping: Optional[float] = None,
     out: Optional[PathLike] = None,
     force: bool = False,
+    drained: bool = False,
 ) -> Dict[str, Any]:
     """``a3d-init verify``: is the mapped state in equilibrium under gravity?
     Judges what Anura3D will hold (a map folder's GOM, CPS and MAPF) with the
     built-in explicit MPM runner. Returns verify.json as a dict (``equilibrium``,
     ``causes``, ``anura3d``, ``run``) with ``folder`` added. A negative verdict
-    is a result, not an exception."""
+    is a result, not an exception. ``drained=True`` holds every pore pressure
+    (two-phase coupled materials otherwise run with their water flowing)."""
     outcome, written = _native.verify(
-        _path(folder), _path(model), _path(state), max_steps, damping, _path(out), force
+        _path(folder),
+        _path(model),
+        _path(state),
+        max_steps,
+        damping,
+        _path(out),
+        force,
+        drained,
     )
     result = json.loads(outcome)
     result["folder"] = written
@@ -338,6 +347,7 @@ def fos(
     zero_pwp: bool = False,
     out: Optional[PathLike] = None,
     force: bool = False,
+    drained: bool = False,
 ) -> Dict[str, Any]:
     """``a3d-init fos``: the factor of safety on the state Anura3D will hold,
     by strength reduction (``method="srm"``, the default here) or by a method
@@ -356,6 +366,7 @@ def fos(
         zero_pwp,
         _path(out),
         force,
+        drained,
     )
     result = json.loads(report)
     result["folder"] = written

@@ -113,6 +113,7 @@ def verify(
     damping: Optional[float] = None,
     out: Optional[_Path] = None,
     force: bool = False,
+    drained: bool = False,
 ) -> Tuple[str, str]:
     """``a3d-init verify``: (verify.json text, folder written)."""
 
@@ -127,6 +128,7 @@ def fos(
     zero_pwp: bool = False,
     out: Optional[_Path] = None,
     force: bool = False,
+    drained: bool = False,
 ) -> Tuple[str, str]:
     """``a3d-init fos`` (``method``: ``"srm"``, strength reduction, or a method
     of slices such as ``"morgenstern-price"``): (fos.json text, folder written)."""

@@ -532,7 +532,7 @@ fn source(
 
 /// `verify`: (outcome as JSON, folder written).
 #[pyfunction]
-#[pyo3(signature = (folder=None, model=None, state=None, max_steps=20000, damping=None, out=None, force=false))]
+#[pyo3(signature = (folder=None, model=None, state=None, max_steps=20000, damping=None, out=None, force=false, drained=false))]
 #[allow(clippy::too_many_arguments)]
 fn verify(
     py: Python<'_>,
@@ -543,9 +543,14 @@ fn verify(
     damping: Option<f64>,
     out: Option<PathBuf>,
     force: bool,
+    drained: bool,
 ) -> PyResult<(String, PathBuf)> {
     let source = source(folder, model, state)?;
-    let options = VerifyOptions { max_steps, damping };
+    let options = VerifyOptions {
+        max_steps,
+        damping,
+        drained,
+    };
     let (outcome, written) = py
         .detach(|| {
             pipeline::check::verify(&source, &options, Destination::new(out.as_deref(), force))
@@ -576,7 +581,7 @@ fn fos_method(name: &str) -> PyResult<FosMethod> {
 /// `method="srm"`, on the state Anura3D will hold): (fos.json as JSON, folder
 /// written).
 #[pyfunction]
-#[pyo3(signature = (folder=None, model=None, state=None, method="srm", damping=None, tolerance=0.01, window=None, zero_pwp=false, out=None, force=false))]
+#[pyo3(signature = (folder=None, model=None, state=None, method="srm", damping=None, tolerance=0.01, window=None, zero_pwp=false, out=None, force=false, drained=false))]
 #[allow(clippy::too_many_arguments)]
 fn fos(
     py: Python<'_>,
@@ -590,6 +595,7 @@ fn fos(
     zero_pwp: bool,
     out: Option<PathBuf>,
     force: bool,
+    drained: bool,
 ) -> PyResult<(String, PathBuf)> {
     let source = source(folder, model, state)?;
     let options = FosOptions {
@@ -598,6 +604,7 @@ fn fos(
         tolerance,
         window,
         zero_pwp,
+        drained,
         ..FosOptions::default()
     };
     let (analysis, written) = py

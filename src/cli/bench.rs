@@ -80,6 +80,10 @@ pub enum BenchWhat {
     /// `fixtures/slope`): one Morgenstern–Price factor with the default
     /// search, and FS(t) over 40 generated node tables.
     Fos,
+    /// The explicit runner on a generated saturated column of about
+    /// `--points` MPs: particle-steps/s drained and two-phase coupled, and
+    /// the time step of each.
+    Runner,
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
@@ -202,6 +206,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         BenchWhat::E2e => e2e(&args)?,
         BenchWhat::Equilibrium => equilibrium(&args)?,
         BenchWhat::Fos => super::bench_fos::fos(&args)?,
+        BenchWhat::Runner => super::bench_runner::runner(&args)?,
         BenchWhat::Csv => {
             let text = generated_fem_csv(args.nodes, 3);
             let mb = text.len() as f64 / 1e6;

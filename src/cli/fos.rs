@@ -40,6 +40,11 @@ pub struct FosArgs {
     /// Set every pore pressure to zero (σ′ = σ) before the analysis.
     #[arg(long)]
     pub zero_pwp: bool,
+    /// Strength reduction: hold every pore pressure (drained). Without it,
+    /// two-phase coupled and undrained-effective materials run with their
+    /// water ([`crate::mpm::liquid`]).
+    #[arg(long)]
+    pub drained: bool,
     /// Output folder (default `<dir>/fos`).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -61,6 +66,7 @@ pub fn run(args: FosArgs) -> anyhow::Result<()> {
         tolerance: args.tolerance,
         window: args.window,
         zero_pwp: args.zero_pwp,
+        drained: args.drained,
     };
     let to = Destination::new(args.out.as_deref(), args.force);
     let (analysis, target) = pipeline::fos::fos(&args.inputs.source()?, &options, to)?;

@@ -25,6 +25,7 @@ macro_rules! say_err {
 pub mod args;
 mod bench;
 mod bench_fos;
+mod bench_runner;
 pub mod calibrate;
 mod demo;
 mod diff;

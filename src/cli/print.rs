@@ -129,6 +129,25 @@ pub fn table_comparison(t: &crate::pipeline::verify::TableComparison) -> Vec<Str
     lines
 }
 
+/// Names the formulation each material ran with, when any is not drained.
+pub fn formulations(list: &[(u32, mpm::Formulation)]) {
+    if list.iter().all(|(_, f)| *f == mpm::Formulation::Drained) {
+        return;
+    }
+    let words: Vec<String> = list
+        .iter()
+        .map(|(m, f)| {
+            let name = match f {
+                mpm::Formulation::Drained => "drained (pwp frozen)",
+                mpm::Formulation::UndrainedEffective => "undrained effective (Δp = K_w/n·Δε_v)",
+                mpm::Formulation::Coupled => "two-phase coupled (the water flows)",
+            };
+            format!("material {m}: {name}")
+        })
+        .collect();
+    say!("water      {}", words.join("; "));
+}
+
 /// Prints the runner's figures (no verdict).
 pub fn run_report(r: &mpm::RunReport) {
     say!(
@@ -146,6 +165,7 @@ pub fn run_report(r: &mpm::RunReport) {
         r.damping,
         r.courant
     );
+    formulations(&r.formulations);
     say!(
         "residual   start {:.3e}, end {:.3e} (limit {:.0e})",
         r.initial_residual_ratio,

@@ -33,6 +33,12 @@ pub struct VerifyArgs {
     /// Find the factor of safety by strength reduction instead (as `a3d-init fos`).
     #[arg(long)]
     pub fos: bool,
+    /// Hold every pore pressure at its mapped value (drained). Without it,
+    /// `saturated_material_coupled` materials run Anura3D's two-phase
+    /// formulation (the water flows) and `saturated_material_undrained_effective`
+    /// ones update p from their volumetric strain.
+    #[arg(long)]
+    pub drained: bool,
 }
 
 #[derive(Debug, clap::Args)]
@@ -60,6 +66,7 @@ pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
         let started = Instant::now();
         let options = FosOptions {
             damping: args.damping,
+            drained: args.drained,
             ..FosOptions::srm()
         };
         let (report, target) = pipeline::fos::fos(&source, &options, args.destination())?;
@@ -69,6 +76,7 @@ pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
     let options = VerifyOptions {
         max_steps: args.max_steps,
         damping: args.damping,
+        drained: args.drained,
     };
     let (outcome, target) = pipeline::check::verify(&source, &options, args.destination())?;
     print::verify_outcome(&outcome, &target);
@@ -96,6 +104,7 @@ pub fn run_run(args: RunArgs) -> anyhow::Result<()> {
         time: args.time,
         snapshots: snapshot_times(&args.snapshots)?,
         damping: args.verify.damping,
+        drained: args.verify.drained,
     };
     let outcome = pipeline::runout::run(&source, &options, args.verify.destination())?;
     let r = &outcome.report;
@@ -106,6 +115,7 @@ pub fn run_run(args: RunArgs) -> anyhow::Result<()> {
         r.time,
         r.damping
     );
+    print::formulations(&r.formulations);
     say!(
         "final      max displacement {:.4} m, {} MPs yielded",
         r.max_displacement,

@@ -237,6 +237,15 @@ impl CpsDocument {
     }
 
     /// Local damping factor α when `$$HOMOGENEOUS_LOCAL_DAMPING 1 α` switches it on.
+    /// `$$HOMOGENEOUS_LOCAL_DAMPING` as Anura3D applies it: α when switched
+    /// on, 0 when switched off, `None` when the CPS does not say.
+    pub fn local_damping_setting(&self) -> Option<f64> {
+        match self.get_token("$$HOMOGENEOUS_LOCAL_DAMPING", 0) {
+            Some("0") => Some(0.0),
+            _ => self.local_damping(),
+        }
+    }
+
     pub fn local_damping(&self) -> Option<f64> {
         match self.get_token("$$HOMOGENEOUS_LOCAL_DAMPING", 0) {
             Some("1") => self.get_real("$$HOMOGENEOUS_LOCAL_DAMPING", 1),

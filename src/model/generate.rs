@@ -196,6 +196,40 @@ impl MaterialSpec {
     }
 }
 
+/// Makes `material` Anura3D's two-phase `saturated_material_coupled`:
+/// intrinsic permeability `kappa` (m²), liquid bulk modulus `bulk` (kPa) and
+/// dynamic viscosity `viscosity` (kPa·s) written right after
+/// `$$DENSITY_LIQUID`, where Anura3D reads them (it reads positionally);
+/// earlier values of these keywords are replaced.
+pub fn make_coupled(material: &mut Material, kappa: f64, bulk: f64, viscosity: f64) {
+    const KEYS: [&str; 3] = [
+        "$$INTRINSIC_PERMEABILITY_LIQUID",
+        "$$BULK_MODULUS_LIQUID",
+        "$$DYNAMIC_VISCOSITY_LIQUID",
+    ];
+    material.material_type = "saturated_material_coupled".into();
+    if material.density_liquid.is_none() {
+        material.density_liquid = Some(1000.0);
+    }
+    let props = &mut material.properties;
+    props.retain(|(k, _)| !KEYS.contains(&k.as_str()));
+    let at = match props.iter().position(|(k, _)| k == "$$DENSITY_LIQUID") {
+        Some(i) => i + 1,
+        None => {
+            let after_solid = props
+                .iter()
+                .position(|(k, _)| k == "$$DENSITY_SOLID")
+                .map_or(0, |i| i + 1);
+            let rho = material.density_liquid.unwrap_or(1000.0);
+            props.insert(after_solid, ("$$DENSITY_LIQUID".into(), rho.to_string()));
+            after_solid + 1
+        }
+    };
+    for (i, (k, v)) in KEYS.iter().zip([kappa, bulk, viscosity]).enumerate() {
+        props.insert(at + i, (k.to_string(), v.to_string()));
+    }
+}
+
 /// Builds a [`Material`] with its verbatim positional properties.
 pub fn material(index: u32, spec: &MaterialSpec) -> Material {
     let mut props: Vec<(String, String)> = Vec::new();

@@ -200,7 +200,7 @@ fn mohr_coulomb_or_error(
 }
 
 /// A numeric property of the material record by keyword, ignoring `$$` and case.
-fn property(material: &Material, keyword: &str) -> Option<f64> {
+pub(crate) fn property(material: &Material, keyword: &str) -> Option<f64> {
     material
         .properties
         .iter()

@@ -27,6 +27,7 @@ mod b_matrix;
 pub mod equilibrium;
 pub mod fos;
 pub mod grid;
+pub mod liquid;
 pub mod loading;
 pub mod material;
 pub mod mohr_coulomb;
@@ -37,6 +38,7 @@ pub mod step;
 
 pub use equilibrium::{EquilibriumOutcome, EquilibriumSettings};
 pub use fos::{FosError, FosOutcome, FosReport, FosSettings, strength_reduction};
+pub use liquid::Formulation;
 pub use material::{Elasticity, SolidModel};
 pub use mohr_coulomb::{MohrCoulomb, ReturnKind, ReturnMap};
 pub use run::{
@@ -156,6 +158,9 @@ pub struct RunSettings {
     /// reaches each time).
     pub snapshot_times: Vec<f64>,
     pub thresholds: Thresholds,
+    /// Hold every pore pressure at its initial value (drained; the
+    /// two-phase and undrained materials run as one phase with frozen p).
+    pub frozen_pore_pressure: bool,
 }
 
 impl RunSettings {
@@ -174,6 +179,7 @@ impl RunSettings {
             stop_at_equilibrium: true,
             snapshot_times: Vec::new(),
             thresholds: Thresholds::default(),
+            frozen_pore_pressure: false,
         }
     }
 

@@ -184,6 +184,12 @@ pub struct RunReport {
     pub final_stresses: Vec<[f64; 6]>,
     /// Per MP: has yielded (accumulated plastic strain above 1e-6).
     pub final_plastic: Vec<bool>,
+    /// Final pore pressures (kPa, Anura3D's sign), in MP order: the initial
+    /// ones where they are frozen.
+    pub final_pore_pressures: Vec<f64>,
+    /// How each material with MPs ran ([`super::liquid`]): (1-based
+    /// material index, formulation).
+    pub formulations: Vec<(u32, super::Formulation)>,
 }
 
 /// The report of [`run`] with the snapshots taken on the way.
@@ -370,6 +376,8 @@ fn drive(
         final_displacements: simulation.displacements(),
         final_stresses: simulation.effective_stresses(),
         final_plastic: simulation.plastic_flags(),
+        final_pore_pressures: simulation.pore_pressures(),
+        formulations: simulation.formulations(),
     };
     Ok(RunOutput { report, snapshots })
 }

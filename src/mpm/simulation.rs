@@ -6,6 +6,7 @@
 //! object, so nothing past this file matches on the element type. The scheme
 //! itself is in [`super::step`].
 
+use super::liquid::Formulation;
 use super::step::{Solver, StepOutcome};
 use super::{MpmError, RunSettings};
 use crate::element::{Element, ElementVisitor, widen, with_element};
@@ -35,6 +36,8 @@ pub(crate) struct PointView {
     pub lost: bool,
     /// Its initial stress was outside the yield surface.
     pub inadmissible: bool,
+    /// Pore pressure (kPa, Anura3D's sign).
+    pub pwp: f64,
 }
 
 /// What [`Simulation`] asks of the solver of any dimension.
@@ -52,6 +55,8 @@ pub(crate) trait Run {
     fn for_each_point(&self, f: &mut dyn FnMut(PointView));
     /// Per element: the sum of the last step's residual force over its corners.
     fn element_residuals(&self) -> Vec<f64>;
+    fn set_nodal_loads(&mut self, loads: &[(u32, [f64; 3])]) -> Result<(), MpmError>;
+    fn formulations(&self) -> Vec<(u32, Formulation)>;
 }
 
 impl<const D: usize, const NC: usize> Run for Solver<D, NC> {
@@ -93,6 +98,7 @@ impl<const D: usize, const NC: usize> Run for Solver<D, NC> {
                 plastic: p.plastic,
                 lost: p.lost,
                 inadmissible,
+                pwp: p.pwp,
             });
         }
     }
@@ -106,6 +112,16 @@ impl<const D: usize, const NC: usize> Run for Solver<D, NC> {
                     .map(|&c| self.node_residual[c as usize])
                     .sum()
             })
+            .collect()
+    }
+    fn set_nodal_loads(&mut self, loads: &[(u32, [f64; 3])]) -> Result<(), MpmError> {
+        Solver::set_nodal_loads(self, loads)
+    }
+    fn formulations(&self) -> Vec<(u32, Formulation)> {
+        self.waters
+            .iter()
+            .enumerate()
+            .filter_map(|(i, w)| w.map(|w| (i as u32 + 1, w.formulation())))
             .collect()
     }
 }
@@ -264,5 +280,25 @@ impl Simulation {
     /// Per element: the sum of the last step's residual force over its corners.
     pub(crate) fn element_residuals(&self) -> Vec<f64> {
         self.inner.element_residuals()
+    }
+
+    /// MP pore pressures (kPa, Anura3D's sign: negative in compression).
+    /// Frozen for drained materials; they evolve for coupled and undrained
+    /// ones ([`super::liquid`]).
+    pub fn pore_pressures(&self) -> Vec<f64> {
+        self.per_point(|p| p.pwp)
+    }
+
+    /// Constant external forces on mesh nodes (0-based node, force in kN per
+    /// metre in plane strain; z ignored in 2D), added to gravity from the
+    /// next step on; a later call replaces them.
+    pub fn set_nodal_loads(&mut self, loads: &[(u32, [f64; 3])]) -> Result<(), MpmError> {
+        self.inner.set_nodal_loads(loads)
+    }
+
+    /// The formulation each material with MPs runs with (1-based material
+    /// index).
+    pub fn formulations(&self) -> Vec<(u32, Formulation)> {
+        self.inner.formulations()
     }
 }

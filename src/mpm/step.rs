@@ -40,6 +40,7 @@ use rayon::prelude::*;
 
 use super::b_matrix::{corner_force, hoop_strain_increment, strain_increment};
 use super::grid::Grid;
+use super::liquid::Water;
 use super::loading::Analysis;
 use super::material::SolidModel;
 use super::{MpmError, RunSettings};
@@ -92,6 +93,53 @@ pub(crate) struct Particle<const D: usize, const NC: usize> {
     pub plastic: bool,
     /// Left the mesh; frozen since.
     pub lost: bool,
+    /// Pore pressure p (kPa, Anura3D's sign: negative in compression).
+    pub pwp: f64,
+    /// The factor of p in the internal force ([`super::loading`]).
+    pub pore_factor: f64,
+    /// How p evolves ([`super::liquid`]).
+    pub water: Water,
+    /// The liquid's velocity (coupled MPs; zero otherwise).
+    pub liquid_velocity: [f64; D],
+}
+
+/// Per-corner P2G contribution of the liquid of one coupled MP.
+#[derive(Clone, Copy, Debug)]
+struct LiquidContribution<const D: usize> {
+    /// ρw·V·N: the liquid equation's mass.
+    mass: f64,
+    /// n·ρw·V·N: the liquid's mass in the mixture.
+    water: f64,
+    /// Drag (n·μ/κ)·V·N.
+    drag: f64,
+    momentum: [f64; D],
+    /// Pressure force −V p ∇N plus the liquid's weight ρw·V·N·g.
+    force: [f64; D],
+}
+
+impl<const D: usize> LiquidContribution<D> {
+    const ZERO: LiquidContribution<D> = LiquidContribution {
+        mass: 0.0,
+        water: 0.0,
+        drag: 0.0,
+        momentum: [0.0; D],
+        force: [0.0; D],
+    };
+}
+
+/// The liquid's nodal arrays and per-MP buffers, present when any MP is
+/// coupled.
+struct LiquidGrid<const D: usize, const NC: usize> {
+    fixed: Vec<[bool; D]>,
+    mass: Vec<f64>,
+    water: Vec<f64>,
+    drag: Vec<f64>,
+    momentum: Vec<[f64; D]>,
+    force: Vec<[f64; D]>,
+    acceleration: Vec<[f64; D]>,
+    velocity: Vec<[f64; D]>,
+    p2g: Vec<[LiquidContribution<D>; NC]>,
+    remap: Vec<[[f64; D]; NC]>,
 }
 
 /// Per-corner P2G contribution of one MP.
@@ -158,6 +206,12 @@ pub(crate) struct Solver<const D: usize, const NC: usize> {
     radius_floor: f64,
     pub wave_speed: f64,
     pub min_altitude: f64,
+    /// The liquid phase, when any MP is coupled.
+    liquid: Option<LiquidGrid<D, NC>>,
+    /// Constant external nodal forces besides gravity.
+    node_load: Vec<[f64; D]>,
+    /// Per material of the GOM (0-based) that MPs use: its water.
+    pub waters: Vec<Option<Water>>,
 }
 
 /// Runs `f` on every MP that is not lost and its output slot, in parallel; a
@@ -199,6 +253,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         // Material models are built for the materials MPs actually use, so an
         // unused material with an unsupported model does not stop the check.
         let mut slots: Vec<Option<u32>> = vec![None; model.materials.len()];
+        let mut waters: Vec<Option<Water>> = vec![None; model.materials.len()];
         let mut models: Vec<SolidModel> = Vec::new();
         let mut particles = Vec::with_capacity(points.len());
         let mut inadmissible = Vec::with_capacity(points.len());
@@ -220,6 +275,14 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                     let slot = (models.len() - 1) as u32;
                     slots[material_index - 1] = Some(slot);
                     slot
+                }
+            };
+            let water = match waters[material_index - 1] {
+                Some(w) => w,
+                None => {
+                    let w = Water::of(material, settings.frozen_pore_pressure)?;
+                    waters[material_index - 1] = Some(w);
+                    w
                 }
             };
             let solid = &models[slot as usize];
@@ -260,7 +323,14 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 stress[5] = 0.0;
             }
             inadmissible.push(!solid.is_admissible(&stress, D == 2));
-            wave_speed = wave_speed.max((solid.elasticity.p_wave_modulus() / density).sqrt());
+            // The undrained wave: the liquid stiffens the mixture by K_w/n.
+            wave_speed = wave_speed
+                .max(((solid.elasticity.p_wave_modulus() + water.bulk_over_n()) / density).sqrt());
+            // A coupled MP's solid carries the mixture less its water.
+            let mass = match water {
+                Water::Coupled(c) => density - c.porosity * c.density,
+                _ => density,
+            } * point.volume;
             particles.push(Particle {
                 position,
                 displacement: [0.0; D],
@@ -268,7 +338,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 shape: [0.0; NC],
                 inverse_radius: 0.0,
                 stress,
-                mass: density * point.volume,
+                mass,
                 weight: loading.weight_density * point.volume,
                 volume: point.volume,
                 pore_term: loading.pore_factor * state.pwp,
@@ -278,6 +348,10 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 plastic_strain: 0.0,
                 plastic: false,
                 lost: false,
+                pwp: state.pwp,
+                pore_factor: loading.pore_factor,
+                water,
+                liquid_velocity: [0.0; D],
             });
         }
         let min_altitude = grid.min_altitude();
@@ -293,6 +367,36 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         let n_points = particles.len();
         let mut gravity = [0.0; D];
         gravity[1] = -settings.gravity;
+        let coupled = particles
+            .iter()
+            .any(|p| matches!(p.water, Water::Coupled(_)));
+        let liquid = coupled.then(|| LiquidGrid {
+            fixed: (0..n_nodes)
+                .map(|node| {
+                    let mut d = [false; D];
+                    let mesh_node = grid.mesh_node[node] as usize;
+                    if let Some(f) = model.liquid_fixity.get(mesh_node) {
+                        d.copy_from_slice(&f[..D]);
+                    }
+                    // On the axis of an axisymmetric model the water cannot
+                    // flow radially either.
+                    if axisymmetric && grid.fixed[node][0] && model.mesh.nodes[mesh_node][0] == 0.0
+                    {
+                        d[0] = true;
+                    }
+                    d
+                })
+                .collect(),
+            mass: vec![0.0; n_nodes],
+            water: vec![0.0; n_nodes],
+            drag: vec![0.0; n_nodes],
+            momentum: vec![[0.0; D]; n_nodes],
+            force: vec![[0.0; D]; n_nodes],
+            acceleration: vec![[0.0; D]; n_nodes],
+            velocity: vec![[0.0; D]; n_nodes],
+            p2g: vec![[LiquidContribution::ZERO; NC]; n_points],
+            remap: vec![[[0.0; D]; NC]; n_points],
+        });
         Ok(Solver {
             grid,
             models,
@@ -318,7 +422,39 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             radius_floor: 1e-6 * min_altitude,
             wave_speed,
             min_altitude,
+            liquid,
+            waters,
+            node_load: vec![[0.0; D]; n_nodes],
         })
+    }
+
+    /// Replaces the constant external nodal forces.
+    pub fn set_nodal_loads(&mut self, loads: &[(u32, [f64; 3])]) -> Result<(), MpmError> {
+        let mut node_load = vec![[0.0; D]; self.grid.n_nodes()];
+        let mut compact = std::collections::HashMap::new();
+        for (g, &m) in self.grid.mesh_node.iter().enumerate() {
+            compact.insert(m, g);
+        }
+        for &(node, f) in loads {
+            let slot = compact
+                .get(&node)
+                .and_then(|&g| node_load.get_mut(g))
+                .ok_or_else(|| {
+                    MpmError::InvalidSettings(format!(
+                        "load on node {node}, which no active element holds"
+                    ))
+                })?;
+            if f.iter().any(|v| !v.is_finite()) {
+                return Err(MpmError::InvalidSettings(format!(
+                    "load {f:?} on node {node} is not finite"
+                )));
+            }
+            for d in 0..D {
+                slot[d] += f[d];
+            }
+        }
+        self.node_load = node_load;
+        Ok(())
     }
 
     /// Advances the state by one time step and reports what it measured.
@@ -382,31 +518,127 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             }
         }
 
-        // 2. Nodal accelerations with local damping and fixities.
+        // 1b. The liquid of coupled MPs: its mass, drag, momentum, pressure
+        // force and weight.
+        if let Some(liquid) = self.liquid.as_mut() {
+            let g = self.gravity;
+            per_live_mp(
+                &mut self.particles,
+                &mut liquid.p2g,
+                [LiquidContribution::ZERO; NC],
+                |p, out| {
+                    let Water::Coupled(c) = p.water else {
+                        *out = [LiquidContribution::ZERO; NC];
+                        return;
+                    };
+                    let element = &grid.elements[p.element as usize];
+                    let n = p.shape;
+                    let pressure = [p.pwp, p.pwp, p.pwp, 0.0, 0.0, 0.0];
+                    let m = c.density * p.volume;
+                    for i in 0..NC {
+                        let g_i = &element.shape.grad[i];
+                        let mut force =
+                            corner_force::<D>(&pressure, g_i, n[i], p.volume, p.inverse_radius);
+                        let share = m * n[i];
+                        let mut momentum = [0.0; D];
+                        for d in 0..D {
+                            force[d] += share * g[d];
+                            momentum[d] = share * p.liquid_velocity[d];
+                        }
+                        out[i] = LiquidContribution {
+                            mass: share,
+                            water: c.porosity * share,
+                            drag: c.drag * p.volume * n[i],
+                            momentum,
+                            force,
+                        };
+                    }
+                },
+            );
+            liquid.mass.fill(0.0);
+            liquid.water.fill(0.0);
+            liquid.drag.fill(0.0);
+            liquid.momentum.fill([0.0; D]);
+            liquid.force.fill([0.0; D]);
+            for (p, out) in self.particles.iter().zip(&liquid.p2g) {
+                if !matches!(p.water, Water::Coupled(_)) || p.lost {
+                    continue;
+                }
+                let corners = &grid.elements[p.element as usize].corners;
+                for i in 0..NC {
+                    let node = corners[i] as usize;
+                    liquid.mass[node] += out[i].mass;
+                    liquid.water[node] += out[i].water;
+                    liquid.drag[node] += out[i].drag;
+                    for d in 0..D {
+                        liquid.momentum[node][d] += out[i].momentum[d];
+                        liquid.force[node][d] += out[i].force[d];
+                    }
+                }
+            }
+        }
+
+        // 2. Nodal accelerations with local damping and fixities. Where the
+        // liquid of coupled MPs is, the liquid's and the solid's are solved
+        // together with the drag implicit in both velocities:
+        //   (M_w + Δt·C) a_w − Δt·C·a_s = F_w − C (v_w − v_s)
+        //   n·ρw-mass · a_w + M_s · a_s = F_mix (damped)
+        // (unconditionally stable for any permeability).
         let mut residual_sq = 0.0;
         let mut external_sq = 0.0;
         for node in 0..grid.n_nodes() {
             let m = self.node_mass[node];
+            let liquid = self
+                .liquid
+                .as_mut()
+                .filter(|l| l.mass[node] > self.mass_floor);
             if m <= self.mass_floor {
                 self.node_acceleration[node] = [0.0; D];
                 self.node_velocity[node] = [0.0; D];
                 self.node_residual[node] = 0.0;
+                if let Some(l) = liquid {
+                    l.acceleration[node] = [0.0; D];
+                    l.velocity[node] = [0.0; D];
+                }
                 continue;
             }
             let mut node_sq = 0.0;
+            let mut liquid = liquid;
             for d in 0..D {
-                if grid.fixed[node][d] {
+                let solid_fixed = grid.fixed[node][d];
+                let velocity = if solid_fixed {
+                    0.0
+                } else {
+                    self.node_momentum[node][d] / m
+                };
+                let external = self.node_weight[node] * self.gravity[d] + self.node_load[node][d];
+                let unbalanced = external + self.node_force[node][d];
+                let damped = unbalanced - self.damping * unbalanced.abs() * sign(velocity);
+                let mut acceleration = damped / m;
+                if let Some(l) = liquid.as_deref_mut() {
+                    let mw = l.mass[node];
+                    let c = l.drag[node];
+                    let vw = l.momentum[node][d] / mw;
+                    let aw = if l.fixed[node][d] {
+                        0.0
+                    } else if solid_fixed {
+                        (l.force[node][d] - c * vw) / (mw + dt * c)
+                    } else {
+                        let water = l.water[node];
+                        (l.force[node][d] - c * (vw - velocity) + dt * c * damped / m)
+                            / (mw + dt * c + dt * c * water / m)
+                    };
+                    acceleration -= l.water[node] * aw / m;
+                    l.acceleration[node][d] = aw;
+                    l.velocity[node][d] = if l.fixed[node][d] { 0.0 } else { vw + aw * dt };
+                }
+                if solid_fixed {
                     self.node_acceleration[node][d] = 0.0;
                     self.node_velocity[node][d] = 0.0;
                     continue;
                 }
-                let external = self.node_weight[node] * self.gravity[d];
-                let unbalanced = external + self.node_force[node][d];
                 node_sq += unbalanced * unbalanced;
                 external_sq += external * external;
-                let velocity = self.node_momentum[node][d] / m;
-                let damped = unbalanced - self.damping * unbalanced.abs() * sign(velocity);
-                let acceleration = damped / m;
                 self.node_acceleration[node][d] = acceleration;
                 self.node_velocity[node][d] = velocity + acceleration * dt;
             }
@@ -471,7 +703,67 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             }
         }
 
-        // Strain increment, stress update, volume, relocation: per MP.
+        // 3b/4b. The liquid: G2P of its acceleration, then its nodal velocity
+        // from the updated momenta (MUSL, fixities again).
+        if let Some(liquid) = self.liquid.as_mut() {
+            let acceleration = &liquid.acceleration;
+            per_live_mp(
+                &mut self.particles,
+                &mut liquid.remap,
+                [[0.0; D]; NC],
+                |p, out| {
+                    let Water::Coupled(c) = p.water else {
+                        *out = [[0.0; D]; NC];
+                        return;
+                    };
+                    let corners = &grid.elements[p.element as usize].corners;
+                    let n = p.shape;
+                    let mut a = [0.0; D];
+                    for i in 0..NC {
+                        let node = corners[i] as usize;
+                        for d in 0..D {
+                            a[d] += n[i] * acceleration[node][d];
+                        }
+                    }
+                    for d in 0..D {
+                        p.liquid_velocity[d] += dt * a[d];
+                    }
+                    let m = c.density * p.volume;
+                    for i in 0..NC {
+                        for d in 0..D {
+                            out[i][d] = m * n[i] * p.liquid_velocity[d];
+                        }
+                    }
+                },
+            );
+            liquid.momentum.fill([0.0; D]);
+            for (p, out) in self.particles.iter().zip(&liquid.remap) {
+                if !matches!(p.water, Water::Coupled(_)) || p.lost {
+                    continue;
+                }
+                let corners = &grid.elements[p.element as usize].corners;
+                for i in 0..NC {
+                    let node = corners[i] as usize;
+                    for d in 0..D {
+                        liquid.momentum[node][d] += out[i][d];
+                    }
+                }
+            }
+            for node in 0..grid.n_nodes() {
+                let m = liquid.mass[node];
+                for d in 0..D {
+                    liquid.velocity[node][d] = if m <= self.mass_floor || liquid.fixed[node][d] {
+                        0.0
+                    } else {
+                        liquid.momentum[node][d] / m
+                    };
+                }
+            }
+        }
+
+        // Strain increment, stress update, pore pressure, volume, relocation:
+        // per MP.
+        let liquid_velocity = self.liquid.as_ref().map(|l| &l.velocity);
         let node_velocity = &self.node_velocity;
         let models = &self.models;
         let plane_strain = self.plane_strain;
@@ -509,7 +801,23 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                     p.plastic_strain += e.iter().map(|v| v * v).sum::<f64>().sqrt();
                     p.plastic |= p.plastic_strain > PLASTIC_STRAIN_FLOOR;
                 }
-                p.volume *= 1.0 + strain[0] + strain[1] + strain[2];
+                let volumetric = strain[0] + strain[1] + strain[2];
+                match p.water {
+                    Water::Frozen => {}
+                    Water::Undrained { bulk_over_n } => {
+                        p.pwp += bulk_over_n * volumetric;
+                        p.pore_term = p.pore_factor * p.pwp;
+                    }
+                    Water::Coupled(c) => {
+                        let liquid = liquid_velocity.map_or(0.0, |v| {
+                            liquid_volumetric_increment(element, &p.shape, p.inverse_radius, v, dt)
+                        });
+                        p.pwp +=
+                            c.bulk_over_n * ((1.0 - c.porosity) * volumetric + c.porosity * liquid);
+                        p.pore_term = p.pore_factor * p.pwp;
+                    }
+                }
+                p.volume *= 1.0 + volumetric;
                 if !grid.contains(p.element, &p.position) {
                     match grid.locate(&p.position, p.element) {
                         Some(e) => p.element = e,
@@ -529,6 +837,10 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         for p in &self.particles {
             let v2: f64 = p.velocity.iter().map(|v| v * v).sum();
             kinetic_energy += 0.5 * p.mass * v2;
+            if let Water::Coupled(c) = p.water {
+                let w2: f64 = p.liquid_velocity.iter().map(|v| v * v).sum();
+                kinetic_energy += 0.5 * c.porosity * c.density * p.volume * w2;
+            }
             yielded += p.yielded as usize;
             plastic += p.plastic as usize;
         }
@@ -553,6 +865,28 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         }
         (max, if count > 0 { sum / count as f64 } else { 0.0 })
     }
+}
+
+/// The liquid's volumetric strain increment at an MP, Δt·Σ ∇N_i·v_w,i
+/// (plus the hoop part Δt·Σ N_i v_w,r,i / r in 2D axisymmetry).
+fn liquid_volumetric_increment<const D: usize, const NC: usize>(
+    element: &super::grid::GridElement<D, NC>,
+    shape: &[f64; NC],
+    inverse_radius: f64,
+    velocity: &[[f64; D]],
+    dt: f64,
+) -> f64 {
+    let mut div = 0.0;
+    for i in 0..NC {
+        let v = &velocity[element.corners[i] as usize];
+        for d in 0..D {
+            div += element.shape.grad[i][d] * v[d];
+        }
+        if inverse_radius != 0.0 {
+            div += shape[i] * v[0] * inverse_radius;
+        }
+    }
+    dt * div
 }
 
 #[inline]

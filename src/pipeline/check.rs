@@ -24,6 +24,9 @@ pub struct VerifyOptions {
     /// Local damping α (`None`: the CPS `$$HOMOGENEOUS_LOCAL_DAMPING`, else
     /// [`runner::DEFAULT_DAMPING`]).
     pub damping: Option<f64>,
+    /// Hold every pore pressure (the drained check; two-phase and undrained
+    /// materials otherwise run coupled, [`crate::mpm::liquid`]).
+    pub drained: bool,
 }
 
 impl Default for VerifyOptions {
@@ -31,6 +34,7 @@ impl Default for VerifyOptions {
         VerifyOptions {
             max_steps: 20_000,
             damping: None,
+            drained: false,
         }
     }
 }
@@ -41,6 +45,7 @@ impl VerifyOptions {
         let mut s = runner::with_cps(RunSettings::verify(), cps, self.damping);
         s.max_steps = self.max_steps;
         s.record_every = 10;
+        s.frozen_pore_pressure = self.drained;
         s
     }
 }

@@ -69,6 +69,9 @@ pub struct FosOptions {
     pub window: Option<f64>,
     /// Every pore pressure set to zero (σ′ = σ) before the analysis.
     pub zero_pwp: bool,
+    /// Strength reduction: hold every pore pressure (two-phase and
+    /// undrained materials otherwise run coupled).
+    pub drained: bool,
 }
 
 impl Default for FosOptions {
@@ -81,6 +84,7 @@ impl Default for FosOptions {
             tolerance: 0.01,
             window: None,
             zero_pwp: false,
+            drained: false,
         }
     }
 }
@@ -100,6 +104,7 @@ impl FosOptions {
     pub fn settings(&self, cps: Option<&CpsDocument>) -> FosSettings {
         let mut s = FosSettings::default();
         s.run = runner::with_cps(s.run, cps, self.damping);
+        s.run.frozen_pore_pressure = self.drained;
         s.tolerance = self.tolerance;
         s.window = self.window;
         s

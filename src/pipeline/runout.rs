@@ -23,8 +23,13 @@ pub struct RunOptions {
     pub time: f64,
     /// Snapshot times (s).
     pub snapshots: Vec<f64>,
-    /// Local damping α (`None`: [`RUNOUT_DAMPING`]).
+    /// Local damping α (`None`: the CPS's `$$HOMOGENEOUS_LOCAL_DAMPING` as
+    /// Anura3D applies it, 0 when it is switched off; [`RUNOUT_DAMPING`] when
+    /// the CPS does not say).
     pub damping: Option<f64>,
+    /// Hold every pore pressure (two-phase and undrained materials otherwise
+    /// run coupled, [`crate::mpm::liquid`]).
+    pub drained: bool,
 }
 
 impl RunOptions {
@@ -44,11 +49,12 @@ impl RunOptions {
                 "snapshot time {t}: expected a number of seconds ≥ 0"
             )));
         }
-        let mut s = runner::with_cps(
-            RunSettings::verify(),
-            cps,
-            Some(self.damping.unwrap_or(RUNOUT_DAMPING)),
-        );
+        let damping = self
+            .damping
+            .or_else(|| cps.and_then(|c| c.local_damping_setting()))
+            .unwrap_or(RUNOUT_DAMPING);
+        let mut s = runner::with_cps(RunSettings::verify(), cps, Some(damping));
+        s.frozen_pore_pressure = self.drained;
         s.record_every = 10;
         s.end_time = Some(self.time);
         s.stop_at_equilibrium = false;

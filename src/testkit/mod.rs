@@ -74,6 +74,21 @@ pub fn saturated(material: Material) -> Material {
     }
 }
 
+/// Turns a material into `saturated_material_coupled` (Anura3D's two-phase
+/// single point): water of 1000 kg/m³, intrinsic permeability `kappa` (m²),
+/// liquid bulk modulus `bulk` (kPa), viscosity 1e-6 kPa·s (water).
+pub fn coupled(material: Material, kappa: f64, bulk: f64) -> Material {
+    let mut m = material;
+    generate::make_coupled(&mut m, kappa, bulk, 1e-6);
+    m
+}
+
+/// The liquid held where the solid is (impermeable sides and base) and free
+/// elsewhere (a free surface drains).
+pub fn impermeable_where_fixed(model: &mut AnuraModel) {
+    model.liquid_fixity = model.solid_fixity.clone();
+}
+
 /// A plane-strain TRI3 column `width` × `height` with `nx` × `ny` cells, each
 /// split along its rising diagonal into two counter-clockwise triangles.
 pub fn column_tri3(

@@ -4,6 +4,7 @@
 #![allow(dead_code)]
 
 pub mod column;
+pub mod kernel_run;
 pub mod malformed;
 pub mod random;
 

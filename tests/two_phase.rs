@@ -1,0 +1,339 @@
+//! The coupled two-phase runner (#27) against closed forms: a saturated
+//! column at rest (hydrostatic pore pressure and geostatic stress held),
+//! Terzaghi's 1D consolidation (degree of consolidation against time factor)
+//! and undrained compression (Δp = K_w/n·Δε_v, the load shared between the
+//! skeleton and the water in the ratio of their stiffnesses).
+
+mod common;
+use common::kernel_run::{run_kernel, vtk_scalars, vtk_vectors};
+use common::{anura3d_kernel_or_skip, run_ok, soil_spec};
+
+use a3d_init::formats::gom::write::model_to_text;
+use a3d_init::model::generate;
+use a3d_init::model::{AnuraModel, MaterialPoint, MpState};
+use a3d_init::mpm::{Formulation, RunSettings, Simulation};
+use a3d_init::testkit::{
+    column_tri3, coupled, elastic_material, geostatic_states, impermeable_where_fixed,
+    place_points, zero_states,
+};
+
+const G: f64 = 9.81;
+const GAMMA_W: f64 = 9.81;
+
+/// A 0.1 m wide, `height` tall column of `ny` cells of coupled linear
+/// elastic soil (ν = 0, so the constrained modulus is E), n = 0.4,
+/// impermeable sides and base, drained top.
+fn column(height: f64, ny: usize, young: f64, kappa: f64, bulk: f64) -> AnuraModel {
+    let soil = coupled(elastic_material(young, 0.0, 2650.0, 0.4), kappa, bulk);
+    let mut model = column_tri3(0.1, height, 1, ny, soil);
+    impermeable_where_fixed(&mut model);
+    model
+}
+
+/// Consistent nodal forces of a uniform pressure `q` (kPa) on the top edge.
+fn top_load(model: &AnuraModel, q: f64) -> Vec<(u32, [f64; 3])> {
+    let top = model.mesh.bounding_box().1[1];
+    let mut top_nodes: Vec<(u32, f64)> = model
+        .mesh
+        .nodes
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| (p[1] - top).abs() < 1e-12)
+        .map(|(i, p)| (i as u32, p[0]))
+        .collect();
+    top_nodes.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let mut loads: Vec<(u32, [f64; 3])> = top_nodes.iter().map(|&(i, _)| (i, [0.0; 3])).collect();
+    for k in 0..top_nodes.len() - 1 {
+        let half = 0.5 * q * (top_nodes[k + 1].1 - top_nodes[k].1);
+        loads[k].1[1] -= half;
+        loads[k + 1].1[1] -= half;
+    }
+    loads
+}
+
+fn settings(gravity: f64) -> RunSettings {
+    RunSettings {
+        gravity,
+        ..RunSettings::dynamic(1.0)
+    }
+}
+
+/// Volume-weighted mean of `values` over the MPs.
+fn mean(points: &[MaterialPoint], values: &[f64]) -> f64 {
+    let v: f64 = points.iter().map(|p| p.volume).sum();
+    points
+        .iter()
+        .zip(values)
+        .map(|(p, x)| p.volume * x)
+        .sum::<f64>()
+        / v
+}
+
+/// Terzaghi: U(T) = 1 − Σ 2/M² exp(−M² T), M = π(2m + 1)/2.
+fn terzaghi(t: f64) -> f64 {
+    let mut sum = 0.0;
+    for m in 0..200 {
+        let big_m = std::f64::consts::PI * (2 * m + 1) as f64 / 2.0;
+        sum += 2.0 / (big_m * big_m) * (-big_m * big_m * t).exp();
+    }
+    1.0 - sum
+}
+
+#[test]
+fn saturated_column_at_rest_holds_hydrostatic_pressure_and_geostatic_stress() {
+    let model = column(2.0, 20, 1e4, 1e-10, 1e6);
+    let points = place_points(&model);
+    // Water table at the top: p = −γw·depth, σ′v = −γ′·depth, K0 = 0 (ν = 0).
+    let states = geostatic_states(&model, &points, G, 0.0, Some(2.0));
+    let mut sim = Simulation::new(&model, &points, &states, &settings(G)).unwrap();
+    assert_eq!(sim.formulations(), vec![(1, Formulation::Coupled)]);
+    let p0 = sim.pore_pressures();
+    let s0 = sim.effective_stresses();
+    for _ in 0..2000 {
+        sim.step();
+    }
+    let load = 2.0 * GAMMA_W; // the largest pore pressure, kPa
+    let dp = sim
+        .pore_pressures()
+        .iter()
+        .zip(&p0)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    let ds = sim
+        .effective_stresses()
+        .iter()
+        .zip(&s0)
+        .flat_map(|(a, b)| a.iter().zip(b).map(|(x, y)| (x - y).abs()))
+        .fold(0.0, f64::max);
+    assert!(dp < 1e-6 * load, "pore pressure moved {dp:e} kPa");
+    assert!(ds < 1e-6 * load, "effective stress moved {ds:e} kPa");
+}
+
+#[test]
+#[allow(clippy::print_stderr)] // the measured values belong in the test output
+fn terzaghi_consolidation_within_two_percent() {
+    // H = 1 m drained at the top; E_oed = 1e4 kPa; k = 1e-3 m/s.
+    let (h, young, bulk, n) = (1.0, 1e4, 1e6, 0.4);
+    let k = 1e-3;
+    let kappa = k * 1e-6 / (1.0 * G);
+    let model = column(h, 20, young, kappa, bulk);
+    let points = place_points(&model);
+    let states: Vec<MpState> = zero_states(&points);
+    let mut sim = Simulation::new(&model, &points, &states, &settings(0.0)).unwrap();
+    let q = 10.0;
+    sim.set_nodal_loads(&top_load(&model, q)).unwrap();
+    // Compressible water: c_v = k / (γw (1/M + n/K_w)); the undrained
+    // pressure p0 = q·(K_w/n)/(M + K_w/n).
+    let cv = k / (GAMMA_W * (1.0 / young + n / bulk));
+    let p0 = q * (bulk / n) / (young + bulk / n);
+    for target in [0.1, 0.5, 1.0] {
+        let time = target * h * h / cv;
+        while sim.time() < time {
+            sim.step();
+        }
+        let t = cv * sim.time() / (h * h);
+        let p = mean(&points, &sim.pore_pressures());
+        let u = 1.0 - (-p) / p0;
+        let exact = terzaghi(t);
+        eprintln!("T = {t:.4}: U = {u:.4}, Terzaghi {exact:.4}");
+        assert!(
+            (u - exact).abs() < 0.02 * exact,
+            "T = {t:.3}: U = {u:.4} against Terzaghi's {exact:.4}"
+        );
+    }
+}
+
+/// Settles `model` under a top pressure `q` with local damping and returns
+/// the volume-weighted mean pore pressure.
+fn settled_mean_pressure(model: &AnuraModel, q: f64) -> f64 {
+    let points = place_points(model);
+    let run = RunSettings {
+        damping: 0.75,
+        ..settings(0.0)
+    };
+    let mut sim = Simulation::new(model, &points, &zero_states(&points), &run).unwrap();
+    sim.set_nodal_loads(&top_load(model, q)).unwrap();
+    while sim.time() < 0.1 {
+        sim.step();
+    }
+    mean(&points, &sim.pore_pressures())
+}
+
+#[test]
+#[allow(clippy::print_stderr)] // the measured values belong in the test output
+fn undrained_compression_shares_the_load_by_stiffness() {
+    // Too impermeable to drain in 0.1 s (c_v·t/H² ≈ 1e-12): the skeleton
+    // (M = 1e4 kPa) and the water (K_w/n = 2.5e5 kPa) share the load q
+    // in the ratio of their stiffnesses, Δp = (K_w/n)·Δε_v = −q·(K_w/n)/(M + K_w/n),
+    // in the coupled formulation and in the one-phase undrained-effective one.
+    let (young, bulk, n, q) = (1e4, 1e5, 0.4, 10.0);
+    let expect = -q * (bulk / n) / (young + bulk / n);
+    let coupled_model = column(1.0, 10, young, 1e-16, bulk);
+    let mut effective_model = coupled_model.clone();
+    let m = &mut effective_model.materials[0];
+    m.material_type = "saturated_material_undrained_effective".into();
+    for (model, formulation) in [
+        (coupled_model, Formulation::Coupled),
+        (effective_model, Formulation::UndrainedEffective),
+    ] {
+        let points = place_points(&model);
+        let sim = Simulation::new(&model, &points, &zero_states(&points), &settings(0.0)).unwrap();
+        assert_eq!(sim.formulations(), vec![(1, formulation)]);
+        let p = settled_mean_pressure(&model, q);
+        eprintln!("{formulation:?}: mean p = {p:.5} kPa, expected {expect:.5}");
+        assert!(
+            (p / expect - 1.0).abs() < 1e-3,
+            "{formulation:?}: p {p} vs {expect}"
+        );
+    }
+    // Frozen on request: the drained runner keeps p at 0 and the skeleton
+    // takes the whole load.
+    let model = column(1.0, 10, young, 1e-16, bulk);
+    let points = place_points(&model);
+    let frozen = RunSettings {
+        frozen_pore_pressure: true,
+        ..settings(0.0)
+    };
+    let sim = Simulation::new(&model, &points, &zero_states(&points), &frozen).unwrap();
+    assert_eq!(sim.formulations(), vec![(1, Formulation::Drained)]);
+}
+
+/// The real kernel and this runner on the same project: a saturated
+/// two-phase column (`saturated_material_coupled`, κ = 1e-10 m²,
+/// K_w = 1e5 kPa, E = 1e4 kPa, ν = 0.3; 0.2 × 1 m, impermeable sides and
+/// base, drained top) mapped with the hydrostatic pore pressure and zero
+/// effective stress (σ = p): under gravity the skeleton loads the water,
+/// which then drains through the top. Both run 0.1 s undamped; the largest
+/// displacement and the pore pressure change at three monitored MPs within
+/// 20 % of the kernel's. Skips without the kernel unless
+/// `A3D_INIT_REQUIRE_KERNEL` is set.
+#[test]
+#[allow(clippy::print_stderr)] // the measured values belong in the test output
+fn anura3d_kernel_two_phase_column_within_twenty_percent() {
+    let Some(bin) = anura3d_kernel_or_skip("anura3d_kernel_two_phase_column_within_twenty_percent")
+    else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let mesh = generate::structured_tri_mesh(0.0, 0.0, 0.2, 1.0, 2, 10);
+    let mut model = generate::single_material_model(mesh, &soil_spec(0.5, 1e4, 0.0), 3);
+    generate::make_coupled(&mut model.materials[0], 1e-10, 1e5, 1e-6);
+    model.liquid_fixity = model.solid_fixity.clone();
+    let folder = tmp.path().join("model");
+    std::fs::create_dir_all(&folder).unwrap();
+    std::fs::write(folder.join("slope.GOM"), model_to_text(&model, "2023")).unwrap();
+    std::fs::write(
+        folder.join("slope.CPS_001"),
+        "### Anura3D_2023 ###\n$$COMPUTATION_METHOD\nMPM-MP\n$$GRAVITY_ACCELERATION\n9.81\n\
+         $$COURANT_NUMBER\n0.5\n$$HOMOGENEOUS_LOCAL_DAMPING\n0 0.0\n$$END\n",
+    )
+    .unwrap();
+    // σ = p: compression-positive FEM stresses equal to the pore pressure.
+    let fem = tmp.path().join("fem.csv");
+    let mut csv = String::from("X,Y,PWP,SXX,SYY,SXY\n");
+    for i in 0..=8 {
+        for j in 0..=40 {
+            let (x, y) = (0.2 * i as f64 / 8.0, j as f64 / 40.0);
+            let p = GAMMA_W * (1.0 - y);
+            csv.push_str(&format!("{x},{y},{p},{p},{p},0\n"));
+        }
+    }
+    std::fs::write(&fem, csv).unwrap();
+    let out = tmp.path().join("out");
+    run_ok(&[
+        "map",
+        "--fem",
+        fem.to_str().unwrap(),
+        "--mpm",
+        folder.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--stress",
+        "fem",
+    ]);
+    let time = 0.1;
+    let vtk = run_kernel(&bin, &out, &tmp.path().join("kernel"), time);
+    let kernel_u = vtk_vectors(&vtk, "displacement_solid");
+    let scalars = vtk.with_file_name("slope_MPScalar_001.vtk");
+    if !scalars.is_file() {
+        let names: Vec<_> = std::fs::read_dir(vtk.parent().unwrap())
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        panic!("no {} among {names:?}", scalars.display());
+    }
+    let kernel_p = vtk_scalars(&scalars, "pressure_liquid");
+    let ours = tmp.path().join("ours");
+    run_ok(&[
+        "run",
+        out.to_str().unwrap(),
+        "--time",
+        &time.to_string(),
+        "--damping",
+        "0",
+        "--snapshots",
+        "",
+        "--out",
+        ours.to_str().unwrap(),
+    ]);
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(ours.join("run.json")).unwrap()).unwrap();
+    let our_u: Vec<f64> = report["final_displacements"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| {
+            let v: Vec<f64> = v
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|x| x.as_f64().unwrap())
+                .collect();
+            (v[0] * v[0] + v[1] * v[1]).sqrt()
+        })
+        .collect();
+    let our_p: Vec<f64> = report["final_pore_pressures"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_f64().unwrap())
+        .collect();
+    assert_eq!(our_p.len(), kernel_p.len());
+    let max = |v: &[f64]| v.iter().copied().fold(0.0, f64::max);
+    let kernel_max = max(&kernel_u
+        .iter()
+        .map(|v| (v[0] * v[0] + v[1] * v[1]).sqrt())
+        .collect::<Vec<_>>());
+    let our_max = max(&our_u);
+    eprintln!("largest displacement: kernel {kernel_max:.4e} m, ours {our_max:.4e} m");
+    assert!(
+        (our_max / kernel_max - 1.0).abs() < 0.2,
+        "largest displacement: kernel {kernel_max:.4e} m, ours {our_max:.4e} m"
+    );
+    // Monitored MPs near the axis at a quarter, half and three quarters of
+    // the height: the change of pore pressure from the hydrostatic start.
+    let project = a3d_init::pipeline::Project::load(&out).unwrap();
+    for y in [0.25, 0.5, 0.75] {
+        let (k, point) = project
+            .points
+            .iter()
+            .enumerate()
+            .min_by(|a, b| {
+                let d =
+                    |p: &MaterialPoint| (p.position[0] - 0.1).powi(2) + (p.position[1] - y).powi(2);
+                d(a.1).total_cmp(&d(b.1))
+            })
+            .unwrap();
+        let p0 = -GAMMA_W * (1.0 - point.position[1]);
+        let (dk, dours) = (kernel_p[k] - p0, our_p[k] - p0);
+        eprintln!(
+            "MP {} at y = {:.3}: p kernel {:.4} kPa, ours {:.4} kPa (change {dk:.4} vs {dours:.4})",
+            point.id, point.position[1], kernel_p[k], our_p[k]
+        );
+        assert!(
+            (dours / dk - 1.0).abs() < 0.2,
+            "MP {}: pore pressure change kernel {dk:.4} kPa, ours {dours:.4} kPa",
+            point.id
+        );
+    }
+}
