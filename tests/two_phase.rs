@@ -172,6 +172,11 @@ fn undrained_compression_shares_the_load_by_stiffness() {
     let mut effective_model = coupled_model.clone();
     let m = &mut effective_model.materials[0];
     m.material_type = "saturated_material_undrained_effective".into();
+    // K_w/n from ν_u as the kernel forms it: with ν = 0, ν_u/(1 − 2ν_u)·E.
+    let ratio = bulk / n / young;
+    let nu_u = ratio / (1.0 + 2.0 * ratio);
+    m.properties
+        .push(("$$POISSON_RATIO_UNDRAINED".into(), nu_u.to_string()));
     for (model, formulation) in [
         (coupled_model, Formulation::Coupled),
         (effective_model, Formulation::UndrainedEffective),

@@ -303,7 +303,7 @@ pub fn material(index: u32, spec: &MaterialSpec) -> Material {
         cohesion: spec.mohr_coulomb.map(|m| m.1),
         dilatancy_angle: spec.mohr_coulomb.map(|m| m.2),
         tensile_strength: spec.mohr_coulomb.map(|_| 0.0),
-        retention: spec.retention.clone(),
+        retention: spec.retention,
         properties: props,
     }
 }

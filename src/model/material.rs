@@ -1,7 +1,7 @@
 //! Materials as read from the GOM's positional material block.
 
 /// Water retention curve of an unsaturated material (`$$WATER_RETENTION_CURVE`).
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
 pub enum RetentionCurve {
     /// Anura3D's van Genuchten form: S = Smin + (Smax − Smin)·(1 + (s/P0)^(1/(1−λ)))^(−λ),
     /// with suction s in kPa.
@@ -20,6 +20,30 @@ impl RetentionCurve {
     /// Returns 1 for s ≤ 0.
     pub fn saturation(&self, s: f64) -> f64 {
         self.anura3d_saturation(s).1
+    }
+
+    /// dS/ds at suction `s` (1/kPa; 0 for s ≤ 0), as the kernel's
+    /// `CalculateDerivDegreeSaturation` forms it.
+    pub fn derivative(&self, s: f64) -> f64 {
+        if s <= 0.0 {
+            return 0.0;
+        }
+        match *self {
+            RetentionCurve::VanGenuchten {
+                s_min,
+                s_max,
+                p0,
+                lambda,
+            } => {
+                let x = s / p0;
+                (s_max - s_min)
+                    * (-lambda / (1.0 - lambda))
+                    * (1.0 + x.powf(1.0 / (1.0 - lambda))).powf(-lambda - 1.0)
+                    * x.powf(lambda / (1.0 - lambda))
+                    / p0
+            }
+            RetentionCurve::Linear { av } => -av,
+        }
     }
 
     /// Anura3D's retention routines at suction `s` (gas pressure 0): the Sr the
@@ -167,6 +191,39 @@ impl Material {
         match &self.retention {
             Some(curve) if self.is_unsaturated() => curve.saturation(pwp),
             _ => 1.0,
+        }
+    }
+}
+
+#[cfg(test)]
+mod retention_tests {
+    use super::RetentionCurve;
+
+    /// dS/ds against a central difference of S, both curves, and 0 at and
+    /// below zero suction.
+    #[test]
+    fn derivative_matches_a_finite_difference() {
+        let curves = [
+            RetentionCurve::VanGenuchten {
+                s_min: 0.1,
+                s_max: 1.0,
+                p0: 1.96,
+                lambda: 0.63,
+            },
+            RetentionCurve::Linear { av: 0.05 },
+        ];
+        for curve in curves {
+            for s in [0.1, 0.5, 1.0, 2.0, 5.0, 10.0] {
+                let h = 1e-6 * s;
+                let fd = (curve.saturation(s + h) - curve.saturation(s - h)) / (2.0 * h);
+                let exact = curve.derivative(s);
+                assert!(
+                    (exact - fd).abs() <= 1e-6 * fd.abs().max(1e-3),
+                    "{curve:?} at s = {s}: {exact} vs {fd}"
+                );
+            }
+            assert_eq!(curve.derivative(0.0), 0.0);
+            assert_eq!(curve.derivative(-3.0), 0.0);
         }
     }
 }

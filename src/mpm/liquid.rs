@@ -18,12 +18,15 @@
 //!   drains (p = 0 there, the weak form's natural condition).
 //! * **Undrained effective** (`saturated_material_undrained_effective`), one
 //!   phase: Δp = (K_w/n)·Δε_v on the solid's strain, σ′ + p in the internal
-//!   force.
+//!   force, K_w/n from the undrained Poisson's ratio as the kernel forms it.
+//!   (The kernel's `StressSolid` adds the increment twice per step,
+//!   `ExternalSoilModel.for` 113–124 and 147–150, so its p moves by
+//!   2·(K_w/n)·Δε_v; this runner follows the closed form.)
 //!
 //! Everything else keeps its pore pressure frozen (drained).
 
 use super::MpmError;
-use crate::model::Material;
+use crate::model::{Material, RetentionCurve};
 
 /// How an MP's pore pressure evolves.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -45,8 +48,12 @@ pub(crate) struct Coupled {
     pub porosity: f64,
     /// Liquid density ρw (t/m³).
     pub density: f64,
-    /// Drag per unit volume of mixture, n·μ/κ (kPa·s/m² = t/(m³·s)).
+    /// Drag per unit volume of mixture at full saturation, n·μ/κ
+    /// (kPa·s/m² = t/(m³·s)).
     pub drag: f64,
+    /// Unsaturated (`unsaturated_material_2phase_suction`): the retention
+    /// curve; `None` for saturated coupled materials.
+    pub retention: Option<RetentionCurve>,
 }
 
 /// The formulation of each material as the runner ran it, for reports.
@@ -103,15 +110,30 @@ impl Water {
             }
         };
         match kind {
-            "saturated_material_undrained_effective"
-                if property(material, "BULK_MODULUS_LIQUID").is_none() =>
-            {
-                Ok(Water::Frozen)
+            "saturated_material_undrained_effective" => {
+                // The kernel forms K_w from the undrained Poisson's ratio at
+                // read time (`ReadMaterialData.FOR`):
+                // K_w/n = (ν_u − ν)·E / ((1 − 2ν_u)(1 + ν)(1 − 2ν)).
+                let (Some(nu_u), Some(e), Some(nu)) = (
+                    property(material, "POISSON_RATIO_UNDRAINED"),
+                    material.young_modulus,
+                    material.poisson_ratio,
+                ) else {
+                    return Ok(Water::Frozen);
+                };
+                let bulk_over_n =
+                    (nu_u - nu) * e / ((1.0 - 2.0 * nu_u) * (1.0 + nu) * (1.0 - 2.0 * nu));
+                if !(nu_u > nu && nu_u < 0.5 && bulk_over_n.is_finite() && bulk_over_n > 0.0) {
+                    return Err(MpmError::InvalidProperty {
+                        material: material.index,
+                        reason: format!(
+                            "POISSON_RATIO_UNDRAINED {nu_u} must lie between ν = {nu} and 0.5"
+                        ),
+                    });
+                }
+                Ok(Water::Undrained { bulk_over_n })
             }
-            "saturated_material_undrained_effective" => Ok(Water::Undrained {
-                bulk_over_n: positive("BULK_MODULUS_LIQUID")? / porosity()?,
-            }),
-            "saturated_material_coupled" => {
+            "saturated_material_coupled" | "unsaturated_material_2phase_suction" => {
                 // Without the liquid's constants (a record made by hand, not
                 // by Anura3D's GUI) the water cannot flow: held, and the
                 // report says drained.
@@ -126,11 +148,27 @@ impl Water {
                 let n = porosity()?;
                 let kappa = positive("INTRINSIC_PERMEABILITY_LIQUID")?;
                 let mu = positive("DYNAMIC_VISCOSITY_LIQUID")?;
+                let retention = if kind == "unsaturated_material_2phase_suction" {
+                    // Only a constant conductivity (k_r = 1) is modelled; the
+                    // others keep the pore pressure frozen.
+                    let constant = material
+                        .properties
+                        .iter()
+                        .find(|(k, _)| k.trim() == "$$HYDR_CONDUCTIVITY_CURVE")
+                        .is_none_or(|(_, v)| v.trim().eq_ignore_ascii_case("constant"));
+                    match material.retention {
+                        Some(curve) if constant => Some(curve),
+                        _ => return Ok(Water::Frozen),
+                    }
+                } else {
+                    None
+                };
                 Ok(Water::Coupled(Coupled {
                     bulk_over_n: positive("BULK_MODULUS_LIQUID")? / n,
                     porosity: n,
                     density: material.density_liquid.unwrap_or(1000.0) / 1000.0,
                     drag: n * mu / kappa,
+                    retention,
                 }))
             }
             _ => Ok(Water::Frozen),

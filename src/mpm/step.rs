@@ -101,6 +101,11 @@ pub(crate) struct Particle<const D: usize, const NC: usize> {
     pub water: Water,
     /// The liquid's velocity (coupled MPs; zero otherwise).
     pub liquid_velocity: [f64; D],
+    /// Degree of saturation (coupled unsaturated MPs follow their retention
+    /// curve; else as mapped).
+    pub saturation: f64,
+    /// Initial volume: the kernel's masses and drag stay those of V₀.
+    pub volume0: f64,
 }
 
 /// Per-corner P2G contribution of the liquid of one coupled MP.
@@ -115,6 +120,9 @@ struct LiquidContribution<const D: usize> {
     momentum: [f64; D],
     /// Pressure force −V p ∇N plus the liquid's weight ρw·V·N·g.
     force: [f64; D],
+    /// m_s·n·ρw·S·N: the mass-weighted nodal n·ρw·S of the advective flux
+    /// (unsaturated MPs), before division by the nodal solid mass.
+    advective: f64,
 }
 
 impl<const D: usize> LiquidContribution<D> {
@@ -124,6 +132,7 @@ impl<const D: usize> LiquidContribution<D> {
         drag: 0.0,
         momentum: [0.0; D],
         force: [0.0; D],
+        advective: 0.0,
     };
 }
 
@@ -134,6 +143,9 @@ struct LiquidGrid<const D: usize, const NC: usize> {
     mass: Vec<f64>,
     water: Vec<f64>,
     drag: Vec<f64>,
+    /// Σ m_s·n·ρw·S·N, then over the nodal solid mass (the kernel's
+    /// `AdvectiveFluxDarcyWater`).
+    advective: Vec<f64>,
     momentum: Vec<[f64; D]>,
     force: Vec<[f64; D]>,
     acceleration: Vec<[f64; D]>,
@@ -328,7 +340,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 .max(((solid.elasticity.p_wave_modulus() + water.bulk_over_n()) / density).sqrt());
             // A coupled MP's solid carries the mixture less its water.
             let mass = match water {
-                Water::Coupled(c) => density - c.porosity * c.density,
+                Water::Coupled(c) => density - c.porosity * state.saturation * c.density,
                 _ => density,
             } * point.volume;
             particles.push(Particle {
@@ -352,6 +364,8 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 pore_factor: loading.pore_factor,
                 water,
                 liquid_velocity: [0.0; D],
+                saturation: state.saturation,
+                volume0: point.volume,
             });
         }
         let min_altitude = grid.min_altitude();
@@ -390,6 +404,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             mass: vec![0.0; n_nodes],
             water: vec![0.0; n_nodes],
             drag: vec![0.0; n_nodes],
+            advective: vec![0.0; n_nodes],
             momentum: vec![[0.0; D]; n_nodes],
             force: vec![[0.0; D]; n_nodes],
             acceleration: vec![[0.0; D]; n_nodes],
@@ -534,7 +549,11 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                     let element = &grid.elements[p.element as usize];
                     let n = p.shape;
                     let pressure = [p.pwp, p.pwp, p.pwp, 0.0, 0.0, 0.0];
-                    let m = c.density * p.volume;
+                    // The kernel's constant masses and drag (of V₀), scaled
+                    // by S in the mixture's water and the drag.
+                    let m = c.density * p.volume0;
+                    let s = p.saturation;
+                    let advective = p.mass * c.porosity * c.density * s;
                     for i in 0..NC {
                         let g_i = &element.shape.grad[i];
                         let mut force =
@@ -547,10 +566,11 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                         }
                         out[i] = LiquidContribution {
                             mass: share,
-                            water: c.porosity * share,
-                            drag: c.drag * p.volume * n[i],
+                            water: c.porosity * s * share,
+                            drag: c.drag * s * p.volume0 * n[i],
                             momentum,
                             force,
+                            advective: advective * n[i],
                         };
                     }
                 },
@@ -558,6 +578,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             liquid.mass.fill(0.0);
             liquid.water.fill(0.0);
             liquid.drag.fill(0.0);
+            liquid.advective.fill(0.0);
             liquid.momentum.fill([0.0; D]);
             liquid.force.fill([0.0; D]);
             for (p, out) in self.particles.iter().zip(&liquid.p2g) {
@@ -570,11 +591,15 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                     liquid.mass[node] += out[i].mass;
                     liquid.water[node] += out[i].water;
                     liquid.drag[node] += out[i].drag;
+                    liquid.advective[node] += out[i].advective;
                     for d in 0..D {
                         liquid.momentum[node][d] += out[i].momentum[d];
                         liquid.force[node][d] += out[i].force[d];
                     }
                 }
+            }
+            for (a, &m) in liquid.advective.iter_mut().zip(&self.node_mass) {
+                *a = if m > self.mass_floor { *a / m } else { 0.0 };
             }
         }
 
@@ -619,13 +644,18 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                     let mw = l.mass[node];
                     let c = l.drag[node];
                     let vw = l.momentum[node][d] / mw;
+                    // Local damping on the liquid's force as the kernel
+                    // applies it: before the drag, with the liquid's
+                    // velocity's sign; the drag itself is never damped.
+                    let fw = l.force[node][d];
+                    let fw = fw - self.damping * fw.abs() * sign(vw);
                     let aw = if l.fixed[node][d] {
                         0.0
                     } else if solid_fixed {
-                        (l.force[node][d] - c * vw) / (mw + dt * c)
+                        (fw - c * vw) / (mw + dt * c)
                     } else {
                         let water = l.water[node];
-                        (l.force[node][d] - c * (vw - velocity) + dt * c * damped / m)
+                        (fw - c * (vw - velocity) + dt * c * damped / m)
                             / (mw + dt * c + dt * c * water / m)
                     };
                     acceleration -= l.water[node] * aw / m;
@@ -682,26 +712,14 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         );
 
         // 4. MUSL: nodal velocities from the updated MP momenta.
-        self.node_momentum.fill([0.0; D]);
-        for (p, out) in self.particles.iter().zip(&self.remap) {
-            let corners = &grid.elements[p.element as usize].corners;
-            for i in 0..NC {
-                let node = corners[i] as usize;
-                for d in 0..D {
-                    self.node_momentum[node][d] += out[i][d];
-                }
-            }
-        }
-        for node in 0..grid.n_nodes() {
-            let m = self.node_mass[node];
-            for d in 0..D {
-                self.node_velocity[node][d] = if m <= self.mass_floor || grid.fixed[node][d] {
-                    0.0
-                } else {
-                    self.node_momentum[node][d] / m
-                };
-            }
-        }
+        scatter(grid, &self.particles, &self.remap, &mut self.node_momentum);
+        velocities(
+            &self.node_mass,
+            &self.node_momentum,
+            &grid.fixed,
+            self.mass_floor,
+            &mut self.node_velocity,
+        );
 
         // 3b/4b. The liquid: G2P of its acceleration, then its nodal velocity
         // from the updated momenta (MUSL, fixities again).
@@ -736,34 +754,21 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                     }
                 },
             );
-            liquid.momentum.fill([0.0; D]);
-            for (p, out) in self.particles.iter().zip(&liquid.remap) {
-                if !matches!(p.water, Water::Coupled(_)) || p.lost {
-                    continue;
-                }
-                let corners = &grid.elements[p.element as usize].corners;
-                for i in 0..NC {
-                    let node = corners[i] as usize;
-                    for d in 0..D {
-                        liquid.momentum[node][d] += out[i][d];
-                    }
-                }
-            }
-            for node in 0..grid.n_nodes() {
-                let m = liquid.mass[node];
-                for d in 0..D {
-                    liquid.velocity[node][d] = if m <= self.mass_floor || liquid.fixed[node][d] {
-                        0.0
-                    } else {
-                        liquid.momentum[node][d] / m
-                    };
-                }
-            }
+            // Non-coupled and lost MPs left zeros in their slots.
+            scatter(grid, &self.particles, &liquid.remap, &mut liquid.momentum);
+            velocities(
+                &liquid.mass,
+                &liquid.momentum,
+                &liquid.fixed,
+                self.mass_floor,
+                &mut liquid.velocity,
+            );
         }
 
         // Strain increment, stress update, pore pressure, volume, relocation:
         // per MP.
         let liquid_velocity = self.liquid.as_ref().map(|l| &l.velocity);
+        let advective = self.liquid.as_ref().map(|l| &l.advective);
         let node_velocity = &self.node_velocity;
         let models = &self.models;
         let plane_strain = self.plane_strain;
@@ -809,15 +814,54 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                         p.pore_term = p.pore_factor * p.pwp;
                     }
                     Water::Coupled(c) => {
-                        let liquid = liquid_velocity.map_or(0.0, |v| {
-                            liquid_volumetric_increment(element, &p.shape, p.inverse_radius, v, dt)
-                        });
-                        p.pwp +=
-                            c.bulk_over_n * ((1.0 - c.porosity) * volumetric + c.porosity * liquid);
-                        p.pore_term = p.pore_factor * p.pwp;
+                        let n = c.porosity;
+                        let s = p.saturation;
+                        let partial = c.retention.is_some() && s > 0.0 && s < 1.0;
+                        if let (true, Some(v), Some(a)) = (partial, liquid_velocity, advective) {
+                            // The kernel's partially saturated storage:
+                            // Δp = (S ρw Δε_v + A) / (n S ρw/K_w − n ρw dS/dp),
+                            // A = Σ ∇N·(n ρw S)_node (Δu_w − Δu_s).
+                            let flux = advective_flux(
+                                element,
+                                a,
+                                v,
+                                node_velocity,
+                                dt,
+                                p.inverse_radius,
+                                &p.shape,
+                            );
+                            let rho = c.density;
+                            let kw = c.bulk_over_n * n;
+                            let ds = c.retention.map_or(0.0, |r| r.derivative(p.pwp));
+                            let storage = n * s * rho / kw - n * rho * ds;
+                            p.pwp += (s * rho * volumetric + flux) / storage;
+                        } else {
+                            let liquid = liquid_velocity.map_or(0.0, |v| {
+                                liquid_volumetric_increment(
+                                    element,
+                                    &p.shape,
+                                    p.inverse_radius,
+                                    v,
+                                    dt,
+                                )
+                            });
+                            p.pwp += c.bulk_over_n * ((1.0 - n) * volumetric + n * liquid);
+                        }
                     }
                 }
                 p.volume *= 1.0 + volumetric;
+                if let Water::Coupled(c) = p.water {
+                    // The end of the kernel's step: S from the retention
+                    // curve at the new p, the mixture's weight with it (of
+                    // the current volume), Bishop's min(S·p, p).
+                    if let Some(curve) = c.retention {
+                        p.saturation = curve.anura3d_saturation(p.pwp).1;
+                        p.weight =
+                            (p.mass / p.volume0 + c.porosity * p.saturation * c.density) * p.volume;
+                        p.pore_factor = p.saturation;
+                    }
+                    p.pore_term = (p.pore_factor * p.pwp).min(p.pwp);
+                }
                 if !grid.contains(p.element, &p.position) {
                     match grid.locate(&p.position, p.element) {
                         Some(e) => p.element = e,
@@ -865,6 +909,71 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         }
         (max, if count > 0 { sum / count as f64 } else { 0.0 })
     }
+}
+
+/// Sums every MP's per-corner vectors into `nodal` (cleared first),
+/// serially in MP order (deterministic).
+fn scatter<const D: usize, const NC: usize>(
+    grid: &Grid<D, NC>,
+    particles: &[Particle<D, NC>],
+    per_mp: &[[[f64; D]; NC]],
+    nodal: &mut [[f64; D]],
+) {
+    nodal.fill([0.0; D]);
+    for (p, out) in particles.iter().zip(per_mp) {
+        let corners = &grid.elements[p.element as usize].corners;
+        for i in 0..NC {
+            let node = corners[i] as usize;
+            for d in 0..D {
+                nodal[node][d] += out[i][d];
+            }
+        }
+    }
+}
+
+/// Nodal velocities momentum / mass; zero at nodes lighter than `floor`
+/// and in fixed directions.
+fn velocities<const D: usize>(
+    mass: &[f64],
+    momentum: &[[f64; D]],
+    fixed: &[[bool; D]],
+    floor: f64,
+    velocity: &mut [[f64; D]],
+) {
+    for node in 0..mass.len() {
+        for d in 0..D {
+            velocity[node][d] = if mass[node] <= floor || fixed[node][d] {
+                0.0
+            } else {
+                momentum[node][d] / mass[node]
+            };
+        }
+    }
+}
+
+/// The kernel's water advective flux at an MP (`CalculateParticleWaterAdvectiveFlux`):
+/// Σ_J ∇N_J · A_J (Δu_w − Δu_s)_J with the nodal n·ρw·S `a` and Δu = Δt·v
+/// (plus the hoop part in 2D axisymmetry).
+fn advective_flux<const D: usize, const NC: usize>(
+    element: &super::grid::GridElement<D, NC>,
+    a: &[f64],
+    liquid: &[[f64; D]],
+    solid: &[[f64; D]],
+    dt: f64,
+    inverse_radius: f64,
+    shape: &[f64; NC],
+) -> f64 {
+    let mut flux = 0.0;
+    for i in 0..NC {
+        let node = element.corners[i] as usize;
+        for d in 0..D {
+            flux += element.shape.grad[i][d] * a[node] * (liquid[node][d] - solid[node][d]);
+        }
+        if inverse_radius != 0.0 {
+            flux += shape[i] * a[node] * (liquid[node][0] - solid[node][0]) * inverse_radius;
+        }
+    }
+    dt * flux
 }
 
 /// The liquid's volumetric strain increment at an MP, Δt·Σ ∇N_i·v_w,i
