@@ -28,6 +28,7 @@ pub mod equilibrium;
 pub mod fos;
 pub mod grid;
 pub mod liquid;
+mod liquid_grid;
 pub mod loading;
 pub mod material;
 pub mod mohr_coulomb;

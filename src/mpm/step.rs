@@ -41,6 +41,9 @@ use rayon::prelude::*;
 use super::b_matrix::{corner_force, hoop_strain_increment, strain_increment};
 use super::grid::Grid;
 use super::liquid::Water;
+use super::liquid_grid::{
+    LiquidContribution, LiquidGrid, advective_flux, liquid_volumetric_increment,
+};
 use super::loading::Analysis;
 use super::material::SolidModel;
 use super::{MpmError, RunSettings};
@@ -106,52 +109,6 @@ pub(crate) struct Particle<const D: usize, const NC: usize> {
     pub saturation: f64,
     /// Initial volume: the kernel's masses and drag stay those of V₀.
     pub volume0: f64,
-}
-
-/// Per-corner P2G contribution of the liquid of one coupled MP.
-#[derive(Clone, Copy, Debug)]
-struct LiquidContribution<const D: usize> {
-    /// ρw·V·N: the liquid equation's mass.
-    mass: f64,
-    /// n·ρw·V·N: the liquid's mass in the mixture.
-    water: f64,
-    /// Drag (n·μ/κ)·V·N.
-    drag: f64,
-    momentum: [f64; D],
-    /// Pressure force −V p ∇N plus the liquid's weight ρw·V·N·g.
-    force: [f64; D],
-    /// m_s·n·ρw·S·N: the mass-weighted nodal n·ρw·S of the advective flux
-    /// (unsaturated MPs), before division by the nodal solid mass.
-    advective: f64,
-}
-
-impl<const D: usize> LiquidContribution<D> {
-    const ZERO: LiquidContribution<D> = LiquidContribution {
-        mass: 0.0,
-        water: 0.0,
-        drag: 0.0,
-        momentum: [0.0; D],
-        force: [0.0; D],
-        advective: 0.0,
-    };
-}
-
-/// The liquid's nodal arrays and per-MP buffers, present when any MP is
-/// coupled.
-struct LiquidGrid<const D: usize, const NC: usize> {
-    fixed: Vec<[bool; D]>,
-    mass: Vec<f64>,
-    water: Vec<f64>,
-    drag: Vec<f64>,
-    /// Σ m_s·n·ρw·S·N, then over the nodal solid mass (the kernel's
-    /// `AdvectiveFluxDarcyWater`).
-    advective: Vec<f64>,
-    momentum: Vec<[f64; D]>,
-    force: Vec<[f64; D]>,
-    acceleration: Vec<[f64; D]>,
-    velocity: Vec<[f64; D]>,
-    p2g: Vec<[LiquidContribution<D>; NC]>,
-    remap: Vec<[[f64; D]; NC]>,
 }
 
 /// Per-corner P2G contribution of one MP.
@@ -228,7 +185,7 @@ pub(crate) struct Solver<const D: usize, const NC: usize> {
 
 /// Runs `f` on every MP that is not lost and its output slot, in parallel; a
 /// lost MP's slot is set to `lost` (it contributes nothing).
-fn per_live_mp<const D: usize, const NC: usize, T: Copy + Send + Sync>(
+pub(super) fn per_live_mp<const D: usize, const NC: usize, T: Copy + Send + Sync>(
     particles: &mut [Particle<D, NC>],
     out: &mut [T],
     lost: T,
@@ -536,71 +493,13 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         // 1b. The liquid of coupled MPs: its mass, drag, momentum, pressure
         // force and weight.
         if let Some(liquid) = self.liquid.as_mut() {
-            let g = self.gravity;
-            per_live_mp(
+            liquid.p2g(
+                grid,
                 &mut self.particles,
-                &mut liquid.p2g,
-                [LiquidContribution::ZERO; NC],
-                |p, out| {
-                    let Water::Coupled(c) = p.water else {
-                        *out = [LiquidContribution::ZERO; NC];
-                        return;
-                    };
-                    let element = &grid.elements[p.element as usize];
-                    let n = p.shape;
-                    let pressure = [p.pwp, p.pwp, p.pwp, 0.0, 0.0, 0.0];
-                    // The kernel's constant masses and drag (of V₀), scaled
-                    // by S in the mixture's water and the drag.
-                    let m = c.density * p.volume0;
-                    let s = p.saturation;
-                    let advective = p.mass * c.porosity * c.density * s;
-                    for i in 0..NC {
-                        let g_i = &element.shape.grad[i];
-                        let mut force =
-                            corner_force::<D>(&pressure, g_i, n[i], p.volume, p.inverse_radius);
-                        let share = m * n[i];
-                        let mut momentum = [0.0; D];
-                        for d in 0..D {
-                            force[d] += share * g[d];
-                            momentum[d] = share * p.liquid_velocity[d];
-                        }
-                        out[i] = LiquidContribution {
-                            mass: share,
-                            water: c.porosity * s * share,
-                            drag: c.drag * s * p.volume0 * n[i],
-                            momentum,
-                            force,
-                            advective: advective * n[i],
-                        };
-                    }
-                },
+                self.gravity,
+                &self.node_mass,
+                self.mass_floor,
             );
-            liquid.mass.fill(0.0);
-            liquid.water.fill(0.0);
-            liquid.drag.fill(0.0);
-            liquid.advective.fill(0.0);
-            liquid.momentum.fill([0.0; D]);
-            liquid.force.fill([0.0; D]);
-            for (p, out) in self.particles.iter().zip(&liquid.p2g) {
-                if !matches!(p.water, Water::Coupled(_)) || p.lost {
-                    continue;
-                }
-                let corners = &grid.elements[p.element as usize].corners;
-                for i in 0..NC {
-                    let node = corners[i] as usize;
-                    liquid.mass[node] += out[i].mass;
-                    liquid.water[node] += out[i].water;
-                    liquid.drag[node] += out[i].drag;
-                    liquid.advective[node] += out[i].advective;
-                    for d in 0..D {
-                        liquid.momentum[node][d] += out[i].momentum[d];
-                        liquid.force[node][d] += out[i].force[d];
-                    }
-                }
-            }
-            for (a, &m) in liquid.advective.iter_mut().zip(&self.node_mass) {
-                *a = if m > self.mass_floor { *a / m } else { 0.0 };
-            }
         }
 
         // 2. Nodal accelerations with local damping and fixities. Where the
@@ -724,45 +623,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         // 3b/4b. The liquid: G2P of its acceleration, then its nodal velocity
         // from the updated momenta (MUSL, fixities again).
         if let Some(liquid) = self.liquid.as_mut() {
-            let acceleration = &liquid.acceleration;
-            per_live_mp(
-                &mut self.particles,
-                &mut liquid.remap,
-                [[0.0; D]; NC],
-                |p, out| {
-                    let Water::Coupled(c) = p.water else {
-                        *out = [[0.0; D]; NC];
-                        return;
-                    };
-                    let corners = &grid.elements[p.element as usize].corners;
-                    let n = p.shape;
-                    let mut a = [0.0; D];
-                    for i in 0..NC {
-                        let node = corners[i] as usize;
-                        for d in 0..D {
-                            a[d] += n[i] * acceleration[node][d];
-                        }
-                    }
-                    for d in 0..D {
-                        p.liquid_velocity[d] += dt * a[d];
-                    }
-                    let m = c.density * p.volume;
-                    for i in 0..NC {
-                        for d in 0..D {
-                            out[i][d] = m * n[i] * p.liquid_velocity[d];
-                        }
-                    }
-                },
-            );
-            // Non-coupled and lost MPs left zeros in their slots.
-            scatter(grid, &self.particles, &liquid.remap, &mut liquid.momentum);
-            velocities(
-                &liquid.mass,
-                &liquid.momentum,
-                &liquid.fixed,
-                self.mass_floor,
-                &mut liquid.velocity,
-            );
+            liquid.g2p(grid, &mut self.particles, dt, self.mass_floor);
         }
 
         // Strain increment, stress update, pore pressure, volume, relocation:
@@ -913,7 +774,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
 
 /// Sums every MP's per-corner vectors into `nodal` (cleared first),
 /// serially in MP order (deterministic).
-fn scatter<const D: usize, const NC: usize>(
+pub(super) fn scatter<const D: usize, const NC: usize>(
     grid: &Grid<D, NC>,
     particles: &[Particle<D, NC>],
     per_mp: &[[[f64; D]; NC]],
@@ -933,7 +794,7 @@ fn scatter<const D: usize, const NC: usize>(
 
 /// Nodal velocities momentum / mass; zero at nodes lighter than `floor`
 /// and in fixed directions.
-fn velocities<const D: usize>(
+pub(super) fn velocities<const D: usize>(
     mass: &[f64],
     momentum: &[[f64; D]],
     fixed: &[[bool; D]],
@@ -949,53 +810,6 @@ fn velocities<const D: usize>(
             };
         }
     }
-}
-
-/// The kernel's water advective flux at an MP (`CalculateParticleWaterAdvectiveFlux`):
-/// Σ_J ∇N_J · A_J (Δu_w − Δu_s)_J with the nodal n·ρw·S `a` and Δu = Δt·v
-/// (plus the hoop part in 2D axisymmetry).
-fn advective_flux<const D: usize, const NC: usize>(
-    element: &super::grid::GridElement<D, NC>,
-    a: &[f64],
-    liquid: &[[f64; D]],
-    solid: &[[f64; D]],
-    dt: f64,
-    inverse_radius: f64,
-    shape: &[f64; NC],
-) -> f64 {
-    let mut flux = 0.0;
-    for i in 0..NC {
-        let node = element.corners[i] as usize;
-        for d in 0..D {
-            flux += element.shape.grad[i][d] * a[node] * (liquid[node][d] - solid[node][d]);
-        }
-        if inverse_radius != 0.0 {
-            flux += shape[i] * a[node] * (liquid[node][0] - solid[node][0]) * inverse_radius;
-        }
-    }
-    dt * flux
-}
-
-/// The liquid's volumetric strain increment at an MP, Δt·Σ ∇N_i·v_w,i
-/// (plus the hoop part Δt·Σ N_i v_w,r,i / r in 2D axisymmetry).
-fn liquid_volumetric_increment<const D: usize, const NC: usize>(
-    element: &super::grid::GridElement<D, NC>,
-    shape: &[f64; NC],
-    inverse_radius: f64,
-    velocity: &[[f64; D]],
-    dt: f64,
-) -> f64 {
-    let mut div = 0.0;
-    for i in 0..NC {
-        let v = &velocity[element.corners[i] as usize];
-        for d in 0..D {
-            div += element.shape.grad[i][d] * v[d];
-        }
-        if inverse_radius != 0.0 {
-            div += shape[i] * v[0] * inverse_radius;
-        }
-    }
-    dt * div
 }
 
 #[inline]
