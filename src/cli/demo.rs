@@ -374,7 +374,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         say!("  {}", wrote(folder, files));
     }
     say!(
-        "  run-out: a3d-init run {} --time 2 --snapshots 0.3,0.8,1.2,2.0",
+        "  run-out: a3d-init run {} --time 2 --damping 0 --snapshots 0.3,0.8,1.2,2.0   (undamped, as Anura3D's dynamics; the CPS's α = 0.75 stops it)",
         target.display()
     );
     say!(

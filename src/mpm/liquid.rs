@@ -75,9 +75,11 @@ fn property(material: &Material, keyword: &str) -> Option<f64> {
 }
 
 impl Water {
-    /// The water of `material`; `frozen` holds every pore pressure.
-    pub fn of(material: &Material, frozen: bool) -> Result<Water, MpmError> {
-        if frozen {
+    /// The water of `material`; `frozen` holds every pore pressure;
+    /// `unsaturated` lets `unsaturated_material_2phase_suction` run two-phase
+    /// (experimental, see [`super::RunSettings::unsaturated_two_phase`]).
+    pub fn of(material: &Material, frozen: bool, unsaturated: bool) -> Result<Water, MpmError> {
+        if frozen || (material.is_unsaturated() && !unsaturated) {
             return Ok(Water::Frozen);
         }
         let kind = material.material_type.as_str();

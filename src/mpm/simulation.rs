@@ -38,6 +38,10 @@ pub(crate) struct PointView {
     pub inadmissible: bool,
     /// Pore pressure (kPa, Anura3D's sign).
     pub pwp: f64,
+    /// The liquid's velocity (coupled MPs; zero otherwise).
+    pub liquid_velocity: [f64; 3],
+    /// Degree of saturation.
+    pub saturation: f64,
 }
 
 /// What [`Simulation`] asks of the solver of any dimension.
@@ -99,6 +103,8 @@ impl<const D: usize, const NC: usize> Run for Solver<D, NC> {
                 lost: p.lost,
                 inadmissible,
                 pwp: p.pwp,
+                liquid_velocity: widen(&p.liquid_velocity),
+                saturation: p.saturation,
             });
         }
     }
@@ -287,6 +293,17 @@ impl Simulation {
     /// ones ([`super::liquid`]).
     pub fn pore_pressures(&self) -> Vec<f64> {
         self.per_point(|p| p.pwp)
+    }
+
+    /// MP liquid velocities (m/s; zero where the water does not flow).
+    pub fn liquid_velocities(&self) -> Vec<[f64; 3]> {
+        self.per_point(|p| p.liquid_velocity)
+    }
+
+    /// MP degrees of saturation (from the retention curve where the water
+    /// flows in unsaturated materials, else as mapped).
+    pub fn saturations(&self) -> Vec<f64> {
+        self.per_point(|p| p.saturation)
     }
 
     /// Constant external forces on mesh nodes (0-based node, force in kN per

@@ -249,7 +249,11 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             let water = match waters[material_index - 1] {
                 Some(w) => w,
                 None => {
-                    let w = Water::of(material, settings.frozen_pore_pressure)?;
+                    let w = Water::of(
+                        material,
+                        settings.frozen_pore_pressure,
+                        settings.unsaturated_two_phase,
+                    )?;
                     waters[material_index - 1] = Some(w);
                     w
                 }
