@@ -6,7 +6,7 @@
 
 mod common;
 use common::kernel_run::{run_kernel, vtk_scalars, vtk_vectors};
-use common::{anura3d_kernel_or_skip, run_ok, soil_spec};
+use common::{anura3d_kernel_or_skip, run_map, run_ok, soil_spec};
 
 use a3d_init::formats::gom::write::model_to_text;
 use a3d_init::model::generate;
@@ -245,17 +245,8 @@ fn anura3d_kernel_two_phase_column_within_twenty_percent() {
     }
     std::fs::write(&fem, csv).unwrap();
     let out = tmp.path().join("out");
-    run_ok(&[
-        "map",
-        "--fem",
-        fem.to_str().unwrap(),
-        "--mpm",
-        folder.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--stress",
-        "fem",
-    ]);
+    let (code, text) = run_map(&folder, &fem, &out, &["--stress", "fem"]);
+    assert_eq!(code, 0, "{text}");
     let time = 0.1;
     let vtk = run_kernel(&bin, &out, &tmp.path().join("kernel"), time);
     let kernel_u = vtk_vectors(&vtk, "displacement_solid");

@@ -58,6 +58,26 @@ fn internal_force<const D: usize>(s: &[f64; 6], g: &[f64; D], volume: f64) -> [f
     f
 }
 
+/// Δε of a nodal velocity field at an MP: [`strain_increment`] with, in 2D
+/// axisymmetry (`inverse_radius` = 1/r ≠ 0), the hoop component from
+/// [`hoop_strain_increment`]. The solid's strain and the liquid's
+/// volumetric strain both come from here.
+#[inline]
+pub(super) fn strain_increment_at<const D: usize, const NC: usize>(
+    element: &super::grid::GridElement<D, NC>,
+    shape: &[f64; NC],
+    inverse_radius: f64,
+    node_velocity: &[[f64; D]],
+    dt: f64,
+) -> [f64; 6] {
+    let mut strain = strain_increment::<D, NC>(element, node_velocity, dt);
+    if D == 2 && inverse_radius != 0.0 {
+        strain[2] =
+            hoop_strain_increment(shape, &element.corners, node_velocity, inverse_radius, dt);
+    }
+    strain
+}
+
 /// Δε = Δt·sym(Σ v_I ⊗ ∇N_I) with engineering shear, as a 6-vector.
 #[inline]
 pub(super) fn strain_increment<const D: usize, const NC: usize>(

@@ -146,6 +146,15 @@ impl<const D: usize, const NC: usize> Grid<D, NC> {
         count
     }
 
+    /// Mesh node index (0-based) → compact node, for the nodes elements use.
+    pub fn compact_nodes(&self) -> HashMap<u32, u32> {
+        self.mesh_node
+            .iter()
+            .enumerate()
+            .map(|(c, &n)| (n, c as u32))
+            .collect()
+    }
+
     /// Ties mesh nodes together: in every pair (primary, secondary), 0-based
     /// mesh node indices, the secondary node's corners are redirected to the
     /// primary node, so both share one set of degrees of freedom (a periodic
@@ -158,10 +167,7 @@ impl<const D: usize, const NC: usize> Grid<D, NC> {
         if pairs.is_empty() {
             return Ok(());
         }
-        let mut compact = HashMap::with_capacity(self.mesh_node.len());
-        for (c, &n) in self.mesh_node.iter().enumerate() {
-            compact.insert(n, c as u32);
-        }
+        let compact = self.compact_nodes();
         let lookup = |n: u32| {
             compact.get(&n).copied().ok_or_else(|| {
                 MpmError::InvalidMesh(format!(

@@ -1,8 +1,8 @@
 //! The liquid phase's share of the explicit step ([`super::step`]) for
 //! coupled MPs ([`super::liquid`]): its nodal arrays and per-MP buffers, the
 //! P2G of its mass, drag, momentum, pressure force and weight, the G2P of its
-//! acceleration with the MUSL remap of its velocity, and the liquid's strain
-//! measures at an MP. The solid–liquid nodal solve stays in the step, beside
+//! acceleration with the MUSL remap of its velocity, and the advective flux
+//! of the partially saturated storage at an MP. The solid–liquid nodal solve stays in the step, beside
 //! the solid's.
 
 // Numerical kernels index several small arrays with one loop counter.
@@ -207,26 +207,4 @@ pub(super) fn advective_flux<const D: usize, const NC: usize>(
         }
     }
     dt * flux
-}
-
-/// The liquid's volumetric strain increment at an MP, Δt·Σ ∇N_i·v_w,i
-/// (plus the hoop part Δt·Σ N_i v_w,r,i / r in 2D axisymmetry).
-pub(super) fn liquid_volumetric_increment<const D: usize, const NC: usize>(
-    element: &GridElement<D, NC>,
-    shape: &[f64; NC],
-    inverse_radius: f64,
-    velocity: &[[f64; D]],
-    dt: f64,
-) -> f64 {
-    let mut div = 0.0;
-    for i in 0..NC {
-        let v = &velocity[element.corners[i] as usize];
-        for d in 0..D {
-            div += element.shape.grad[i][d] * v[d];
-        }
-        if inverse_radius != 0.0 {
-            div += shape[i] * v[0] * inverse_radius;
-        }
-    }
-    dt * div
 }

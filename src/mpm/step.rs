@@ -38,12 +38,10 @@
 
 use rayon::prelude::*;
 
-use super::b_matrix::{corner_force, hoop_strain_increment, strain_increment};
+use super::b_matrix::{corner_force, strain_increment_at};
 use super::grid::Grid;
 use super::liquid::Water;
-use super::liquid_grid::{
-    LiquidContribution, LiquidGrid, advective_flux, liquid_volumetric_increment,
-};
+use super::liquid_grid::{LiquidContribution, LiquidGrid, advective_flux};
 use super::loading::Analysis;
 use super::material::SolidModel;
 use super::{MpmError, RunSettings};
@@ -407,14 +405,11 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
     /// Replaces the constant external nodal forces.
     pub fn set_nodal_loads(&mut self, loads: &[(u32, [f64; 3])]) -> Result<(), MpmError> {
         let mut node_load = vec![[0.0; D]; self.grid.n_nodes()];
-        let mut compact = std::collections::HashMap::new();
-        for (g, &m) in self.grid.mesh_node.iter().enumerate() {
-            compact.insert(m, g);
-        }
+        let compact = self.grid.compact_nodes();
         for &(node, f) in loads {
             let slot = compact
                 .get(&node)
-                .and_then(|&g| node_load.get_mut(g))
+                .and_then(|&g| node_load.get_mut(g as usize))
                 .ok_or_else(|| {
                     MpmError::InvalidSettings(format!(
                         "load on node {node}, which no active element holds"
@@ -646,16 +641,13 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                     return;
                 }
                 let element = &grid.elements[p.element as usize];
-                let mut strain = strain_increment::<D, NC>(element, node_velocity, dt);
-                if D == 2 && p.inverse_radius != 0.0 {
-                    strain[2] = hoop_strain_increment(
-                        &p.shape,
-                        &element.corners,
-                        node_velocity,
-                        p.inverse_radius,
-                        dt,
-                    );
-                }
+                let strain = strain_increment_at::<D, NC>(
+                    element,
+                    &p.shape,
+                    p.inverse_radius,
+                    node_velocity,
+                    dt,
+                );
                 let model = &models[p.model as usize];
                 let before = p.stress;
                 let kind = model.update(&mut p.stress, &strain, plane_strain);
@@ -701,14 +693,16 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                             let storage = n * s * rho / kw - n * rho * ds;
                             p.pwp += (s * rho * volumetric + flux) / storage;
                         } else {
+                            // The liquid's volumetric strain, from the same operator.
                             let liquid = liquid_velocity.map_or(0.0, |v| {
-                                liquid_volumetric_increment(
+                                let e = strain_increment_at::<D, NC>(
                                     element,
                                     &p.shape,
                                     p.inverse_radius,
                                     v,
                                     dt,
-                                )
+                                );
+                                e[0] + e[1] + e[2]
                             });
                             p.pwp += c.bulk_over_n * ((1.0 - n) * volumetric + n * liquid);
                         }
