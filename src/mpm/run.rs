@@ -142,6 +142,13 @@ pub struct Snapshot {
     pub stresses: Vec<[f64; 6]>,
     /// Has yielded: accumulated plastic strain above 1e-6 (`step::PLASTIC_STRAIN_FLOOR`).
     pub plastic: Vec<bool>,
+    /// Pore pressure (kPa, Anura3D's sign: negative in compression).
+    pub pore_pressures: Vec<f64>,
+    /// Degree of saturation (empty where not known).
+    pub saturations: Vec<f64>,
+    /// Liquid velocity (m/s; zero where the water does not flow; empty where
+    /// not known).
+    pub liquid_velocities: Vec<[f64; 3]>,
 }
 
 /// Everything a run measured, with the verdict.
@@ -409,6 +416,9 @@ fn snapshot(simulation: &Simulation) -> Snapshot {
         displacements: simulation.displacements(),
         stresses: simulation.effective_stresses(),
         plastic: simulation.plastic_flags(),
+        pore_pressures: simulation.pore_pressures(),
+        saturations: simulation.saturations(),
+        liquid_velocities: simulation.liquid_velocities(),
     }
 }
 

@@ -183,30 +183,39 @@ pub fn write(
         mps_table::write_states(w, &start.points, start.at_zero(), &diagnostics)
     })?;
     let positions: Vec<[f64; 3]> = start.points.iter().map(|p| p.position).collect();
-    let start_stress: Vec<[f64; 6]> = start.at_zero().iter().map(MpState::effective).collect();
-    write_snapshot(
-        out,
-        "mps_start.vtu",
-        &positions,
-        &vec![[0.0; 3]; positions.len()],
-        &start_stress,
-        &vec![false; positions.len()],
-    )?;
+    let at_zero = start.at_zero();
+    let n = positions.len();
+    let start_snapshot = mpm::Snapshot {
+        step: 0,
+        time: 0.0,
+        displacements: vec![[0.0; 3]; n],
+        stresses: at_zero.iter().map(MpState::effective).collect(),
+        plastic: vec![false; n],
+        pore_pressures: at_zero.iter().map(|s| s.pwp).collect(),
+        saturations: at_zero.iter().map(|s| s.saturation).collect(),
+        liquid_velocities: Vec::new(),
+        positions,
+    };
+    write_snapshot(out, "mps_start.vtu", &start_snapshot)?;
     if let Some(report) = &outcome.run {
         history_plot(&out.path("verify_history.svg"), report)?;
-        let end_positions: Vec<[f64; 3]> = positions
-            .iter()
-            .zip(&report.final_displacements)
-            .map(|(p, d)| [p[0] + d[0], p[1] + d[1], p[2] + d[2]])
-            .collect();
-        write_snapshot(
-            out,
-            "mps_end.vtu",
-            &end_positions,
-            &report.final_displacements,
-            &report.final_stresses,
-            &report.final_plastic,
-        )?;
+        let end = mpm::Snapshot {
+            step: report.steps,
+            time: report.time,
+            positions: start_snapshot
+                .positions
+                .iter()
+                .zip(&report.final_displacements)
+                .map(|(p, d)| [p[0] + d[0], p[1] + d[1], p[2] + d[2]])
+                .collect(),
+            displacements: report.final_displacements.clone(),
+            stresses: report.final_stresses.clone(),
+            plastic: report.final_plastic.clone(),
+            pore_pressures: report.final_pore_pressures.clone(),
+            saturations: Vec::new(),
+            liquid_velocities: Vec::new(),
+        };
+        write_snapshot(out, "mps_end.vtu", &end)?;
     }
     Ok(())
 }

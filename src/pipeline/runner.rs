@@ -50,33 +50,55 @@ pub fn runner_error(e: mpm::MpmError) -> PipelineError {
     }
 }
 
-/// MP positions, displacements, effective stresses and plastic flags as a VTU.
+/// An MP snapshot as a VTU: positions, displacements, effective stresses,
+/// plastic flags, pore pressures and, where known, saturations and liquid
+/// velocities.
 pub fn write_snapshot(
     out: &OutputDir<'_>,
     name: &str,
-    positions: &[[f64; 3]],
-    displacements: &[[f64; 3]],
-    stresses: &[[f64; 6]],
-    plastic: &[bool],
+    s: &mpm::Snapshot,
 ) -> Result<(), PipelineError> {
-    let arrays = vec![
+    let mut arrays = vec![
         vtu::PointArray {
             name: "displacement".into(),
             components: 3,
-            values: displacements.iter().flat_map(|d| *d).collect(),
+            values: s.displacements.iter().flat_map(|d| *d).collect(),
         },
         vtu::PointArray {
             name: "effective_stress".into(),
             components: 9,
-            values: stresses.iter().flat_map(vtu::tensor9).collect(),
+            values: s.stresses.iter().flat_map(vtu::tensor9).collect(),
         },
         vtu::PointArray {
             name: "plastic".into(),
             components: 1,
-            values: plastic.iter().map(|&p| if p { 1.0 } else { 0.0 }).collect(),
+            values: s
+                .plastic
+                .iter()
+                .map(|&p| if p { 1.0 } else { 0.0 })
+                .collect(),
+        },
+        vtu::PointArray {
+            name: "pore_pressure".into(),
+            components: 1,
+            values: s.pore_pressures.clone(),
         },
     ];
-    out.write(name, |w| vtu::write_points(w, positions, &arrays))
+    if !s.saturations.is_empty() {
+        arrays.push(vtu::PointArray {
+            name: "saturation".into(),
+            components: 1,
+            values: s.saturations.clone(),
+        });
+    }
+    if !s.liquid_velocities.is_empty() {
+        arrays.push(vtu::PointArray {
+            name: "liquid_velocity".into(),
+            components: 3,
+            values: s.liquid_velocities.iter().flat_map(|v| *v).collect(),
+        });
+    }
+    out.write(name, |w| vtu::write_points(w, &s.positions, &arrays))
 }
 
 /// Kinetic energy and out-of-balance force ratio against time (SVG).

@@ -97,14 +97,7 @@ pub fn run(
     let mut snapshots = Vec::new();
     for s in &output.snapshots {
         let name = format!("mps_t{:.2}.vtu", s.time);
-        write_snapshot(
-            &dir,
-            &name,
-            &s.positions,
-            &s.displacements,
-            &s.stresses,
-            &s.plastic,
-        )?;
+        write_snapshot(&dir, &name, s)?;
         snapshots.push(name);
     }
     Ok(RunOutcome {
