@@ -162,11 +162,9 @@ pub struct RunSettings {
     /// Hold every pore pressure at its initial value (drained; the
     /// two-phase and undrained materials run as one phase with frozen p).
     pub frozen_pore_pressure: bool,
-    /// Experimental: run `unsaturated_material_2phase_suction` materials
-    /// two-phase, partially saturated ([`liquid`]). Off by default: on the
-    /// demo slope an undamped run's liquid velocities grow after about
-    /// 1.5 s at the drained sand–clay interface, and the displacement after
-    /// 0.2 s is 36 % below the real kernel's (docs/two-phase.md).
+    /// Run `unsaturated_material_2phase_suction` materials two-phase,
+    /// partially saturated ([`liquid`]); on by default. Off, they keep their
+    /// pore pressure frozen as the other drained materials do.
     pub unsaturated_two_phase: bool,
 }
 
@@ -187,7 +185,7 @@ impl RunSettings {
             snapshot_times: Vec::new(),
             thresholds: Thresholds::default(),
             frozen_pore_pressure: false,
-            unsaturated_two_phase: false,
+            unsaturated_two_phase: true,
         }
     }
 

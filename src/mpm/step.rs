@@ -674,38 +674,40 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                         let n = c.porosity;
                         let s = p.saturation;
                         let partial = c.retention.is_some() && s > 0.0 && s < 1.0;
-                        if let (true, Some(v), Some(a)) = (partial, liquid_velocity, advective) {
-                            // The kernel's partially saturated storage:
-                            // Δp = (S ρw Δε_v + A) / (n S ρw/K_w − n ρw dS/dp),
-                            // A = Σ ∇N·(n ρw S)_node (Δu_w − Δu_s).
-                            let flux = advective_flux(
-                                element,
-                                a,
-                                v,
-                                node_velocity,
-                                dt,
-                                p.inverse_radius,
-                                &p.shape,
-                            );
-                            let rho = c.density;
-                            let kw = c.bulk_over_n * n;
-                            let ds = c.retention.map_or(0.0, |r| r.derivative(p.pwp));
-                            let storage = n * s * rho / kw - n * rho * ds;
-                            p.pwp += (s * rho * volumetric + flux) / storage;
-                        } else {
-                            // The liquid's volumetric strain, from the same operator.
-                            let liquid = liquid_velocity.map_or(0.0, |v| {
-                                let e = strain_increment_at::<D, NC>(
+                        // The water's volume demand per unit volume of the
+                        // mixture: partially saturated, the kernel's
+                        // S·Δε_v + A/ρw with its advective term
+                        // A = Σ ∇N·(n ρw S)_node (Δu_w − Δu_s); saturated,
+                        // (1 − n)·Δε_v,s + n·Δε_v,w.
+                        let demand = match (partial, liquid_velocity, advective) {
+                            (true, Some(v), Some(a)) => {
+                                let flux = advective_flux(
                                     element,
-                                    &p.shape,
-                                    p.inverse_radius,
+                                    a,
                                     v,
+                                    node_velocity,
                                     dt,
+                                    p.inverse_radius,
+                                    &p.shape,
                                 );
-                                e[0] + e[1] + e[2]
-                            });
-                            p.pwp += c.bulk_over_n * ((1.0 - n) * volumetric + n * liquid);
-                        }
+                                s * volumetric + flux / c.density
+                            }
+                            _ => {
+                                // The liquid's volumetric strain, from the same operator.
+                                let liquid = liquid_velocity.map_or(0.0, |v| {
+                                    let e = strain_increment_at::<D, NC>(
+                                        element,
+                                        &p.shape,
+                                        p.inverse_radius,
+                                        v,
+                                        dt,
+                                    );
+                                    e[0] + e[1] + e[2]
+                                });
+                                (1.0 - n) * volumetric + n * liquid
+                            }
+                        };
+                        p.pwp += c.pressure_increment(p.pwp, s, demand);
                     }
                 }
                 p.volume *= 1.0 + volumetric;
@@ -727,6 +729,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                         None => {
                             p.lost = true;
                             p.velocity = [0.0; D];
+                            p.liquid_velocity = [0.0; D];
                         }
                     }
                 }
