@@ -562,3 +562,90 @@ fn anura3d_kernel_demo_slope_within_twenty_percent() {
         "saturated sand: mean p kernel {kernel:.4} kPa, ours {our:.4} kPa"
     );
 }
+
+/// Gravity drains a partially saturated column of uniform suction (no
+/// suction gradient): the water sinks at Darcy's n·S·(v_w − v_s) = k·k_r(S)
+/// with k_r from the GOM's conductivity curve (constant, Hillel, Mualem),
+/// measured at mid-height once the drag has settled the liquid's velocity.
+#[test]
+fn gravity_drainage_follows_the_conductivity_curve() {
+    let curve = a3d_init::model::RetentionCurve::VanGenuchten {
+        s_min: 0.1,
+        s_max: 1.0,
+        p0: 2.0,
+        lambda: 0.6,
+    };
+    let (kappa, mu, n) = (1e-12, 1e-6, 0.4);
+    let k_sat = 1.0 * G * kappa / mu;
+    let suction = 3.0;
+    let s = curve.saturation(suction);
+    let lambda = 0.6_f64;
+    let mualem = {
+        let w = 1.0 - (1.0 - s.powf(1.0 / lambda)).powf(lambda);
+        s.sqrt() * w * w
+    };
+    let pair = |k: &str, v: &str| (format!("$${k}"), v.to_string());
+    for (curve_lines, kr) in [
+        (vec![pair("HYDR_CONDUCTIVITY_CURVE", "constant")], 1.0),
+        (
+            vec![pair("HYDR_CONDUCTIVITY_CURVE", "hillel"), pair("r", "3")],
+            s.powi(3),
+        ),
+        (
+            vec![
+                pair("HYDR_CONDUCTIVITY_CURVE", "mualem"),
+                pair("Smin", "0.1"),
+                pair("Smax", "1"),
+                pair("P0", "2"),
+                pair("lambda", "0.6"),
+            ],
+            mualem,
+        ),
+    ] {
+        let soil = coupled(elastic_material(1e6, 0.0, 2650.0, n), kappa, 4.5e4);
+        let mut properties = soil.properties.clone();
+        properties.retain(|(k, _)| !k.contains("HYDR_CONDUCTIVITY"));
+        properties.extend(curve_lines);
+        let soil = a3d_init::model::Material {
+            material_type: "unsaturated_material_2phase_suction".into(),
+            retention: Some(curve),
+            properties,
+            ..soil
+        };
+        let mut model = column_tri3(0.1, 2.0, 1, 20, soil);
+        impermeable_where_fixed(&mut model);
+        let points = place_points(&model);
+        let m = model.materials[0].clone();
+        let gamma = m.gamma_at_saturation(s, G);
+        let states: Vec<MpState> = points
+            .iter()
+            .map(|p| {
+                let sigma_v = -gamma * (2.0 - p.position[1]);
+                MpState {
+                    pwp: suction,
+                    total: [s * suction, sigma_v, s * suction, 0.0, 0.0, 0.0],
+                    saturation: s,
+                }
+            })
+            .collect();
+        let mut sim = Simulation::new(&model, &points, &states, &settings(G)).unwrap();
+        for _ in 0..200 {
+            sim.step();
+        }
+        let w = sim.liquid_velocities();
+        let v = sim.velocities();
+        let mid: Vec<usize> = (0..points.len())
+            .filter(|&k| (points[k].position[1] - 1.0).abs() < 0.25)
+            .collect();
+        let flux = mid
+            .iter()
+            .map(|&k| n * s * (w[k][1] - v[k][1]))
+            .sum::<f64>()
+            / mid.len() as f64;
+        let expected = -k_sat * kr;
+        assert!(
+            (flux / expected - 1.0).abs() < 0.02,
+            "k_r {kr:.4}: Darcy flux {flux:.4e} m/s, expected {expected:.4e} m/s"
+        );
+    }
+}

@@ -54,6 +54,49 @@ pub(crate) struct Coupled {
     /// Unsaturated (`unsaturated_material_2phase_suction`): the retention
     /// curve; `None` for saturated coupled materials.
     pub retention: Option<RetentionCurve>,
+    /// How the conductivity follows S (unsaturated materials).
+    pub conductivity: Conductivity,
+}
+
+/// The GOM's `$$HYDR_CONDUCTIVITY_CURVE`: k = k_sat·k_r(S), as the kernel's
+/// `DynUpdateParticleHydraulicConductivity*` form it (with S, not the
+/// effective saturation; only while S < 1, so k keeps its last value when an
+/// MP saturates again).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Conductivity {
+    /// k_r = 1.
+    Constant,
+    /// k_r = S^r.
+    Hillel { r: f64 },
+    /// Mualem's k_r = √S·(1 − (1 − S^(1/λ))^λ)².
+    Mualem { lambda: f64 },
+}
+
+/// The smallest relative conductivity the drag divides by (a fully dry MP's
+/// water does not move).
+const MIN_RELATIVE_CONDUCTIVITY: f64 = 1e-12;
+
+impl Conductivity {
+    /// k_r at saturation `s` (1 for s ≥ 1), at least 1e-12.
+    pub fn relative(&self, s: f64) -> f64 {
+        if s >= 1.0 {
+            return 1.0;
+        }
+        let s = s.max(0.0);
+        let kr = match *self {
+            Conductivity::Constant => 1.0,
+            Conductivity::Hillel { r } => s.powf(r),
+            Conductivity::Mualem { lambda } => {
+                let w = 1.0 - (1.0 - s.powf(1.0 / lambda)).powf(lambda);
+                s.sqrt() * w * w
+            }
+        };
+        if kr.is_finite() {
+            kr.max(MIN_RELATIVE_CONDUCTIVITY)
+        } else {
+            MIN_RELATIVE_CONDUCTIVITY
+        }
+    }
 }
 
 impl Coupled {
@@ -133,6 +176,49 @@ pub enum Formulation {
     Coupled,
 }
 
+/// The conductivity curve of an unsaturated material record: the value of
+/// `$$HYDR_CONDUCTIVITY_CURVE` and the parameters on the lines after it
+/// (Hillel: r; Mualem: Smin, Smax, P0, λ).
+fn conductivity_of(material: &Material) -> Result<Conductivity, MpmError> {
+    let props = &material.properties;
+    let Some(at) = props
+        .iter()
+        .position(|(k, _)| k.trim() == "$$HYDR_CONDUCTIVITY_CURVE")
+    else {
+        return Ok(Conductivity::Constant);
+    };
+    let invalid = |reason: String| MpmError::InvalidProperty {
+        material: material.index,
+        reason,
+    };
+    let parameter = |i: usize| -> Result<f64, MpmError> {
+        props
+            .get(at + i)
+            .and_then(|(_, v)| v.trim().parse::<f64>().ok())
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| invalid(format!("conductivity curve parameter {i} is missing")))
+    };
+    let name = props[at].1.trim().to_ascii_lowercase();
+    match name.as_str() {
+        "constant" => Ok(Conductivity::Constant),
+        "hillel" => {
+            let r = parameter(1)?;
+            if r < 0.0 {
+                return Err(invalid(format!("Hillel's exponent r = {r} must be ≥ 0")));
+            }
+            Ok(Conductivity::Hillel { r })
+        }
+        "mualem" => {
+            let lambda = parameter(4)?;
+            if !(lambda > 0.0 && lambda < 1.0) {
+                return Err(invalid(format!("Mualem's λ = {lambda} must lie in (0, 1)")));
+            }
+            Ok(Conductivity::Mualem { lambda })
+        }
+        other => Err(invalid(format!("unknown conductivity curve `{other}`"))),
+    }
+}
+
 /// A numeric property of the material record by keyword.
 fn property(material: &Material, keyword: &str) -> Option<f64> {
     super::material::property(material, keyword)
@@ -141,7 +227,7 @@ fn property(material: &Material, keyword: &str) -> Option<f64> {
 impl Water {
     /// The water of `material`; `frozen` holds every pore pressure;
     /// `unsaturated` lets `unsaturated_material_2phase_suction` run two-phase
-    /// (experimental, see [`super::RunSettings::unsaturated_two_phase`]).
+    /// (on by default, [`super::RunSettings::unsaturated_two_phase`]).
     pub fn of(material: &Material, frozen: bool, unsaturated: bool) -> Result<Water, MpmError> {
         if frozen || (material.is_unsaturated() && !unsaturated) {
             return Ok(Water::Frozen);
@@ -214,20 +300,13 @@ impl Water {
                 let n = porosity()?;
                 let kappa = positive("INTRINSIC_PERMEABILITY_LIQUID")?;
                 let mu = positive("DYNAMIC_VISCOSITY_LIQUID")?;
-                let retention = if kind == "unsaturated_material_2phase_suction" {
-                    // Only a constant conductivity (k_r = 1) is modelled; the
-                    // others keep the pore pressure frozen.
-                    let constant = material
-                        .properties
-                        .iter()
-                        .find(|(k, _)| k.trim() == "$$HYDR_CONDUCTIVITY_CURVE")
-                        .is_none_or(|(_, v)| v.trim().eq_ignore_ascii_case("constant"));
-                    match material.retention {
-                        Some(curve) if constant => Some(curve),
-                        _ => return Ok(Water::Frozen),
-                    }
+                let (retention, conductivity) = if kind == "unsaturated_material_2phase_suction" {
+                    let Some(curve) = material.retention else {
+                        return Ok(Water::Frozen);
+                    };
+                    (Some(curve), conductivity_of(material)?)
                 } else {
-                    None
+                    (None, Conductivity::Constant)
                 };
                 Ok(Water::Coupled(Coupled {
                     bulk_over_n: positive("BULK_MODULUS_LIQUID")? / n,
@@ -235,6 +314,7 @@ impl Water {
                     density: material.density_liquid.unwrap_or(1000.0) / 1000.0,
                     drag: n * mu / kappa,
                     retention,
+                    conductivity,
                 }))
             }
             _ => Ok(Water::Frozen),
@@ -277,6 +357,7 @@ mod tests {
             density: 1.0,
             drag: 0.58 * 1e-6 / 2e-11,
             retention,
+            conductivity: Conductivity::Constant,
         }
     }
 
@@ -325,5 +406,66 @@ mod tests {
         let tangent = demand / (s / c.bulk_over_n - c.porosity * CURVE.derivative(p));
         let dp = c.pressure_increment(p, s, demand);
         assert!((dp / tangent - 1.0).abs() < 1e-6, "{dp} vs {tangent}");
+    }
+
+    #[test]
+    fn conductivity_curves_as_the_kernel_forms_them() {
+        let s = 0.6_f64;
+        assert_eq!(Conductivity::Constant.relative(s), 1.0);
+        assert!((Conductivity::Hillel { r: 3.0 }.relative(s) - 0.216).abs() < 1e-15);
+        let lambda = 0.5;
+        let w = 1.0 - (1.0 - s.powf(2.0)).powf(0.5);
+        let mualem = Conductivity::Mualem { lambda }.relative(s);
+        assert!((mualem - s.sqrt() * w * w).abs() < 1e-15);
+        for c in [
+            Conductivity::Constant,
+            Conductivity::Hillel { r: 3.0 },
+            Conductivity::Mualem { lambda },
+        ] {
+            assert_eq!(c.relative(1.0), 1.0);
+            assert!(c.relative(0.0) >= MIN_RELATIVE_CONDUCTIVITY);
+        }
+    }
+
+    #[test]
+    fn conductivity_curve_read_from_the_record() {
+        let mut m = Material {
+            index: 1,
+            name: "sand".into(),
+            material_type: "unsaturated_material_2phase_suction".into(),
+            model: None,
+            porosity: None,
+            density_solid: None,
+            density_liquid: None,
+            k0: None,
+            young_modulus: None,
+            poisson_ratio: None,
+            friction_angle: None,
+            cohesion: None,
+            dilatancy_angle: None,
+            tensile_strength: None,
+            retention: Some(CURVE),
+            properties: Vec::new(),
+        };
+        assert_eq!(conductivity_of(&m).unwrap(), Conductivity::Constant);
+        let pair = |k: &str, v: &str| (format!("$${k}"), v.to_string());
+        m.properties = vec![pair("HYDR_CONDUCTIVITY_CURVE", "hillel"), pair("r", "2.5")];
+        assert_eq!(
+            conductivity_of(&m).unwrap(),
+            Conductivity::Hillel { r: 2.5 }
+        );
+        m.properties = vec![
+            pair("HYDR_CONDUCTIVITY_CURVE", "mualem"),
+            pair("Smin", "0.1"),
+            pair("Smax", "1"),
+            pair("P0", "2"),
+            pair("lambda", "0.4"),
+        ];
+        assert_eq!(
+            conductivity_of(&m).unwrap(),
+            Conductivity::Mualem { lambda: 0.4 }
+        );
+        m.properties.truncate(3);
+        assert!(conductivity_of(&m).is_err());
     }
 }

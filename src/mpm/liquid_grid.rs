@@ -20,7 +20,7 @@ pub(super) struct LiquidContribution<const D: usize> {
     pub(super) mass: f64,
     /// n·ρw·V·N: the liquid's mass in the mixture.
     pub(super) water: f64,
-    /// Drag (n·μ/κ)·V·N.
+    /// Drag (n·S·μ/(κ·k_r))·V₀·N.
     pub(super) drag: f64,
     pub(super) momentum: [f64; D],
     /// Pressure force −V p ∇N plus the liquid's weight ρw·V·N·g.
@@ -101,7 +101,7 @@ impl<const D: usize, const NC: usize> LiquidGrid<D, NC> {
                     out[i] = LiquidContribution {
                         mass: share,
                         water: c.porosity * s * share,
-                        drag: c.drag * s * p.volume0 * n[i],
+                        drag: c.drag * s / p.conductivity * p.volume0 * n[i],
                         momentum,
                         force,
                         advective: advective * n[i],

@@ -31,6 +31,7 @@ pub mod liquid;
 mod liquid_grid;
 pub mod loading;
 pub mod material;
+mod mixed;
 pub mod mohr_coulomb;
 mod principal;
 pub mod run;
@@ -166,6 +167,12 @@ pub struct RunSettings {
     /// partially saturated ([`liquid`]); on by default. Off, they keep their
     /// pore pressure frozen as the other drained materials do.
     pub unsaturated_two_phase: bool,
+    /// MPM-MIXED (Anura3D's default integration, [`crate::model::ComputationMethod`]):
+    /// after every step σ′ and p of the MPs of each element whose MPs share
+    /// one material are replaced by their volume-weighted mean, as the
+    /// kernel's `StressAndPorePressureSmoothening` does. Off (per-MP
+    /// integration, `MPM-MP`) by default; the pipeline sets it from the CPS.
+    pub element_smoothing: bool,
 }
 
 impl RunSettings {
@@ -186,6 +193,7 @@ impl RunSettings {
             thresholds: Thresholds::default(),
             frozen_pore_pressure: false,
             unsaturated_two_phase: true,
+            element_smoothing: false,
         }
     }
 

@@ -44,6 +44,7 @@ use super::liquid::Water;
 use super::liquid_grid::{LiquidContribution, LiquidGrid, advective_flux};
 use super::loading::Analysis;
 use super::material::SolidModel;
+use super::mixed::ElementSums;
 use super::{MpmError, RunSettings};
 use crate::element::Element;
 use crate::model::{AnuraModel, Dimension, MaterialPoint, MpState};
@@ -107,6 +108,8 @@ pub(crate) struct Particle<const D: usize, const NC: usize> {
     pub saturation: f64,
     /// Initial volume: the kernel's masses and drag stay those of V₀.
     pub volume0: f64,
+    /// Relative conductivity k_r of coupled unsaturated MPs (1 otherwise).
+    pub conductivity: f64,
 }
 
 /// Per-corner P2G contribution of one MP.
@@ -179,6 +182,8 @@ pub(crate) struct Solver<const D: usize, const NC: usize> {
     node_load: Vec<[f64; D]>,
     /// Per material of the GOM (0-based) that MPs use: its water.
     pub waters: Vec<Option<Water>>,
+    /// MPM-MIXED's element smoothing ([`RunSettings::element_smoothing`]).
+    element_sums: Option<ElementSums>,
 }
 
 /// Runs `f` on every MP that is not lost and its output slot, in parallel; a
@@ -325,6 +330,13 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 liquid_velocity: [0.0; D],
                 saturation: state.saturation,
                 volume0: point.volume,
+                // The kernel sets k from S when it reads the MAPF.
+                conductivity: match water {
+                    Water::Coupled(c) if c.retention.is_some() => {
+                        c.conductivity.relative(state.saturation)
+                    }
+                    _ => 1.0,
+                },
             });
         }
         let min_altitude = grid.min_altitude();
@@ -371,6 +383,9 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             p2g: vec![[LiquidContribution::ZERO; NC]; n_points],
             remap: vec![[[0.0; D]; NC]; n_points],
         });
+        let element_sums = settings
+            .element_smoothing
+            .then(|| ElementSums::new(grid.elements.len()));
         Ok(Solver {
             grid,
             models,
@@ -399,6 +414,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             liquid,
             waters,
             node_load: vec![[0.0; D]; n_nodes],
+            element_sums,
         })
     }
 
@@ -632,6 +648,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         let node_velocity = &self.node_velocity;
         let models = &self.models;
         let plane_strain = self.plane_strain;
+        let smoothing = self.element_sums.is_some();
         self.particles
             .par_iter_mut()
             .with_min_len(MIN_CHUNK)
@@ -668,7 +685,6 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                     Water::Frozen => {}
                     Water::Undrained { bulk_over_n } => {
                         p.pwp += bulk_over_n * volumetric;
-                        p.pore_term = p.pore_factor * p.pwp;
                     }
                     Water::Coupled(c) => {
                         let n = c.porosity;
@@ -711,17 +727,8 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                     }
                 }
                 p.volume *= 1.0 + volumetric;
-                if let Water::Coupled(c) = p.water {
-                    // The end of the kernel's step: S from the retention
-                    // curve at the new p, the mixture's weight with it (of
-                    // the current volume), Bishop's min(S·p, p).
-                    if let Some(curve) = c.retention {
-                        p.saturation = curve.anura3d_saturation(p.pwp).1;
-                        p.weight =
-                            (p.mass / p.volume0 + c.porosity * p.saturation * c.density) * p.volume;
-                        p.pore_factor = p.saturation;
-                    }
-                    p.pore_term = (p.pore_factor * p.pwp).min(p.pwp);
+                if !smoothing {
+                    settle_water(p);
                 }
                 if !grid.contains(p.element, &p.position) {
                     match grid.locate(&p.position, p.element) {
@@ -734,6 +741,12 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                     }
                 }
             });
+
+        // MPM-MIXED: σ′ and p averaged over each single-material element
+        // (after the MPs moved), then S and p's force term from the average.
+        if let Some(sums) = self.element_sums.as_mut() {
+            sums.smooth(&mut self.particles);
+        }
 
         self.time += dt;
         self.steps += 1;
@@ -775,6 +788,27 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
 
 /// Sums every MP's per-corner vectors into `nodal` (cleared first),
 /// serially in MP order (deterministic).
+/// The end of the kernel's step for an MP's water: S, k_r and the mixture's
+/// weight from the retention curve at the new p (coupled unsaturated MPs, with
+/// the current volume), and p's term in the internal force (Bishop's
+/// min(S·p, p) for coupled MPs).
+pub(super) fn settle_water<const D: usize, const NC: usize>(p: &mut Particle<D, NC>) {
+    match p.water {
+        Water::Coupled(c) => {
+            if let Some(curve) = c.retention {
+                p.saturation = curve.anura3d_saturation(p.pwp).1;
+                if p.saturation < 1.0 {
+                    p.conductivity = c.conductivity.relative(p.saturation);
+                }
+                p.weight = (p.mass / p.volume0 + c.porosity * p.saturation * c.density) * p.volume;
+                p.pore_factor = p.saturation;
+            }
+            p.pore_term = (p.pore_factor * p.pwp).min(p.pwp);
+        }
+        Water::Undrained { .. } | Water::Frozen => p.pore_term = p.pore_factor * p.pwp,
+    }
+}
+
 pub(super) fn scatter<const D: usize, const NC: usize>(
     grid: &Grid<D, NC>,
     particles: &[Particle<D, NC>],

@@ -31,6 +31,7 @@ pub fn with_cps(
         if let Some(c) = cps.get_real("$$COURANT_NUMBER", 0) {
             s.courant = c.min(0.9);
         }
+        s.element_smoothing = cps.computation_method() == "MPM-MIXED";
     }
     s.damping = damping
         .or_else(|| cps.and_then(CpsDocument::local_damping))
