@@ -89,8 +89,10 @@ def test_map_solves_for_equilibrium_and_verify_measures_it(tmp_path):
     assert solve["equilibrium"] is True
     assert solve["residual_ratio"] < 1e-6
     assert {m["poisson_from"] for m in solve["materials"]} <= {"k0", "gom", "default"}
-    # The state a3d-init intended (mps.csv) is at rest in the runner's equations.
-    verdict = a3d_init.verify(model=out, state=out / "mps.csv", out=tmp_path / "v")
+    # The state a3d-init intended (mps.csv) is at rest in the runner's
+    # equations, with the pore pressure held (the stand-in pwp field is not a
+    # seepage solution, so the sand's water flows when it runs two-phase).
+    verdict = a3d_init.verify(model=out, state=out / "mps.csv", out=tmp_path / "v", drained=True)
     assert verdict["equilibrium"] is True
     assert verdict["run"]["initial_residual_ratio"] < 1e-6
     gom = a3d_init.map(SAND, SLOPE, tmp_path / "gom", stress="equilibrium", h=0.046, k0_consistent=False)
