@@ -58,6 +58,24 @@ fn settings(gravity: f64) -> RunSettings {
     }
 }
 
+/// `a3d-init run` of the map folder `dir` undamped for `time` s into `out`;
+/// its `run.json`.
+fn run_undamped(dir: &std::path::Path, out: &std::path::Path, time: f64) -> serde_json::Value {
+    run_ok(&[
+        "run",
+        dir.to_str().unwrap(),
+        "--time",
+        &time.to_string(),
+        "--damping",
+        "0",
+        "--snapshots",
+        "",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap()
+}
+
 /// Volume-weighted mean of `values` over the MPs.
 fn mean(points: &[MaterialPoint], values: &[f64]) -> f64 {
     let v: f64 = points.iter().map(|p| p.volume).sum();
@@ -259,21 +277,7 @@ fn anura3d_kernel_two_phase_column_within_twenty_percent() {
         panic!("no {} among {names:?}", scalars.display());
     }
     let kernel_p = vtk_scalars(&scalars, "pressure_liquid");
-    let ours = tmp.path().join("ours");
-    run_ok(&[
-        "run",
-        out.to_str().unwrap(),
-        "--time",
-        &time.to_string(),
-        "--damping",
-        "0",
-        "--snapshots",
-        "",
-        "--out",
-        ours.to_str().unwrap(),
-    ]);
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(ours.join("run.json")).unwrap()).unwrap();
+    let report = run_undamped(&out, &tmp.path().join("ours"), time);
     let our_u: Vec<f64> = report["final_displacements"]
         .as_array()
         .unwrap()
@@ -460,21 +464,7 @@ fn anura3d_kernel_demo_slope_within_twenty_percent() {
         "pressure_liquid",
     );
 
-    let ours = tmp.path().join("ours");
-    run_ok(&[
-        "run",
-        demo.to_str().unwrap(),
-        "--time",
-        &time.to_string(),
-        "--damping",
-        "0",
-        "--snapshots",
-        "",
-        "--out",
-        ours.to_str().unwrap(),
-    ]);
-    let report: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(ours.join("run.json")).unwrap()).unwrap();
+    let report = run_undamped(&demo, &tmp.path().join("ours"), time);
     assert_eq!(
         report["formulations"][0],
         serde_json::json!([1, "coupled"]),

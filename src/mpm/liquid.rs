@@ -430,22 +430,8 @@ mod tests {
     #[test]
     fn conductivity_curve_read_from_the_record() {
         let mut m = Material {
-            index: 1,
-            name: "sand".into(),
-            material_type: "unsaturated_material_2phase_suction".into(),
-            model: None,
-            porosity: None,
-            density_solid: None,
-            density_liquid: None,
-            k0: None,
-            young_modulus: None,
-            poisson_ratio: None,
-            friction_angle: None,
-            cohesion: None,
-            dilatancy_angle: None,
-            tensile_strength: None,
             retention: Some(CURVE),
-            properties: Vec::new(),
+            ..Material::new(1, "sand", "unsaturated_material_2phase_suction")
         };
         assert_eq!(conductivity_of(&m).unwrap(), Conductivity::Constant);
         let pair = |k: &str, v: &str| (format!("$${k}"), v.to_string());
