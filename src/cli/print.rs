@@ -148,6 +148,41 @@ pub fn formulations(list: &[(u32, mpm::Formulation)]) {
     say!("water      {}", words.join("; "));
 }
 
+/// A bounding box as `x ∈ [a, b], y ∈ [c, d]` (unbounded axes left out).
+fn area_words(area: &[[f64; 2]; 3]) -> String {
+    let words: Vec<String> = ["x", "y", "z"]
+        .iter()
+        .zip(area)
+        .filter(|(_, b)| b[0].is_finite() || b[1].is_finite())
+        .map(|(axis, b)| format!("{axis} ∈ [{}, {}]", b[0], b[1]))
+        .collect();
+    words.join(", ")
+}
+
+/// The water of a run: each material's formulation, the seepage face and
+/// infiltration applied, and what the run did not apply.
+pub fn water(r: &mpm::RunReport) {
+    formulations(&r.formulations);
+    if let Some(area) = &r.hydraulic.seepage_area {
+        say!(
+            "water      seepage face on the free surface in {}",
+            area_words(area)
+        );
+    }
+    if let Some((area, rate)) = &r.hydraulic.infiltration {
+        say!(
+            "water      infiltration at most ({:e}, {:e}, {:e}) m/s on the free surface in {}",
+            rate[0],
+            rate[1],
+            rate[2],
+            area_words(area)
+        );
+    }
+    for note in &r.notes {
+        say!("note       {note}");
+    }
+}
+
 /// Prints the runner's figures (no verdict).
 pub fn run_report(r: &mpm::RunReport) {
     say!(
@@ -165,7 +200,7 @@ pub fn run_report(r: &mpm::RunReport) {
         r.damping,
         r.courant
     );
-    formulations(&r.formulations);
+    water(r);
     say!(
         "residual   start {:.3e}, end {:.3e} (limit {:.0e})",
         r.initial_residual_ratio,

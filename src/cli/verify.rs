@@ -115,7 +115,7 @@ pub fn run_run(args: RunArgs) -> anyhow::Result<()> {
         r.time,
         r.damping
     );
-    print::formulations(&r.formulations);
+    print::water(r);
     say!(
         "final      max displacement {:.4} m, {} MPs yielded",
         r.max_displacement,

@@ -35,6 +35,7 @@ mod mixed;
 pub mod mohr_coulomb;
 mod principal;
 pub mod run;
+pub mod seepage;
 mod simulation;
 pub mod step;
 
@@ -173,6 +174,9 @@ pub struct RunSettings {
     /// kernel's `StressAndPorePressureSmoothening` does. Off (per-MP
     /// integration, `MPM-MP`) by default; the pipeline sets it from the CPS.
     pub element_smoothing: bool,
+    /// Seepage faces and infiltration of partially saturated analyses
+    /// ([`seepage`]); none by default.
+    pub hydraulic: seepage::HydraulicBoundaries,
 }
 
 impl RunSettings {
@@ -194,6 +198,7 @@ impl RunSettings {
             frozen_pore_pressure: false,
             unsaturated_two_phase: true,
             element_smoothing: false,
+            hydraulic: seepage::HydraulicBoundaries::default(),
         }
     }
 

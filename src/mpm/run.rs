@@ -197,6 +197,10 @@ pub struct RunReport {
     /// How each material with MPs ran ([`super::liquid`]): (1-based
     /// material index, formulation).
     pub formulations: Vec<(u32, super::Formulation)>,
+    /// The seepage face and infiltration the run applied ([`super::seepage`]).
+    pub hydraulic: super::seepage::HydraulicBoundaries,
+    /// What the project asks for that the run did not apply.
+    pub notes: Vec<String>,
 }
 
 /// The report of [`run`] with the snapshots taken on the way.
@@ -385,6 +389,8 @@ fn drive(
         final_plastic: simulation.plastic_flags(),
         final_pore_pressures: simulation.pore_pressures(),
         formulations: simulation.formulations(),
+        hydraulic: simulation.hydraulic(),
+        notes: Vec::new(),
     };
     Ok(RunOutput { report, snapshots })
 }

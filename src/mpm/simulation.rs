@@ -61,6 +61,7 @@ pub(crate) trait Run {
     fn element_residuals(&self) -> Vec<f64>;
     fn set_nodal_loads(&mut self, loads: &[(u32, [f64; 3])]) -> Result<(), MpmError>;
     fn formulations(&self) -> Vec<(u32, Formulation)>;
+    fn hydraulic(&self) -> super::seepage::HydraulicBoundaries;
 }
 
 impl<const D: usize, const NC: usize> Run for Solver<D, NC> {
@@ -129,6 +130,9 @@ impl<const D: usize, const NC: usize> Run for Solver<D, NC> {
             .enumerate()
             .filter_map(|(i, w)| w.map(|w| (i as u32 + 1, w.formulation())))
             .collect()
+    }
+    fn hydraulic(&self) -> super::seepage::HydraulicBoundaries {
+        self.surface_boundaries()
     }
 }
 
@@ -304,6 +308,12 @@ impl Simulation {
     /// flows in unsaturated materials, else as mapped).
     pub fn saturations(&self) -> Vec<f64> {
         self.per_point(|p| p.saturation)
+    }
+
+    /// The seepage face and infiltration this run applies (none where the
+    /// analysis is not partially saturated).
+    pub fn hydraulic(&self) -> super::seepage::HydraulicBoundaries {
+        self.inner.hydraulic()
     }
 
     /// Constant external forces on mesh nodes (0-based node, force in kN per

@@ -45,6 +45,7 @@ use super::liquid_grid::{LiquidContribution, LiquidGrid, advective_flux};
 use super::loading::Analysis;
 use super::material::SolidModel;
 use super::mixed::ElementSums;
+use super::seepage::{Surface, SurfaceFlow};
 use super::{MpmError, RunSettings};
 use crate::element::Element;
 use crate::model::{AnuraModel, Dimension, MaterialPoint, MpState};
@@ -184,6 +185,9 @@ pub(crate) struct Solver<const D: usize, const NC: usize> {
     pub waters: Vec<Option<Water>>,
     /// MPM-MIXED's element smoothing ([`RunSettings::element_smoothing`]).
     element_sums: Option<ElementSums>,
+    /// Seepage faces and infiltration ([`RunSettings::hydraulic`]), where
+    /// the water of partially saturated MPs flows.
+    surface: Option<SurfaceFlow<D>>,
 }
 
 /// Runs `f` on every MP that is not lost and its output slot, in parallel; a
@@ -386,6 +390,13 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         let element_sums = settings
             .element_smoothing
             .then(|| ElementSums::new(grid.elements.len()));
+        // The kernel applies seepage faces and infiltration only when the
+        // analysis is partially saturated.
+        let partially_saturated = particles
+            .iter()
+            .any(|p| matches!(p.water, Water::Coupled(c) if c.retention.is_some()));
+        let surface = (partially_saturated && !settings.hydraulic.is_empty())
+            .then(|| SurfaceFlow::new(settings.hydraulic.clone(), &grid, &model.mesh.nodes));
         Ok(Solver {
             grid,
             models,
@@ -415,6 +426,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             waters,
             node_load: vec![[0.0; D]; n_nodes],
             element_sums,
+            surface,
         })
     }
 
@@ -590,6 +602,46 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             self.node_residual[node] = node_sq.sqrt();
         }
         let residual_ratio = ratio(residual_sq.sqrt(), external_sq.sqrt());
+
+        // 2b. Seepage faces and infiltration ([`super::seepage`]).
+        if let (Some(flow), Some(l)) = (self.surface.as_mut(), self.liquid.as_mut()) {
+            flow.detect(grid, &self.particles, &l.fixed);
+            let q = flow.rate();
+            for node in 0..grid.n_nodes() {
+                let kind = flow.kind[node];
+                let (mw, mnw, ms) = (l.mass[node], l.water[node], self.node_mass[node]);
+                if kind == Surface::None || mw <= self.mass_floor || ms <= self.mass_floor {
+                    continue;
+                }
+                let ns = mnw / mw;
+                if ns <= 0.0 {
+                    continue;
+                }
+                let n = flow.normal[node];
+                let mut rate = 0.0;
+                for d in 0..D {
+                    rate += ns * (l.velocity[node][d] - self.node_velocity[node][d]) * n[d];
+                    if kind == Surface::Infiltration {
+                        rate -= q[d] * n[d];
+                    }
+                }
+                if rate >= 0.0 {
+                    continue;
+                }
+                let dw = -ms * rate / (ns * (mnw + ms));
+                let dv = mnw * rate / (ns * (mnw + ms));
+                for d in 0..D {
+                    if !l.fixed[node][d] {
+                        l.velocity[node][d] += dw * n[d];
+                        l.acceleration[node][d] += dw * n[d] / dt;
+                    }
+                    if !grid.fixed[node][d] {
+                        self.node_velocity[node][d] += dv * n[d];
+                        self.node_acceleration[node][d] += dv * n[d] / dt;
+                    }
+                }
+            }
+        }
 
         // 3. G2P: MP velocity and position, and the momenta for the MUSL remap.
         let acceleration = &self.node_acceleration;
@@ -769,6 +821,15 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             yielded,
             plastic,
         }
+    }
+
+    /// The seepage face and infiltration applied (none where the analysis is
+    /// not partially saturated).
+    pub fn surface_boundaries(&self) -> super::seepage::HydraulicBoundaries {
+        self.surface
+            .as_ref()
+            .map(|s| s.boundaries.clone())
+            .unwrap_or_default()
     }
 
     /// Largest and mean displacement magnitude over the MPs still in the mesh.

@@ -109,7 +109,9 @@ fn causes(check: Option<&KernelCheck>, run: Option<&mpm::RunReport>) -> Vec<Stri
 
 /// Runs the equilibrium check on a loaded start (writes nothing).
 pub fn check(start: &Start, options: &VerifyOptions) -> Result<VerifyOutcome, PipelineError> {
-    let settings = options.settings(start.project.cps.as_ref());
+    let mut settings = options.settings(start.project.cps.as_ref());
+    let (hydraulic, notes) = runner::hydraulic(&start.project);
+    settings.hydraulic = hydraulic;
     // A model the runner cannot simulate still gets its Anura3D-side checks
     // and start.csv; the verdict then says why no run was made.
     let mut run_error = None;
@@ -120,7 +122,10 @@ pub fn check(start: &Start, options: &VerifyOptions) -> Result<VerifyOutcome, Pi
             start.states(),
             &settings,
         ) {
-            Ok(r) => Some(r),
+            Ok(mut r) => {
+                r.notes = notes;
+                Some(r)
+            }
             Err(
                 e
                 @ (mpm::MpmError::Unsupported(_) | mpm::MpmError::UnsupportedMaterialModel { .. }),

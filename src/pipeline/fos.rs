@@ -409,7 +409,8 @@ pub fn analyse_state(
         (Err(e), FosMethod::Le(_)) => return Err(e),
     };
     let strength_reduction = if run_srm {
-        let settings = options.settings(project.cps.as_ref());
+        let mut settings = options.settings(project.cps.as_ref());
+        settings.run.hydraulic = runner::hydraulic(project).0;
         Some(analyse(&project.model, &start.points, states, &settings)?)
     } else {
         None

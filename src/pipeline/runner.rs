@@ -40,6 +40,46 @@ pub fn with_cps(
     s
 }
 
+/// The seepage face and infiltration the project's CPS switches on
+/// (`$$APPLY_SEEPAGE_FACE 1`, `$$APPLY_INFILTRATION 1`) over its GOM's
+/// areas, and notes on what the runner does not apply.
+pub fn hydraulic(project: &super::Project) -> (mpm::seepage::HydraulicBoundaries, Vec<String>) {
+    let mut notes = Vec::new();
+    let Some(cps) = project.cps.as_ref() else {
+        return (Default::default(), notes);
+    };
+    let on = |keyword: &str| cps.get_real(keyword, 0) == Some(1.0);
+    let areas = &project.info.hydraulic;
+    let mut boundaries = mpm::seepage::HydraulicBoundaries::default();
+    if on("$$APPLY_SEEPAGE_FACE") {
+        match areas.seepage {
+            Some(area) => boundaries.seepage_area = Some(area),
+            None => notes.push(
+                "the CPS applies a seepage face but the GOM has no $$BOUNDARY_SEEPAGE_AREA: none applied"
+                    .into(),
+            ),
+        }
+    }
+    if on("$$APPLY_INFILTRATION") {
+        match (areas.infiltration, areas.infiltration_rate) {
+            (Some(area), Some(rate)) => boundaries.infiltration = Some((area, rate)),
+            _ => notes.push(
+                "the CPS applies infiltration but the GOM lacks $$BOUNDARY_INFILTRATION_AREA or $$INFILTRATION_RATE: none applied"
+                    .into(),
+            ),
+        }
+    }
+    if cps
+        .get_token("$$HYDRAULIC_HEAD", 0)
+        .is_some_and(|t| t.eq_ignore_ascii_case("file"))
+    {
+        notes.push(
+            "the CPS prescribes a hydraulic head from a file ($$HYDRAULIC_HEAD file): this runner does not apply it".into(),
+        );
+    }
+    (boundaries, notes)
+}
+
 /// The runner's error as a pipeline error: an unsupported element or material
 /// is the model's, anything else numerical.
 pub fn runner_error(e: mpm::MpmError) -> PipelineError {

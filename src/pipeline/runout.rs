@@ -81,15 +81,18 @@ pub fn run(
     to: Destination<'_>,
 ) -> Result<RunOutcome, PipelineError> {
     let (reads, start, target) = runner::begin(source, to, "run")?;
-    let settings = options.settings(start.project.cps.as_ref())?;
+    let mut settings = options.settings(start.project.cps.as_ref())?;
+    let (hydraulic, notes) = runner::hydraulic(&start.project);
+    settings.hydraulic = hydraulic;
     let dir = OutputDir::create(&target, to.replace, &reads)?;
-    let output = mpm::run(
+    let mut output = mpm::run(
         &start.project.model,
         &start.points,
         start.states(),
         &settings,
     )
     .map_err(runner::runner_error)?;
+    output.report.notes = notes;
     let json = serde_json::to_string_pretty(&output.report)
         .map_err(|e| PipelineError::Output(format!("run.json: {e}")))?;
     dir.write("run.json", |w| w.write_all(json.as_bytes()))?;

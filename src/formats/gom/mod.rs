@@ -52,6 +52,21 @@ pub struct GomInfo {
     pub mp_count_lines: Vec<u32>,
     /// Things that are legal for Anura3D but worth telling the user.
     pub warnings: Vec<String>,
+    /// The hydraulic boundary areas of partially saturated analyses.
+    pub hydraulic: HydraulicAreas,
+}
+
+/// The GOM's hydraulic boundary areas (`$$BOUNDARY_SEEPAGE_AREA`,
+/// `$$BOUNDARY_INFILTRATION_AREA` with `$$INFILTRATION_RATE`,
+/// `$$BOUNDARY_HYDRAULIC_HEAD_AREA`): bounding boxes `[min, max]` per axis
+/// (x, y[, z]; unused axes are unbounded). The CPS switches them on.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct HydraulicAreas {
+    pub seepage: Option<[[f64; 2]; 3]>,
+    pub infiltration: Option<[[f64; 2]; 3]>,
+    /// m/s per axis, the infiltration velocity (pointing into the ground).
+    pub infiltration_rate: Option<[f64; 3]>,
+    pub hydraulic_head: Option<[[f64; 2]; 3]>,
 }
 
 /// A lossless GOM document.
@@ -330,6 +345,11 @@ impl GomDocument {
             }
         }
 
+        match self.read_hydraulic(dimension.n_dim()) {
+            Ok(h) => info.hydraulic = h,
+            Err(e) => errors.push(e),
+        }
+
         let materials = match self.block("$$NUMBER_OF_MATERIALS") {
             Some(b) => {
                 let start = self.doc.blocks()[b].line;
@@ -483,6 +503,66 @@ impl GomDocument {
             lines.push(line);
         }
         Ok((connectivity, lines))
+    }
+
+    /// The hydraulic boundary areas and the infiltration rate, where given.
+    fn read_hydraulic(&self, n_dim: usize) -> Result<HydraulicAreas, ParseError> {
+        let area = |keyword: &str| -> Result<Option<[[f64; 2]; 3]>, ParseError> {
+            let Some(b) = self.block(keyword) else {
+                return Ok(None);
+            };
+            let mut area = [[f64::NEG_INFINITY, f64::INFINITY]; 3];
+            let mut rows = self.rows(b);
+            for (d, bounds) in area.iter_mut().enumerate().take(n_dim) {
+                let Some((i, line)) = rows.next() else {
+                    return Err(self.short_block(b, n_dim, d, "`min max` lines"));
+                };
+                let mut v = [0.0; 2];
+                lex::reals(line, &mut v).map_err(|bad| {
+                    self.numbers_error(
+                        i,
+                        bad,
+                        "a bound",
+                        line.len(),
+                        String::from("expected `min max`"),
+                    )
+                })?;
+                if v[0] > v[1] || v.iter().any(|x| x.is_nan()) {
+                    return Err(self.doc.error_at(
+                        i,
+                        0,
+                        format!("{keyword}: min {} is above max {}", v[0], v[1]),
+                    ));
+                }
+                *bounds = v;
+            }
+            Ok(Some(area))
+        };
+        let infiltration_rate = match self.block("$$INFILTRATION_RATE") {
+            None => None,
+            Some(b) => {
+                let Some((i, line)) = self.rows(b).next() else {
+                    return Err(self.short_block(b, 1, 0, "rate line"));
+                };
+                let mut v = [0.0; 3];
+                lex::reals(line, &mut v[..n_dim]).map_err(|bad| {
+                    self.numbers_error(
+                        i,
+                        bad,
+                        "a rate",
+                        line.len(),
+                        format!("expected {n_dim} velocity components (m/s)"),
+                    )
+                })?;
+                Some(v)
+            }
+        };
+        Ok(HydraulicAreas {
+            seepage: area("$$BOUNDARY_SEEPAGE_AREA")?,
+            infiltration: area("$$BOUNDARY_INFILTRATION_AREA")?,
+            infiltration_rate,
+            hydraulic_head: area("$$BOUNDARY_HYDRAULIC_HEAD_AREA")?,
+        })
     }
 
     fn read_fixity(
