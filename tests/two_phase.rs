@@ -768,3 +768,33 @@ fn hydraulic_areas_are_read_from_the_gom() {
         "{message}"
     );
 }
+
+/// What the runner does not apply is said, not dropped: GOM loads the CPS
+/// switches on (test-1001: nodal solid loads under `$$SOLID_TRACTION step`)
+/// and a hydraulic head from a file.
+#[test]
+fn loads_and_heads_the_runner_does_not_apply_are_noted() {
+    use a3d_init::pipeline::{Project, runner};
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/anura3d/test-1001");
+    let mut project = Project::load(&dir).unwrap();
+    let (boundaries, notes) = runner::hydraulic(&project);
+    assert!(boundaries.is_empty());
+    assert_eq!(notes.len(), 1, "{notes:?}");
+    assert!(
+        notes[0].contains("$$START_LOAD_ON_NODES_SOLID") && notes[0].contains("$$SOLID_TRACTION"),
+        "{notes:?}"
+    );
+    let cps = project.cps.as_ref().unwrap().to_text();
+    let cps = cps.replacen(
+        "$$END",
+        "$$HYDRAULIC_HEAD\nfile 1.0\n$$APPLY_SEEPAGE_FACE\n1\n$$END",
+        1,
+    );
+    project.cps = Some(
+        a3d_init::formats::cps::CpsDocument::parse(&dir.join("test-1001.CPS_001"), cps).unwrap(),
+    );
+    let (_, notes) = runner::hydraulic(&project);
+    assert_eq!(notes.len(), 3, "{notes:?}");
+    assert!(notes.iter().any(|n| n.contains("$$HYDRAULIC_HEAD file")));
+    assert!(notes.iter().any(|n| n.contains("$$BOUNDARY_SEEPAGE_AREA")));
+}

@@ -42,7 +42,8 @@ pub fn with_cps(
 
 /// The seepage face and infiltration the project's CPS switches on
 /// (`$$APPLY_SEEPAGE_FACE 1`, `$$APPLY_INFILTRATION 1`) over its GOM's
-/// areas, and notes on what the runner does not apply.
+/// areas, and notes on what the runner does not apply: a hydraulic head from
+/// a file, and GOM loads (solid tractions, liquid pressures) the CPS switches on.
 pub fn hydraulic(project: &super::Project) -> (mpm::seepage::HydraulicBoundaries, Vec<String>) {
     let mut notes = Vec::new();
     let Some(cps) = project.cps.as_ref() else {
@@ -67,6 +68,16 @@ pub fn hydraulic(project: &super::Project) -> (mpm::seepage::HydraulicBoundaries
                 "the CPS applies infiltration but the GOM lacks $$BOUNDARY_INFILTRATION_AREA or $$INFILTRATION_RATE: none applied"
                     .into(),
             ),
+        }
+    }
+    for (block, multiplier) in crate::formats::gom::LOAD_BLOCKS {
+        let on = cps
+            .get_token(multiplier, 0)
+            .is_some_and(|t| !t.eq_ignore_ascii_case("off"));
+        if on && project.info.load_blocks.iter().any(|b| b == block) {
+            notes.push(format!(
+                "the GOM's {block} under the CPS's {multiplier}: this runner does not apply GOM loads, only gravity"
+            ));
         }
     }
     if cps

@@ -54,7 +54,32 @@ pub struct GomInfo {
     pub warnings: Vec<String>,
     /// The hydraulic boundary areas of partially saturated analyses.
     pub hydraulic: HydraulicAreas,
+    /// The load blocks present (`$$START_LOAD_ON_NODES_SOLID`, …), kept
+    /// verbatim; the CPS's `$$SOLID_TRACTION[_B]` / `$$LIQUID_PRESSURE[_B]`
+    /// scale them in Anura3D.
+    pub load_blocks: Vec<String>,
 }
+
+/// The GOM's load blocks and the CPS multiplier that scales each.
+pub const LOAD_BLOCKS: [(&str, &str); 8] = [
+    ("$$START_LOAD_ON_NODES_SOLID", "$$SOLID_TRACTION"),
+    ("$$START_LOAD_ON_NODES_SOLID_B", "$$SOLID_TRACTION_B"),
+    ("$$START_LOAD_ON_MATERIAL_POINTS_SOLID", "$$SOLID_TRACTION"),
+    (
+        "$$START_LOAD_ON_MATERIAL_POINTS_SOLID_B",
+        "$$SOLID_TRACTION_B",
+    ),
+    ("$$START_LOAD_ON_NODES_LIQUID", "$$LIQUID_PRESSURE"),
+    ("$$START_LOAD_ON_NODES_LIQUID_B", "$$LIQUID_PRESSURE_B"),
+    (
+        "$$START_LOAD_ON_MATERIAL_POINTS_LIQUID",
+        "$$LIQUID_PRESSURE",
+    ),
+    (
+        "$$START_LOAD_ON_MATERIAL_POINTS_LIQUID_B",
+        "$$LIQUID_PRESSURE_B",
+    ),
+];
 
 /// The GOM's hydraulic boundary areas (`$$BOUNDARY_SEEPAGE_AREA`,
 /// `$$BOUNDARY_INFILTRATION_AREA` with `$$INFILTRATION_RATE`,
@@ -345,6 +370,11 @@ impl GomDocument {
             }
         }
 
+        info.load_blocks = LOAD_BLOCKS
+            .iter()
+            .filter(|(block, _)| self.block(block).is_some())
+            .map(|(block, _)| block.to_string())
+            .collect();
         match self.read_hydraulic(dimension.n_dim()) {
             Ok(h) => info.hydraulic = h,
             Err(e) => errors.push(e),
