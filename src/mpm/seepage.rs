@@ -16,6 +16,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use super::grid::{Grid, NO_ELEMENT};
+use super::liquid_grid::LiquidGrid;
 use super::step::Particle;
 
 /// A bounding box `[min, max]` per axis.
@@ -44,7 +45,7 @@ fn inside<const D: usize>(area: &Area, x: &[f64; D]) -> bool {
 
 /// Per-node kind of surface condition this step.
 #[derive(Clone, Copy, PartialEq, Eq)]
-pub(super) enum Surface {
+enum Surface {
     None,
     Seepage,
     Infiltration,
@@ -56,8 +57,8 @@ pub(super) struct SurfaceFlow<const D: usize> {
     /// Compact node coordinates.
     position: Vec<[f64; D]>,
     active: Vec<bool>,
-    pub(super) kind: Vec<Surface>,
-    pub(super) normal: Vec<[f64; D]>,
+    kind: Vec<Surface>,
+    normal: Vec<[f64; D]>,
 }
 
 impl<const D: usize> SurfaceFlow<D> {
@@ -86,7 +87,7 @@ impl<const D: usize> SurfaceFlow<D> {
     }
 
     /// The infiltration rate (m/s per axis).
-    pub(super) fn rate(&self) -> [f64; D] {
+    fn rate(&self) -> [f64; D] {
         let mut q = [0.0; D];
         if let Some((_, rate)) = &self.boundaries.infiltration {
             q.copy_from_slice(&rate[..D]);
@@ -94,9 +95,63 @@ impl<const D: usize> SurfaceFlow<D> {
         q
     }
 
+    /// Finds this step's free-surface nodes in the boxes and, where the net
+    /// outward rate is negative, brings it to 0: the liquid's and the solid's
+    /// nodal velocities (and accelerations, by the change over Δt) after
+    /// the step's nodal solve, in their free directions.
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn apply<const NC: usize>(
+        &mut self,
+        grid: &Grid<D, NC>,
+        particles: &[Particle<D, NC>],
+        l: &mut LiquidGrid<D, NC>,
+        node_mass: &[f64],
+        node_velocity: &mut [[f64; D]],
+        node_acceleration: &mut [[f64; D]],
+        mass_floor: f64,
+        dt: f64,
+    ) {
+        self.detect(grid, particles, &l.fixed);
+        let q = self.rate();
+        for node in 0..grid.n_nodes() {
+            let kind = self.kind[node];
+            let (mw, mnw, ms) = (l.mass[node], l.water[node], node_mass[node]);
+            if kind == Surface::None || mw <= mass_floor || ms <= mass_floor {
+                continue;
+            }
+            let ns = mnw / mw;
+            if ns <= 0.0 {
+                continue;
+            }
+            let n = self.normal[node];
+            let mut rate = 0.0;
+            for d in 0..D {
+                rate += ns * (l.velocity[node][d] - node_velocity[node][d]) * n[d];
+                if kind == Surface::Infiltration {
+                    rate -= q[d] * n[d];
+                }
+            }
+            if rate >= 0.0 {
+                continue;
+            }
+            let dw = -ms * rate / (ns * (mnw + ms));
+            let dv = mnw * rate / (ns * (mnw + ms));
+            for d in 0..D {
+                if !l.fixed[node][d] {
+                    l.velocity[node][d] += dw * n[d];
+                    l.acceleration[node][d] += dw * n[d] / dt;
+                }
+                if !grid.fixed[node][d] {
+                    node_velocity[node][d] += dv * n[d];
+                    node_acceleration[node][d] += dv * n[d] / dt;
+                }
+            }
+        }
+    }
+
     /// Finds this step's free-surface nodes in the boxes and their outward
     /// normals; `liquid_fixed` masks the liquid's fixed directions.
-    pub(super) fn detect<const NC: usize>(
+    fn detect<const NC: usize>(
         &mut self,
         grid: &Grid<D, NC>,
         particles: &[Particle<D, NC>],

@@ -45,7 +45,7 @@ use super::liquid_grid::{LiquidContribution, LiquidGrid, advective_flux};
 use super::loading::Analysis;
 use super::material::SolidModel;
 use super::mixed::ElementSums;
-use super::seepage::{Surface, SurfaceFlow};
+use super::seepage::SurfaceFlow;
 use super::{MpmError, RunSettings};
 use crate::element::Element;
 use crate::model::{AnuraModel, Dimension, MaterialPoint, MpState};
@@ -605,42 +605,16 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
 
         // 2b. Seepage faces and infiltration ([`super::seepage`]).
         if let (Some(flow), Some(l)) = (self.surface.as_mut(), self.liquid.as_mut()) {
-            flow.detect(grid, &self.particles, &l.fixed);
-            let q = flow.rate();
-            for node in 0..grid.n_nodes() {
-                let kind = flow.kind[node];
-                let (mw, mnw, ms) = (l.mass[node], l.water[node], self.node_mass[node]);
-                if kind == Surface::None || mw <= self.mass_floor || ms <= self.mass_floor {
-                    continue;
-                }
-                let ns = mnw / mw;
-                if ns <= 0.0 {
-                    continue;
-                }
-                let n = flow.normal[node];
-                let mut rate = 0.0;
-                for d in 0..D {
-                    rate += ns * (l.velocity[node][d] - self.node_velocity[node][d]) * n[d];
-                    if kind == Surface::Infiltration {
-                        rate -= q[d] * n[d];
-                    }
-                }
-                if rate >= 0.0 {
-                    continue;
-                }
-                let dw = -ms * rate / (ns * (mnw + ms));
-                let dv = mnw * rate / (ns * (mnw + ms));
-                for d in 0..D {
-                    if !l.fixed[node][d] {
-                        l.velocity[node][d] += dw * n[d];
-                        l.acceleration[node][d] += dw * n[d] / dt;
-                    }
-                    if !grid.fixed[node][d] {
-                        self.node_velocity[node][d] += dv * n[d];
-                        self.node_acceleration[node][d] += dv * n[d] / dt;
-                    }
-                }
-            }
+            flow.apply(
+                grid,
+                &self.particles,
+                l,
+                &self.node_mass,
+                &mut self.node_velocity,
+                &mut self.node_acceleration,
+                self.mass_floor,
+                dt,
+            );
         }
 
         // 3. G2P: MP velocity and position, and the momenta for the MUSL remap.
@@ -847,8 +821,6 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
     }
 }
 
-/// Sums every MP's per-corner vectors into `nodal` (cleared first),
-/// serially in MP order (deterministic).
 /// The end of the kernel's step for an MP's water: S, k_r and the mixture's
 /// weight from the retention curve at the new p (coupled unsaturated MPs, with
 /// the current volume), and p's term in the internal force (Bishop's
@@ -870,6 +842,8 @@ pub(super) fn settle_water<const D: usize, const NC: usize>(p: &mut Particle<D, 
     }
 }
 
+/// Sums every MP's per-corner vectors into `nodal` (cleared first),
+/// serially in MP order (deterministic).
 pub(super) fn scatter<const D: usize, const NC: usize>(
     grid: &Grid<D, NC>,
     particles: &[Particle<D, NC>],
