@@ -11,6 +11,15 @@ use std::path::Path;
 use super::error::FormatError;
 use super::keyword_doc::KeywordDocument;
 use super::lex;
+use crate::model::loads::{Multiplier, MultiplierKind};
+
+/// The load multipliers the runner applies (GOM loads × these).
+pub const MULTIPLIERS: [&str; 4] = [
+    "$$SOLID_TRACTION",
+    "$$SOLID_TRACTION_B",
+    "$$LIQUID_PRESSURE",
+    "$$LIQUID_PRESSURE_B",
+];
 
 /// A lossless CPS (or OPD) document.
 #[derive(Debug, Clone)]
@@ -72,10 +81,101 @@ impl CpsDocument {
         if self.get_token("$$HOMOGENEOUS_LOCAL_DAMPING", 0) == Some("1") {
             self.check_range("$$HOMOGENEOUS_LOCAL_DAMPING", 1, 0.0, 1.0, &mut errors);
         }
+        for keyword in MULTIPLIERS {
+            self.check_multiplier(keyword, &mut errors);
+        }
         match FormatError::from_list(errors) {
             Some(e) => Err(e),
             None => Ok(self),
         }
+    }
+
+    /// A load multiplier, when present, is `type realised final` with a type
+    /// the kernel takes (`linear`, `step` or `off`, as written) and two
+    /// numbers; Anura3D stops on anything else.
+    fn check_multiplier(&self, keyword: &str, errors: &mut Vec<super::error::ParseError>) {
+        let Some(b) = self.doc.find(keyword, true) else {
+            return;
+        };
+        let block = &self.doc.blocks()[b];
+        let mut tokens = block
+            .data
+            .clone()
+            .flat_map(|i| lex::tokens(self.doc.line(i)).map(move |(o, t)| (i, o, t)));
+        match tokens.next() {
+            Some((_, _, "linear" | "step" | "off")) => {}
+            Some((i, o, tok)) => errors.push(self.doc.error_at(
+                i,
+                o,
+                format!("{keyword}: load type `{tok}` must be `linear`, `step` or `off`"),
+            )),
+            None => {
+                errors.push(self.doc.error_at(
+                    block.line,
+                    0,
+                    format!("{keyword}: expected `type realised final`, found nothing"),
+                ));
+                return;
+            }
+        }
+        for what in ["realised", "final"] {
+            match tokens.next() {
+                Some((i, o, tok)) => {
+                    if lex::parse_real(tok).is_none() && !is_non_finite(tok) {
+                        errors.push(self.doc.error_at(
+                            i,
+                            o,
+                            format!("{keyword}: expected the {what} multiplier, found `{tok}`"),
+                        ));
+                    }
+                }
+                None => errors.push(self.doc.error_at(
+                    block.line,
+                    0,
+                    format!("{keyword}: the {what} multiplier is missing (`type realised final`)"),
+                )),
+            }
+        }
+    }
+
+    /// The load multiplier `keyword` (`$$SOLID_TRACTION`, …; checked when
+    /// the CPS was read), or the kernel's default `step 0 1` when absent.
+    pub fn multiplier(&self, keyword: &str) -> Multiplier {
+        let Some(kind) = self.get_token(keyword, 0) else {
+            return Multiplier::default();
+        };
+        let kind = match kind {
+            "linear" => MultiplierKind::Linear,
+            "off" => MultiplierKind::Off,
+            _ => MultiplierKind::Step,
+        };
+        let value = |i| self.get_real(keyword, i).unwrap_or(0.0);
+        if kind == MultiplierKind::Off {
+            return Multiplier {
+                kind,
+                realised: 0.0,
+                final_value: 0.0,
+            };
+        }
+        Multiplier {
+            kind,
+            realised: value(1),
+            final_value: value(2),
+        }
+    }
+
+    /// `$$NUMBER_OF_LOADSTEPS` (at least 1; 1 when absent) and
+    /// `$$TIME_PER_LOADSTEP` (s; the kernel's 0.5 when absent).
+    pub fn load_steps(&self) -> (usize, f64) {
+        let n = self
+            .get_real("$$NUMBER_OF_LOADSTEPS", 0)
+            .filter(|v| v.is_finite() && *v >= 1.0)
+            .map_or(1, |v| v as usize);
+        let t = self
+            .get_real("$$TIME_PER_LOADSTEP", 0)
+            .filter(|v| v.is_finite() && *v > 0.0)
+            .unwrap_or(0.5);
+        (n, t)
     }
 
     /// Token `index` of `keyword`, when the keyword is present, must be a real in `lo..=hi`.

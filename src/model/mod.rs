@@ -10,6 +10,7 @@
 
 mod fem;
 pub mod generate;
+pub mod loads;
 pub mod material;
 mod mesh;
 mod points;

@@ -30,6 +30,7 @@ pub mod grid;
 pub mod liquid;
 mod liquid_grid;
 pub mod loading;
+pub mod loads;
 pub mod material;
 mod mixed;
 pub mod mohr_coulomb;
@@ -177,6 +178,9 @@ pub struct RunSettings {
     /// Seepage faces and infiltration of partially saturated analyses
     /// ([`seepage`]); none by default.
     pub hydraulic: seepage::HydraulicBoundaries,
+    /// The GOM's distributed loads with the CPS's multipliers ([`loads`]);
+    /// none by default (gravity only).
+    pub loads: crate::model::loads::ProjectLoads,
 }
 
 impl RunSettings {
@@ -199,6 +203,7 @@ impl RunSettings {
             unsaturated_two_phase: true,
             element_smoothing: false,
             hydraulic: seepage::HydraulicBoundaries::default(),
+            loads: crate::model::loads::ProjectLoads::default(),
         }
     }
 

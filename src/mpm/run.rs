@@ -390,7 +390,7 @@ fn drive(
         final_pore_pressures: simulation.pore_pressures(),
         formulations: simulation.formulations(),
         hydraulic: simulation.hydraulic(),
-        notes: Vec::new(),
+        notes: simulation.notes(),
     };
     Ok(RunOutput { report, snapshots })
 }

@@ -62,6 +62,8 @@ pub(crate) trait Run {
     fn set_nodal_loads(&mut self, loads: &[(u32, [f64; 3])]) -> Result<(), MpmError>;
     fn formulations(&self) -> Vec<(u32, Formulation)>;
     fn hydraulic(&self) -> super::seepage::HydraulicBoundaries;
+    /// What the runner was asked to apply and did not (loads), and why.
+    fn notes(&self) -> Vec<String>;
 }
 
 impl<const D: usize, const NC: usize> Run for Solver<D, NC> {
@@ -133,6 +135,12 @@ impl<const D: usize, const NC: usize> Run for Solver<D, NC> {
     }
     fn hydraulic(&self) -> super::seepage::HydraulicBoundaries {
         self.surface_boundaries()
+    }
+    fn notes(&self) -> Vec<String> {
+        self.external
+            .as_ref()
+            .map(|e| e.notes.clone())
+            .unwrap_or_default()
     }
 }
 
@@ -314,6 +322,12 @@ impl Simulation {
     /// analysis is not partially saturated).
     pub fn hydraulic(&self) -> super::seepage::HydraulicBoundaries {
         self.inner.hydraulic()
+    }
+
+    /// What the runner was asked to apply and did not (GOM loads that reach
+    /// no node or MP, liquid loads without a two-phase material), and why.
+    pub fn notes(&self) -> Vec<String> {
+        self.inner.notes()
     }
 
     /// Constant external forces on mesh nodes (0-based node, force in kN per

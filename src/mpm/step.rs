@@ -43,6 +43,7 @@ use super::grid::Grid;
 use super::liquid::Water;
 use super::liquid_grid::{LiquidContribution, LiquidGrid, advective_flux};
 use super::loading::Analysis;
+use super::loads::ExternalLoads;
 use super::material::SolidModel;
 use super::mixed::ElementSums;
 use super::seepage::SurfaceFlow;
@@ -188,6 +189,11 @@ pub(crate) struct Solver<const D: usize, const NC: usize> {
     /// Seepage faces and infiltration ([`RunSettings::hydraulic`]), where
     /// the water of partially saturated MPs flows.
     surface: Option<SurfaceFlow<D>>,
+    /// The GOM's loads ([`RunSettings::loads`]).
+    pub external: Option<ExternalLoads<D>>,
+    /// This step's external nodal forces besides gravity: `node_load` plus
+    /// the solid loads at the step's multipliers.
+    load_now: Vec<[f64; D]>,
 }
 
 /// Runs `f` on every MP that is not lost and its output slot, in parallel; a
@@ -397,6 +403,25 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             .any(|p| matches!(p.water, Water::Coupled(c) if c.retention.is_some()));
         let surface = (partially_saturated && !settings.hydraulic.is_empty())
             .then(|| SurfaceFlow::new(settings.hydraulic.clone(), &grid, &model.mesh.nodes));
+        let external = (!settings.loads.is_empty()).then(|| {
+            // MP loads go to the MPs by their elements when the run starts.
+            let located: Vec<MaterialPoint> = points
+                .iter()
+                .zip(&particles)
+                .map(|(point, p)| MaterialPoint {
+                    element: p.element,
+                    ..*point
+                })
+                .collect();
+            ExternalLoads::new(
+                &settings.loads,
+                &grid,
+                &model.mesh,
+                &located,
+                axisymmetric,
+                coupled,
+            )
+        });
         Ok(Solver {
             grid,
             models,
@@ -427,6 +452,8 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             node_load: vec![[0.0; D]; n_nodes],
             element_sums,
             surface,
+            external,
+            load_now: vec![[0.0; D]; n_nodes],
         })
     }
 
@@ -529,6 +556,23 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             );
         }
 
+        // 1c. External loads at the multipliers of the step that ends at
+        // t + Δt (the kernel advances its clock first): solid ones beside
+        // the constant nodal loads, liquid ones on the liquid's force.
+        self.load_now.copy_from_slice(&self.node_load);
+        if let Some(external) = self.external.as_ref() {
+            let particles = &self.particles;
+            external.add::<NC>(
+                self.time + dt,
+                |mp| {
+                    let p = &particles[mp as usize];
+                    (!p.lost).then(|| (grid.elements[p.element as usize].corners, p.shape))
+                },
+                &mut self.load_now,
+                self.liquid.as_mut().map(|l| &mut l.force[..]),
+            );
+        }
+
         // 2. Nodal accelerations with local damping and fixities. Where the
         // liquid of coupled MPs is, the liquid's and the solid's are solved
         // together with the drag implicit in both velocities:
@@ -562,7 +606,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 } else {
                     self.node_momentum[node][d] / m
                 };
-                let external = self.node_weight[node] * self.gravity[d] + self.node_load[node][d];
+                let external = self.node_weight[node] * self.gravity[d] + self.load_now[node][d];
                 let unbalanced = external + self.node_force[node][d];
                 let damped = unbalanced - self.damping * unbalanced.abs() * sign(velocity);
                 let mut acceleration = damped / m;

@@ -109,9 +109,8 @@ fn causes(check: Option<&KernelCheck>, run: Option<&mpm::RunReport>) -> Vec<Stri
 
 /// Runs the equilibrium check on a loaded start (writes nothing).
 pub fn check(start: &Start, options: &VerifyOptions) -> Result<VerifyOutcome, PipelineError> {
-    let mut settings = options.settings(start.project.cps.as_ref());
-    let (hydraulic, notes) = runner::hydraulic(&start.project);
-    settings.hydraulic = hydraulic;
+    let (settings, notes) =
+        runner::with_project(options.settings(start.project.cps.as_ref()), &start.project);
     // A model the runner cannot simulate still gets its Anura3D-side checks
     // and start.csv; the verdict then says why no run was made.
     let mut run_error = None;
@@ -123,7 +122,7 @@ pub fn check(start: &Start, options: &VerifyOptions) -> Result<VerifyOutcome, Pi
             &settings,
         ) {
             Ok(mut r) => {
-                r.notes = notes;
+                r.notes.splice(0..0, notes);
                 Some(r)
             }
             Err(

@@ -494,7 +494,11 @@ fn srm_at(
     };
     let mapped = super::map::map(again, fem, &config)?;
     let mut settings = FosSettings::default();
-    settings.run = runner::with_cps(settings.run, project.cps.as_ref(), options.srm_damping);
+    settings.run = runner::with_project(
+        runner::with_cps(settings.run, project.cps.as_ref(), options.srm_damping),
+        &mapped.project,
+    )
+    .0;
     let report = strength_reduction(
         &mapped.project.model,
         &mapped.project.points,

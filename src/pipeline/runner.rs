@@ -42,8 +42,8 @@ pub fn with_cps(
 
 /// The seepage face and infiltration the project's CPS switches on
 /// (`$$APPLY_SEEPAGE_FACE 1`, `$$APPLY_INFILTRATION 1`) over its GOM's
-/// areas, and notes on what the runner does not apply: a hydraulic head from
-/// a file, and GOM loads (solid tractions, liquid pressures) the CPS switches on.
+/// areas, and notes on what the runner does not apply (a hydraulic head from
+/// a file).
 pub fn hydraulic(project: &super::Project) -> (mpm::seepage::HydraulicBoundaries, Vec<String>) {
     let mut notes = Vec::new();
     let Some(cps) = project.cps.as_ref() else {
@@ -70,16 +70,6 @@ pub fn hydraulic(project: &super::Project) -> (mpm::seepage::HydraulicBoundaries
             ),
         }
     }
-    for (block, multiplier) in crate::formats::gom::LOAD_BLOCKS {
-        let on = cps
-            .get_token(multiplier, 0)
-            .is_some_and(|t| !t.eq_ignore_ascii_case("off"));
-        if on && project.info.load_blocks.iter().any(|b| b == block) {
-            notes.push(format!(
-                "the GOM's {block} under the CPS's {multiplier}: this runner does not apply GOM loads, only gravity"
-            ));
-        }
-    }
     if cps
         .get_token("$$HYDRAULIC_HEAD", 0)
         .is_some_and(|t| t.eq_ignore_ascii_case("file"))
@@ -89,6 +79,39 @@ pub fn hydraulic(project: &super::Project) -> (mpm::seepage::HydraulicBoundaries
         );
     }
     (boundaries, notes)
+}
+
+/// `s` with what the project adds to gravity: its seepage face and
+/// infiltration ([`hydraulic`]) and its GOM loads ([`loads`]); with the notes
+/// on what the runner does not apply.
+pub fn with_project(mut s: RunSettings, project: &super::Project) -> (RunSettings, Vec<String>) {
+    let (hydraulic, notes) = hydraulic(project);
+    s.hydraulic = hydraulic;
+    s.loads = loads(project);
+    (s, notes)
+}
+
+/// The GOM's load blocks with the CPS's multipliers (`$$SOLID_TRACTION[_B]`,
+/// `$$LIQUID_PRESSURE[_B]`; the kernel's `step 0 1` where the CPS names
+/// none, and no loads without a CPS) and load-step timing.
+pub fn loads(project: &super::Project) -> crate::model::loads::ProjectLoads {
+    let Some(cps) = project.cps.as_ref() else {
+        return Default::default();
+    };
+    let (load_steps, step_time) = cps.load_steps();
+    crate::model::loads::ProjectLoads {
+        blocks: project.info.loads.clone(),
+        solid: [
+            cps.multiplier("$$SOLID_TRACTION"),
+            cps.multiplier("$$SOLID_TRACTION_B"),
+        ],
+        liquid: [
+            cps.multiplier("$$LIQUID_PRESSURE"),
+            cps.multiplier("$$LIQUID_PRESSURE_B"),
+        ],
+        load_steps,
+        step_time,
+    }
 }
 
 /// The runner's error as a pipeline error: an unsupported element or material

@@ -81,9 +81,10 @@ pub fn run(
     to: Destination<'_>,
 ) -> Result<RunOutcome, PipelineError> {
     let (reads, start, target) = runner::begin(source, to, "run")?;
-    let mut settings = options.settings(start.project.cps.as_ref())?;
-    let (hydraulic, notes) = runner::hydraulic(&start.project);
-    settings.hydraulic = hydraulic;
+    let (settings, notes) = runner::with_project(
+        options.settings(start.project.cps.as_ref())?,
+        &start.project,
+    );
     let dir = OutputDir::create(&target, to.replace, &reads)?;
     let mut output = mpm::run(
         &start.project.model,
@@ -92,7 +93,7 @@ pub fn run(
         &settings,
     )
     .map_err(runner::runner_error)?;
-    output.report.notes = notes;
+    output.report.notes.splice(0..0, notes);
     let json = serde_json::to_string_pretty(&output.report)
         .map_err(|e| PipelineError::Output(format!("run.json: {e}")))?;
     dir.write("run.json", |w| w.write_all(json.as_bytes()))?;

@@ -15,6 +15,7 @@ use std::path::Path;
 use super::error::{FormatError, ParseError};
 use super::keyword_doc::KeywordDocument;
 use super::lex;
+use crate::model::loads::{LoadBlock, LoadPhase, LoadTarget, SideLoad};
 use crate::model::{AnuraModel, Dimension, ElementType, Material, Mesh};
 
 /// Element types Anura3D's readers accept but a3d-init cannot place MPs in.
@@ -54,10 +55,10 @@ pub struct GomInfo {
     pub warnings: Vec<String>,
     /// The hydraulic boundary areas of partially saturated analyses.
     pub hydraulic: HydraulicAreas,
-    /// The load blocks present (`$$START_LOAD_ON_NODES_SOLID`, …), kept
-    /// verbatim; the CPS's `$$SOLID_TRACTION[_B]` / `$$LIQUID_PRESSURE[_B]`
-    /// scale them in Anura3D.
-    pub load_blocks: Vec<String>,
+    /// The load blocks present (`$$START_LOAD_ON_NODES_SOLID`, …), read as
+    /// the kernel reads them; the CPS's `$$SOLID_TRACTION[_B]` /
+    /// `$$LIQUID_PRESSURE[_B]` scale them in time.
+    pub loads: Vec<LoadBlock>,
 }
 
 /// The GOM's load blocks and the CPS multiplier that scales each.
@@ -80,6 +81,22 @@ pub const LOAD_BLOCKS: [(&str, &str); 8] = [
         "$$LIQUID_PRESSURE_B",
     ),
 ];
+
+/// The phase, target and load system (0 = A, 1 = B) of the load block
+/// `keyword` (one of [`LOAD_BLOCKS`]).
+fn load_kind(keyword: &str) -> (LoadPhase, LoadTarget, usize) {
+    let phase = if keyword.contains("LIQUID") {
+        LoadPhase::Liquid
+    } else {
+        LoadPhase::Solid
+    };
+    let target = if keyword.contains("MATERIAL_POINTS") {
+        LoadTarget::MaterialPoints
+    } else {
+        LoadTarget::Nodes
+    };
+    (phase, target, usize::from(keyword.ends_with("_B")))
+}
 
 /// The GOM's hydraulic boundary areas (`$$BOUNDARY_SEEPAGE_AREA`,
 /// `$$BOUNDARY_INFILTRATION_AREA` with `$$INFILTRATION_RATE`,
@@ -370,11 +387,14 @@ impl GomDocument {
             }
         }
 
-        info.load_blocks = LOAD_BLOCKS
-            .iter()
-            .filter(|(block, _)| self.block(block).is_some())
-            .map(|(block, _)| block.to_string())
-            .collect();
+        for (keyword, _) in LOAD_BLOCKS {
+            if let Some(b) = self.block(keyword) {
+                match self.read_load_block(b, keyword, dimension.n_dim(), n_nodes) {
+                    Ok(block) => info.loads.push(block),
+                    Err(e) => errors.push(e),
+                }
+            }
+        }
         match self.read_hydraulic(dimension.n_dim()) {
             Ok(h) => info.hydraulic = h,
             Err(e) => errors.push(e),
@@ -661,6 +681,107 @@ impl GomDocument {
             ));
         }
         Ok(())
+    }
+
+    /// A load block as the kernel reads it (`MeshInfo.FOR` 625-927): a count
+    /// of loaded sides, then per side its node ids (2 in 2D; 6 in 3D, the
+    /// three corners first) and the load at each node (n_dim values each).
+    /// Only the corners' values count. Node ids must exist; every number is
+    /// checked.
+    fn read_load_block(
+        &self,
+        b: usize,
+        keyword: &str,
+        n_dim: usize,
+        n_nodes: usize,
+    ) -> Result<LoadBlock, ParseError> {
+        let (phase, target, system) = load_kind(keyword);
+        let (ids_per_side, corners) = if n_dim == 3 { (6, 3) } else { (2, 2) };
+        let mut rows = self.rows(b);
+        let Some((cline, ctext)) = rows.next() else {
+            return Err(self.short_block(b, 1, 0, "count line"));
+        };
+        let mut count = [0u64];
+        lex::uints(ctext, &mut count).map_err(|_| {
+            self.doc.error_at(
+                cline,
+                0,
+                format!(
+                    "expected the number of loaded sides, found `{}`",
+                    ctext.trim()
+                ),
+            )
+        })?;
+        let count = count[0] as usize;
+        let mut sides = Vec::with_capacity(count.min(1 << 20));
+        let width = ids_per_side * (1 + n_dim);
+        let mut numbers = vec![0.0; width];
+        let layout = if n_dim == 3 {
+            "`c1 c2 c3 m12 m23 m31` and three values per node"
+        } else {
+            "`n1 n2 q1x q1y q2x q2y`"
+        };
+        for (i, line) in rows.by_ref().take(count) {
+            lex::reals(line, &mut numbers).map_err(|bad| {
+                self.numbers_error(
+                    i,
+                    bad,
+                    "a node id or a load value",
+                    line.len(),
+                    format!("{keyword}: expected {width} numbers per side, {layout}"),
+                )
+            })?;
+            let mut ids = Vec::with_capacity(corners);
+            for (k, &v) in numbers[..corners].iter().enumerate() {
+                let offset = lex::tokens(line).nth(k).map_or(0, |(o, _)| o);
+                if v.fract() != 0.0 || v < 1.0 || v > n_nodes as f64 {
+                    return Err(self.doc.error_at(
+                        i,
+                        offset,
+                        format!("{keyword}: node id {v} is out of range 1..={n_nodes}"),
+                    ));
+                }
+                ids.push(v as u32 - 1);
+            }
+            for k in corners..ids_per_side {
+                let v = numbers[k];
+                if v.fract() != 0.0 || v < 1.0 || v > n_nodes as f64 {
+                    let offset = lex::tokens(line).nth(k).map_or(0, |(o, _)| o);
+                    return Err(self.doc.error_at(
+                        i,
+                        offset,
+                        format!("{keyword}: node id {v} is out of range 1..={n_nodes}"),
+                    ));
+                }
+            }
+            let values = (0..corners)
+                .map(|k| {
+                    let mut q = [0.0; 3];
+                    q[..n_dim].copy_from_slice(
+                        &numbers[ids_per_side + k * n_dim..ids_per_side + (k + 1) * n_dim],
+                    );
+                    q
+                })
+                .collect();
+            sides.push(SideLoad {
+                corners: ids,
+                values,
+                line: i as u32 + 1,
+            });
+        }
+        if sides.len() < count {
+            return Err(self.short_block(b, count, sides.len(), "loaded sides"));
+        }
+        if let Some((i, _)) = rows.next() {
+            return Err(self.extra_row(b, i, count, "loaded sides"));
+        }
+        Ok(LoadBlock {
+            keyword: keyword.to_string(),
+            phase,
+            target,
+            system,
+            sides,
+        })
     }
 
     fn read_element_materials(

@@ -1,0 +1,149 @@
+//! GOM loads (#27): solid tractions and liquid pressures on nodes and on
+//! material points, scaled by the CPS multipliers, against closed forms and
+//! against the real Anura3D kernel run on the same project.
+
+mod common;
+use common::anura3d_kernel_or_skip;
+use common::kernel_run::vtk_vectors;
+
+use a3d_init::model::MpState;
+use a3d_init::mpm::{RunSettings, Simulation};
+use a3d_init::pipeline::{Project, runner};
+
+/// `test-1001` (a 0.1 m wide column of 20 TRI3 elements with 3 MPs each
+/// under two empty ones; a −20 kPa vertical traction on the side between
+/// them) run as MPM-MP with a stiffer soil (E = 10 MPa, so that strains
+/// stay small), its load block named `block`, and `material` in place of
+/// its dry material when given.
+fn column_project(block: &str, material: Option<&str>, extra: &str) -> (String, String) {
+    let dir = common::fixture("anura3d/test-1001");
+    let gom = std::fs::read_to_string(dir.join("test-1001.GOM")).unwrap();
+    let cps = std::fs::read_to_string(dir.join("test-1001.CPS_001")).unwrap();
+    let mut gom = gom
+        .replace("$$START_LOAD_ON_NODES_SOLID\n", &format!("{block}\n"))
+        .replace("$$YOUNG_MODULUS\n100\n", "$$YOUNG_MODULUS\n10000\n");
+    if let Some(m) = material {
+        let start = gom.find("$$MATERIAL_TYPE").unwrap();
+        let end = gom.find("$$K0_VALUE_SOLID").unwrap();
+        gom.replace_range(start..end, m);
+    }
+    gom = gom.replace(
+        "$$NUMBER_OF_MATERIALS",
+        &format!("{extra}$$NUMBER_OF_MATERIALS"),
+    );
+    let cps = cps.replace("$$COMPUTATION_METHOD\nFEM", "$$COMPUTATION_METHOD\nMPM-MP");
+    (gom, cps)
+}
+
+const COUPLED: &str = "$$MATERIAL_TYPE\nsaturated_material_coupled\n$$POROSITY_SOLID\n0.3\n\
+$$DENSITY_SOLID\n2600\n$$DENSITY_LIQUID\n1000\n$$INTRINSIC_PERMEABILITY_LIQUID\n1e-10\n\
+$$BULK_MODULUS_LIQUID\n100000\n$$DYNAMIC_VISCOSITY_LIQUID\n1e-6\n";
+
+/// Writes the project as `slope.*` into `dir` and loads it.
+fn write_project(dir: &std::path::Path, gom: &str, cps: &str) -> Project {
+    std::fs::create_dir_all(dir).unwrap();
+    std::fs::write(dir.join("slope.GOM"), gom).unwrap();
+    std::fs::write(dir.join("slope.CPS_001"), cps).unwrap();
+    Project::load(&dir.join("slope.GOM")).unwrap()
+}
+
+/// Runs the project undamped and without gravity (the CPS's
+/// `$$GRAVITY_LOAD off`) for `time` s from rest; the MPs' displacements and
+/// pore pressures.
+fn run_ours(project: &Project, time: f64) -> (Vec<[f64; 3]>, Vec<f64>, Vec<String>) {
+    let states = vec![
+        MpState {
+            pwp: 0.0,
+            total: [0.0; 6],
+            saturation: 1.0,
+        };
+        project.points.len()
+    ];
+    let base = runner::with_cps(RunSettings::dynamic(time), project.cps.as_ref(), None);
+    let (mut settings, _) = runner::with_project(base, project);
+    settings.gravity = 0.0;
+    let mut sim = Simulation::new(&project.model, &project.points, &states, &settings).unwrap();
+    while sim.time() < time - 0.5 * sim.time_step() {
+        sim.step();
+    }
+    (sim.displacements(), sim.pore_pressures(), sim.notes())
+}
+
+/// The CPS with `$$TIME_PER_LOADSTEP` `time`, local damping `alpha` and no
+/// quasi-static stop.
+fn timed(cps: &str, time: f64, alpha: f64) -> String {
+    let edited = common::kernel_run::edit_cps(cps, time);
+    edited.replace(
+        "$$HOMOGENEOUS_LOCAL_DAMPING\n0 0.0",
+        &format!("$$HOMOGENEOUS_LOCAL_DAMPING\n1 {alpha}"),
+    )
+}
+
+/// Runs the kernel on the project in `dir` (`slope.*`); its MP VTK.
+fn run_anura3d(kernel: &std::path::Path, dir: &std::path::Path) -> std::path::PathBuf {
+    let status = std::process::Command::new(kernel)
+        .arg("slope")
+        .current_dir(dir)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .status()
+        .unwrap();
+    let vtk = dir.join("slope_MPVector_001.vtk");
+    assert!(
+        status.success() || vtk.is_file(),
+        "the kernel failed in {}",
+        dir.display()
+    );
+    vtk
+}
+
+/// The largest vertical displacement magnitude.
+fn largest(u: &[[f64; 3]]) -> f64 {
+    u.iter().map(|v| v[1].abs()).fold(0.0, f64::max)
+}
+
+#[test]
+#[allow(clippy::print_stderr)] // the measured values belong in the test output
+fn solid_loads_on_nodes_and_on_mps_move_the_column_as_the_kernel_does() {
+    let Some(kernel) = anura3d_kernel_or_skip("solid_loads_on_nodes_and_on_mps") else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    // M = E(1 − ν)/((1 + ν)(1 − 2ν)) with E = 1e4 kPa, ν = 0.2; q = 20 kPa
+    // over H = 1 m: the static settlement of the top q·H/M.
+    let static_top = 20.0 * 1.0 / (1e4 * 0.8 / (1.2 * 0.6));
+    for block in [
+        "$$START_LOAD_ON_NODES_SOLID",
+        "$$START_LOAD_ON_MATERIAL_POINTS_SOLID",
+    ] {
+        let (gom, cps) = column_project(block, None, "");
+        for (time, alpha) in [(0.01, 0.0), (0.5, 0.75)] {
+            let dir = tmp.path().join(format!("{}-{alpha}", &block[15..]));
+            let project = write_project(&dir, &gom, &timed(&cps, time, alpha));
+            let (ours, _, notes) = run_ours(&project, time);
+            assert!(notes.is_empty(), "{notes:?}");
+            let theirs = vtk_vectors(&run_anura3d(&kernel, &dir), "displacement_solid");
+            let (a, b) = (largest(&ours), largest(&theirs));
+            eprintln!(
+                "{block}, {time} s, α = {alpha}: largest settlement {a:.5e} m (kernel {b:.5e} m, static {static_top:.5e} m)"
+            );
+            assert!(b > 1e-4, "the load moved nothing in the kernel");
+            assert!((a - b).abs() < 0.02 * b, "{block}: {a:e} m against {b:e} m");
+            if alpha > 0.0 && block.contains("NODES") {
+                // At rest under a nodal load the top MP (at height y above
+                // the fixed base) has settled q·y/M.
+                let y = project
+                    .points
+                    .iter()
+                    .map(|p| p.position[1])
+                    .fold(0.0, f64::max);
+                let exact = static_top * y;
+                eprintln!("  closed form at the top MP (y = {y:.4} m): {exact:.5e} m");
+                assert!(
+                    (a - exact).abs() < 0.005 * exact,
+                    "{a:e} m against q·y/M = {exact:e} m"
+                );
+            }
+        }
+    }
+}
