@@ -4,7 +4,7 @@
 
 mod common;
 use common::anura3d_kernel_or_skip;
-use common::kernel_run::vtk_vectors;
+use common::kernel_run::{vtk_scalars, vtk_vectors};
 
 use a3d_init::model::MpState;
 use a3d_init::mpm::{RunSettings, Simulation};
@@ -31,12 +31,14 @@ fn column_project(block: &str, material: Option<&str>, extra: &str) -> (String, 
         "$$NUMBER_OF_MATERIALS",
         &format!("{extra}$$NUMBER_OF_MATERIALS"),
     );
-    let cps = cps.replace("$$COMPUTATION_METHOD\nFEM", "$$COMPUTATION_METHOD\nMPM-MP");
+    let cps = cps
+        .replace("$$COMPUTATION_METHOD\nFEM", "$$COMPUTATION_METHOD\nMPM-MP")
+        .replace("$$LIQUID_PRESSURE\noff", "$$LIQUID_PRESSURE\nstep");
     (gom, cps)
 }
 
 const COUPLED: &str = "$$MATERIAL_TYPE\nsaturated_material_coupled\n$$POROSITY_SOLID\n0.3\n\
-$$DENSITY_SOLID\n2600\n$$DENSITY_LIQUID\n1000\n$$INTRINSIC_PERMEABILITY_LIQUID\n1e-10\n\
+$$DENSITY_SOLID\n2600\n$$DENSITY_LIQUID\n1000\n$$INTRINSIC_PERMEABILITY_LIQUID\n1e-8\n\
 $$BULK_MODULUS_LIQUID\n100000\n$$DYNAMIC_VISCOSITY_LIQUID\n1e-6\n";
 
 /// Writes the project as `slope.*` into `dir` and loads it.
@@ -47,10 +49,14 @@ fn write_project(dir: &std::path::Path, gom: &str, cps: &str) -> Project {
     Project::load(&dir.join("slope.GOM")).unwrap()
 }
 
-/// Runs the project undamped and without gravity (the CPS's
+/// Runs the project with the CPS's damping and without gravity (the CPS's
 /// `$$GRAVITY_LOAD off`) for `time` s from rest; the MPs' displacements and
 /// pore pressures.
-fn run_ours(project: &Project, time: f64) -> (Vec<[f64; 3]>, Vec<f64>, Vec<String>) {
+fn run_ours(
+    project: &Project,
+    time: f64,
+    dt: Option<f64>,
+) -> (Vec<[f64; 3]>, Vec<f64>, Vec<String>) {
     let states = vec![
         MpState {
             pwp: 0.0,
@@ -63,6 +69,11 @@ fn run_ours(project: &Project, time: f64) -> (Vec<[f64; 3]>, Vec<f64>, Vec<Strin
     let (mut settings, _) = runner::with_project(base, project);
     settings.gravity = 0.0;
     let mut sim = Simulation::new(&project.model, &project.points, &states, &settings).unwrap();
+    if let Some(dt) = dt {
+        // The same Δt as the kernel's: scale the Courant number.
+        settings.courant *= dt / sim.time_step();
+        sim = Simulation::new(&project.model, &project.points, &states, &settings).unwrap();
+    }
     while sim.time() < time - 0.5 * sim.time_step() {
         sim.step();
     }
@@ -120,7 +131,7 @@ fn solid_loads_on_nodes_and_on_mps_move_the_column_as_the_kernel_does() {
         for (time, alpha) in [(0.01, 0.0), (0.5, 0.75)] {
             let dir = tmp.path().join(format!("{}-{alpha}", &block[15..]));
             let project = write_project(&dir, &gom, &timed(&cps, time, alpha));
-            let (ours, _, notes) = run_ours(&project, time);
+            let (ours, _, notes) = run_ours(&project, time, None);
             assert!(notes.is_empty(), "{notes:?}");
             let theirs = vtk_vectors(&run_anura3d(&kernel, &dir), "displacement_solid");
             let (a, b) = (largest(&ours), largest(&theirs));
@@ -145,5 +156,137 @@ fn solid_loads_on_nodes_and_on_mps_move_the_column_as_the_kernel_does() {
                 );
             }
         }
+    }
+}
+
+#[test]
+#[allow(clippy::print_stderr)] // the measured values belong in the test output
+fn liquid_pressures_on_nodes_and_on_mps_load_the_water_as_the_kernel_does() {
+    let Some(kernel) = anura3d_kernel_or_skip("liquid_pressures_on_nodes_and_on_mps") else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    // The same column, coupled (n = 0.3, K_w = 1e5 kPa, k = 0.1 m/s, so that
+    // the drag relaxes slower than a time step and the kernel's explicit drag
+    // and this runner's implicit one agree): a
+    // −20 kPa liquid pressure on the side above it instead of the traction,
+    // on nodes (along the normal out of the soil: it compresses the water)
+    // and on MPs (along the normal as the side's node order gives it, here
+    // pointing into the soil: it pulls).
+    for block in [
+        "$$START_LOAD_ON_NODES_LIQUID",
+        "$$START_LOAD_ON_MATERIAL_POINTS_LIQUID",
+    ] {
+        let (gom, cps) = column_project(block, Some(COUPLED), "");
+        // A liquid load is its first value at each node.
+        let gom = gom.replace(
+            "4 3            0          -20            0          -20",
+            "4 3 -20 -20 -20 -20",
+        );
+        let time = 0.004;
+        let dir = tmp.path().join(&block[15..]);
+        let project = write_project(&dir, &gom, &timed(&cps, time, 0.0));
+        let vtk = run_anura3d(&kernel, &dir);
+        // The kernel's Δt comes from its two-phase critical step (Mieremet's);
+        // the comparison runs both codes with the same Δt.
+        let out =
+            String::from_utf8_lossy(&std::fs::read(dir.join("slope.OUT")).unwrap()).into_owned();
+        let dt: f64 = out
+            .lines()
+            .find_map(|l| l.trim().strip_prefix("TimeIncrement:"))
+            .and_then(|v| v.trim().parse().ok())
+            .expect("the kernel's TimeIncrement in slope.OUT");
+        let (ours, p_ours, notes) = run_ours(&project, time, Some(dt));
+        assert!(notes.is_empty(), "{notes:?}");
+        let theirs = vtk_vectors(&vtk, "displacement_solid");
+        let p_theirs = vtk_scalars(
+            &vtk.with_file_name("slope_MPScalar_001.vtk"),
+            "pressure_liquid",
+        );
+        let (a, b) = (largest(&ours), largest(&theirs));
+        let pa = p_ours.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let pb = p_theirs.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
+        let signed = |p: &[f64]| p.iter().sum::<f64>() / p.len() as f64;
+        eprintln!(
+            "{block}: largest displacement {a:.4e} m (kernel {b:.4e} m), largest |p| {pa:.4} kPa (kernel {pb:.4} kPa), mean p {:.4} kPa (kernel {:.4} kPa)",
+            signed(&p_ours),
+            signed(&p_theirs)
+        );
+        assert!(pb > 1.0, "the load moved no water in the kernel");
+        assert!((a - b).abs() < 0.02 * b, "{block}: {a:e} m against {b:e} m");
+        assert!(
+            (pa - pb).abs() < 0.02 * pb,
+            "{block}: |p| {pa} against {pb} kPa"
+        );
+        assert!(
+            (signed(&p_ours) - signed(&p_theirs)).abs() < 0.02 * pb,
+            "{block}: mean p apart"
+        );
+    }
+}
+
+/// A bad load block or multiplier is an error at its line and column, as
+/// every GOM and CPS value is.
+#[test]
+fn bad_load_blocks_and_multipliers_are_errors_at_their_place() {
+    use a3d_init::formats::cps::CpsDocument;
+    use a3d_init::formats::gom::GomDocument;
+    let (gom, cps) = column_project("$$START_LOAD_ON_NODES_SOLID", None, "");
+    let side = "4 3            0          -20            0          -20";
+    let line = gom.lines().position(|l| l == side).unwrap() + 1;
+    let path = std::path::Path::new("column.GOM");
+    for (bad, column, words) in [
+        ("4 99 0 -20 0 -20", 3, "node id 99 is out of range 1..=24"),
+        ("4 3 0 -20 0", 12, "expected 6 numbers per side"),
+        (
+            "4 3 0 -2x 0 -20",
+            7,
+            "expected a node id or a load value, found `-2x`",
+        ),
+    ] {
+        let text = gom.replacen(side, bad, 1);
+        let err = GomDocument::parse(path, text).unwrap().model().unwrap_err();
+        let message = err.to_string();
+        assert!(
+            message.contains(&format!("column.GOM:{line}:{column}:")) && message.contains(words),
+            "{bad}: {message}"
+        );
+    }
+    let text = gom.replacen(
+        &format!("SOLID\n1\n{side}"),
+        &format!("SOLID\n2\n{side}"),
+        1,
+    );
+    let message = GomDocument::parse(path, text)
+        .unwrap()
+        .model()
+        .unwrap_err()
+        .to_string();
+    assert!(
+        message.contains("expects 2 loaded sides, found 1"),
+        "{message}"
+    );
+
+    let cps_path = std::path::Path::new("column.CPS_001");
+    let line = cps.lines().position(|l| l == "$$SOLID_TRACTION").unwrap() + 2;
+    for (bad, column, words) in [
+        (
+            "ramp 0.0 1.0",
+            1,
+            "load type `ramp` must be `linear`, `step` or `off`",
+        ),
+        ("step 0.0 x", 10, "expected the final multiplier, found `x`"),
+    ] {
+        let text = cps.replacen(
+            "$$SOLID_TRACTION\nstep  0.0  1.0",
+            &format!("$$SOLID_TRACTION\n{bad}"),
+            1,
+        );
+        let message = CpsDocument::parse(cps_path, text).unwrap_err().to_string();
+        assert!(
+            message.contains(&format!("column.CPS_001:{line}:{column}:"))
+                && message.contains(words),
+            "{bad}: {message}"
+        );
     }
 }

@@ -768,20 +768,25 @@ fn hydraulic_areas_are_read_from_the_gom() {
     );
 }
 
-/// What the runner does not apply is said, not dropped: GOM loads the CPS
-/// switches on (test-1001: nodal solid loads under `$$SOLID_TRACTION step`)
-/// and a hydraulic head from a file.
+/// What the runner does not apply is said, not dropped (a hydraulic head
+/// from a file); the GOM loads the CPS switches on (test-1001: nodal solid
+/// loads under `$$SOLID_TRACTION step`) are applied, not noted.
 #[test]
-fn loads_and_heads_the_runner_does_not_apply_are_noted() {
+fn heads_the_runner_does_not_apply_are_noted() {
     use a3d_init::pipeline::{Project, runner};
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/anura3d/test-1001");
     let mut project = Project::load(&dir).unwrap();
     let (boundaries, notes) = runner::hydraulic(&project);
     assert!(boundaries.is_empty());
-    assert_eq!(notes.len(), 1, "{notes:?}");
-    assert!(
-        notes[0].contains("$$START_LOAD_ON_NODES_SOLID") && notes[0].contains("$$SOLID_TRACTION"),
-        "{notes:?}"
+    assert!(notes.is_empty(), "{notes:?}");
+    let loads = runner::loads(&project);
+    assert_eq!(loads.blocks.len(), 1);
+    assert_eq!(loads.blocks[0].keyword, "$$START_LOAD_ON_NODES_SOLID");
+    assert_eq!(loads.blocks[0].sides[0].corners, vec![3, 2]);
+    assert_eq!(loads.blocks[0].sides[0].values[1], [0.0, -20.0, 0.0]);
+    assert_eq!(
+        loads.multiplier(a3d_init::model::loads::LoadPhase::Solid, 0, 0.05),
+        1.0
     );
     let cps = project.cps.as_ref().unwrap().to_text();
     let cps = cps.replacen(
@@ -793,7 +798,7 @@ fn loads_and_heads_the_runner_does_not_apply_are_noted() {
         a3d_init::formats::cps::CpsDocument::parse(&dir.join("test-1001.CPS_001"), cps).unwrap(),
     );
     let (_, notes) = runner::hydraulic(&project);
-    assert_eq!(notes.len(), 3, "{notes:?}");
+    assert_eq!(notes.len(), 2, "{notes:?}");
     assert!(notes.iter().any(|n| n.contains("$$HYDRAULIC_HEAD file")));
     assert!(notes.iter().any(|n| n.contains("$$BOUNDARY_SEEPAGE_AREA")));
 }
