@@ -290,3 +290,43 @@ fn bad_load_blocks_and_multipliers_are_errors_at_their_place() {
         );
     }
 }
+
+#[test]
+#[allow(clippy::print_stderr)] // the measured values belong in the test output
+fn face_loads_in_3d_move_the_column_as_the_kernel_does() {
+    let Some(kernel) = anura3d_kernel_or_skip("face_loads_in_3d") else {
+        return;
+    };
+    // test-1005_3D: 60 tetrahedral_old elements with 4 MPs each under six
+    // empty ones, a −20 kPa vertical traction on the MPs next to the two
+    // faces between them; stiffened as above, run as MPM-MP, and the same
+    // load put on the faces' nodes.
+    let dir = common::fixture("anura3d/test-1005_3D");
+    let gom = std::fs::read_to_string(dir.join("test-1005_3D.GOM"))
+        .unwrap()
+        .replace("$$YOUNG_MODULUS\n100\n", "$$YOUNG_MODULUS\n10000\n");
+    let cps = std::fs::read_to_string(dir.join("test-1005_3D.CPS_001")).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    for block in [
+        "$$START_LOAD_ON_MATERIAL_POINTS_SOLID",
+        "$$START_LOAD_ON_NODES_SOLID",
+    ] {
+        let gom = gom.replace(
+            "$$START_LOAD_ON_MATERIAL_POINTS_SOLID\n",
+            &format!("{block}\n"),
+        );
+        for (time, alpha) in [(0.01, 0.0), (0.5, 0.75)] {
+            let dir = tmp.path().join(format!("{}-{alpha}", &block[15..]));
+            let project = write_project(&dir, &gom, &timed(&cps, time, alpha));
+            let (ours, _, notes) = run_ours(&project, time, None);
+            assert!(notes.is_empty(), "{notes:?}");
+            let theirs = vtk_vectors(&run_anura3d(&kernel, &dir), "displacement_solid");
+            let (a, b) = (largest(&ours), largest(&theirs));
+            eprintln!(
+                "3D {block}, {time} s, α = {alpha}: largest settlement {a:.5e} m (kernel {b:.5e} m)"
+            );
+            assert!(b > 1e-4, "the load moved nothing in the kernel");
+            assert!((a - b).abs() < 0.02 * b, "{block}: {a:e} m against {b:e} m");
+        }
+    }
+}

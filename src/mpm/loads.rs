@@ -145,11 +145,14 @@ fn side_corners(dim: usize) -> &'static [&'static [usize]] {
     }
 }
 
+/// A block's nodal forces at multiplier 1: its phase, load system and
+/// (grid node, force) pairs.
+type NodalForces<const D: usize> = (LoadPhase, usize, Vec<(u32, [f64; D])>);
+
 /// The loads of a run, built for its grid and MPs.
 pub(crate) struct ExternalLoads<const D: usize> {
     loads: ProjectLoads,
-    /// (phase, system) → nodal forces (compact node, force) at multiplier 1.
-    nodal: Vec<(LoadPhase, usize, Vec<(u32, [f64; D])>)>,
+    nodal: Vec<NodalForces<D>>,
     /// (phase, system, MP index, force at multiplier 1).
     on_mps: Vec<(LoadPhase, usize, u32, [f64; D])>,
     /// What was not applied, and why.

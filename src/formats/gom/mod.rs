@@ -732,19 +732,7 @@ impl GomDocument {
                 )
             })?;
             let mut ids = Vec::with_capacity(corners);
-            for (k, &v) in numbers[..corners].iter().enumerate() {
-                let offset = lex::tokens(line).nth(k).map_or(0, |(o, _)| o);
-                if v.fract() != 0.0 || v < 1.0 || v > n_nodes as f64 {
-                    return Err(self.doc.error_at(
-                        i,
-                        offset,
-                        format!("{keyword}: node id {v} is out of range 1..={n_nodes}"),
-                    ));
-                }
-                ids.push(v as u32 - 1);
-            }
-            for k in corners..ids_per_side {
-                let v = numbers[k];
+            for (k, &v) in numbers[..ids_per_side].iter().enumerate() {
                 if v.fract() != 0.0 || v < 1.0 || v > n_nodes as f64 {
                     let offset = lex::tokens(line).nth(k).map_or(0, |(o, _)| o);
                     return Err(self.doc.error_at(
@@ -752,6 +740,10 @@ impl GomDocument {
                         offset,
                         format!("{keyword}: node id {v} is out of range 1..={n_nodes}"),
                     ));
+                }
+                // The corners come first; mid-side nodes are only checked.
+                if k < corners {
+                    ids.push(v as u32 - 1);
                 }
             }
             let values = (0..corners)
