@@ -249,8 +249,7 @@ impl<const D: usize> ExternalLoads<D> {
                     skipped.push(side.line);
                     continue;
                 };
-                let x: Vec<[f64; D]> = side.corners.iter().map(|&n| coords(n)).collect();
-                let (mut normal, measure) = side_geometry(&x);
+                let mut at = Side::new(side, side.corners.iter().map(|&n| coords(n)).collect());
                 // The elements (grid indices, ascending) that hold every corner.
                 let holders: Vec<usize> = by_node
                     .get(&grid_nodes[0])
@@ -278,10 +277,11 @@ impl<const D: usize> ExternalLoads<D> {
                                         continue;
                                     }
                                     let other = coords(grid.mesh_node[c as usize]);
-                                    let dot: f64 =
-                                        (0..D).map(|d| (other[d] - x[0][d]) * normal[d]).sum();
+                                    let dot: f64 = (0..D)
+                                        .map(|d| (other[d] - at.x[0][d]) * at.normal[d])
+                                        .sum();
                                     if dot > 0.0 {
-                                        normal.iter_mut().for_each(|v| *v = -*v);
+                                        at.normal.iter_mut().for_each(|v| *v = -*v);
                                         break;
                                     } else if dot < 0.0 {
                                         break;
@@ -289,8 +289,7 @@ impl<const D: usize> ExternalLoads<D> {
                                 }
                             }
                         }
-                        let forces =
-                            nodal_forces(side, &x, normal, measure, block.phase, axisymmetric);
+                        let forces = at.nodal_forces(block.phase, axisymmetric);
                         for (k, f) in forces.into_iter().enumerate() {
                             nodal.push((grid_nodes[k], f));
                         }
@@ -303,8 +302,7 @@ impl<const D: usize> ExternalLoads<D> {
                         if !applied {
                             continue;
                         }
-                        let total =
-                            mp_side_total(side, &x, normal, measure, block.phase, axisymmetric);
+                        let total = at.total(block.phase, axisymmetric);
                         let mut reached = false;
                         for &e in holders.iter().filter(|&&e| active(e)) {
                             let Some(side_number) = element_side(grid, e, &grid_nodes) else {
@@ -419,81 +417,92 @@ fn element_side<const D: usize, const NC: usize>(
     })
 }
 
-/// Consistent nodal forces of one side at multiplier 1 (`Load2D`/`Load3D`
-/// with one integration point).
-fn nodal_forces<const D: usize>(
-    side: &SideLoad,
-    x: &[[f64; D]],
+/// One loaded side where the run places it: its load, corner coordinates,
+/// unit normal (turned as the caller decided) and measure.
+struct Side<'a, const D: usize> {
+    load: &'a SideLoad,
+    x: Vec<[f64; D]>,
     normal: [f64; D],
     measure: f64,
-    phase: LoadPhase,
-    axisymmetric: bool,
-) -> Vec<[f64; D]> {
-    let n = x.len();
-    let traction = |k: usize| {
-        let mut t = [0.0; D];
-        for d in 0..D {
-            t[d] = match phase {
-                LoadPhase::Solid => side.values[k][d],
-                LoadPhase::Liquid => side.values[k][0] * normal[d],
-            };
-        }
-        t
-    };
-    let radius = |k: usize| if axisymmetric { x[k][0] } else { 1.0 };
-    let mut mean = [0.0; D];
-    for k in 0..n {
-        let t = traction(k);
-        for d in 0..D {
-            mean[d] += t[d] * radius(k) / n as f64;
+}
+
+impl<'a, const D: usize> Side<'a, D> {
+    /// The side `load` at the corner coordinates `x`, with the normal its
+    /// node order gives ([`side_geometry`]).
+    fn new(load: &'a SideLoad, x: Vec<[f64; D]>) -> Side<'a, D> {
+        let (normal, measure) = side_geometry(&x);
+        Side {
+            load,
+            x,
+            normal,
+            measure,
         }
     }
-    let mut forces = vec![[0.0; D]; n];
-    for k in 0..n {
-        for d in 0..D {
-            forces[k][d] = measure / n as f64 * mean[d];
+
+    /// Consistent nodal forces of one side at multiplier 1 (`Load2D`/`Load3D`
+    /// with one integration point).
+    fn nodal_forces(&self, phase: LoadPhase, axisymmetric: bool) -> Vec<[f64; D]> {
+        let (side, x, normal, measure) = (self.load, &self.x, self.normal, self.measure);
+        let n = x.len();
+        let traction = |k: usize| {
+            let mut t = [0.0; D];
+            for d in 0..D {
+                t[d] = match phase {
+                    LoadPhase::Solid => side.values[k][d],
+                    LoadPhase::Liquid => side.values[k][0] * normal[d],
+                };
+            }
+            t
+        };
+        let radius = |k: usize| if axisymmetric { x[k][0] } else { 1.0 };
+        let mut mean = [0.0; D];
+        for k in 0..n {
+            let t = traction(k);
+            for d in 0..D {
+                mean[d] += t[d] * radius(k) / n as f64;
+            }
         }
-    }
-    if axisymmetric && let Some(on_axis) = (0..n).find(|&k| x[k][0] < 1e-60) {
-        // `Load2D`: the corner on the axis gives 7/8 of its share to the other.
-        let moved = forces[on_axis];
+        let mut forces = vec![[0.0; D]; n];
         for k in 0..n {
             for d in 0..D {
-                let shift = moved[d] / (n - 1) as f64 * (7.0 / 8.0);
-                if x[k][0] < 1e-60 {
-                    forces[k][d] -= shift;
-                } else {
-                    forces[k][d] += shift;
+                forces[k][d] = measure / n as f64 * mean[d];
+            }
+        }
+        if axisymmetric && let Some(on_axis) = (0..n).find(|&k| x[k][0] < 1e-60) {
+            // `Load2D`: the corner on the axis gives 7/8 of its share to the other.
+            let moved = forces[on_axis];
+            for k in 0..n {
+                for d in 0..D {
+                    let shift = moved[d] / (n - 1) as f64 * (7.0 / 8.0);
+                    if x[k][0] < 1e-60 {
+                        forces[k][d] -= shift;
+                    } else {
+                        forces[k][d] += shift;
+                    }
                 }
             }
         }
+        forces
     }
-    forces
-}
 
-/// The total force of an MP load's side at multiplier 1
-/// (`DetermineLoadPerParticle` × the number of loaded MPs).
-fn mp_side_total<const D: usize>(
-    side: &SideLoad,
-    x: &[[f64; D]],
-    normal: [f64; D],
-    measure: f64,
-    phase: LoadPhase,
-    axisymmetric: bool,
-) -> [f64; D] {
-    let n = x.len();
-    let mut total = [0.0; D];
-    for k in 0..n {
-        let radius = if axisymmetric { x[k][0] } else { 1.0 };
-        for d in 0..D {
-            let v = match phase {
-                LoadPhase::Solid => side.values[k][d],
-                LoadPhase::Liquid => side.values[k][d] * normal[d],
-            };
-            total[d] += v * radius / n as f64 * measure;
+    /// The total force of an MP load's side at multiplier 1
+    /// (`DetermineLoadPerParticle` × the number of loaded MPs).
+    fn total(&self, phase: LoadPhase, axisymmetric: bool) -> [f64; D] {
+        let (side, x, normal, measure) = (self.load, &self.x, self.normal, self.measure);
+        let n = x.len();
+        let mut total = [0.0; D];
+        for k in 0..n {
+            let radius = if axisymmetric { x[k][0] } else { 1.0 };
+            for d in 0..D {
+                let v = match phase {
+                    LoadPhase::Solid => side.values[k][d],
+                    LoadPhase::Liquid => side.values[k][d] * normal[d],
+                };
+                total[d] += v * radius / n as f64 * measure;
+            }
         }
+        total
     }
-    total
 }
 
 #[cfg(test)]
@@ -524,9 +533,8 @@ mod tests {
             values: vec![[0.0, -20.0, 0.0], [0.0, -20.0, 0.0]],
             line: 1,
         };
-        let x = [[0.0, 1.0], [0.1, 1.0]];
-        let (normal, measure) = side_geometry(&x);
-        let f = nodal_forces(&side, &x, normal, measure, LoadPhase::Solid, false);
+        let x = vec![[0.0, 1.0], [0.1, 1.0]];
+        let f = Side::new(&side, x.clone()).nodal_forces(LoadPhase::Solid, false);
         assert!((f[0][1] + 1.0).abs() < 1e-12 && (f[1][1] + 1.0).abs() < 1e-12);
         // A liquid pressure acts along the normal only: −10 kPa on the left
         // normal (0, 1) of 0 → 1.
@@ -534,7 +542,7 @@ mod tests {
             values: vec![[-10.0, 99.0, 0.0], [-10.0, 99.0, 0.0]],
             ..side
         };
-        let f = nodal_forces(&side, &x, normal, measure, LoadPhase::Liquid, false);
+        let f = Side::new(&side, x).nodal_forces(LoadPhase::Liquid, false);
         assert!(f[0][0].abs() < 1e-12 && (f[0][1] + 0.5).abs() < 1e-12);
     }
 
@@ -545,11 +553,13 @@ mod tests {
             values: vec![[0.0, -3.0, 0.0]; 3],
             line: 1,
         };
-        let x = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]];
-        let (normal, measure) = side_geometry(&x);
-        assert!((measure - 0.5).abs() < 1e-12);
-        assert!((normal[1] + 1.0).abs() < 1e-12);
-        let f = nodal_forces(&side, &x, normal, measure, LoadPhase::Solid, false);
+        let face = Side::new(
+            &side,
+            vec![[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]],
+        );
+        assert!((face.measure - 0.5).abs() < 1e-12);
+        assert!((face.normal[1] + 1.0).abs() < 1e-12);
+        let f = face.nodal_forces(LoadPhase::Solid, false);
         let total: f64 = f.iter().map(|v| v[1]).sum();
         assert!((total + 1.5).abs() < 1e-12);
     }

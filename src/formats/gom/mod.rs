@@ -615,12 +615,14 @@ impl GomDocument {
         })
     }
 
-    fn read_fixity(
+    /// A block that starts with a count line (`N`, then N rows of `what`):
+    /// the count and the rows after it. A missing or non-numeric count is an
+    /// error at its line.
+    fn counted_rows(
         &self,
         b: usize,
-        n_dim: usize,
-        fixity: &mut [[bool; 3]],
-    ) -> Result<(), ParseError> {
+        what: &str,
+    ) -> Result<(usize, impl Iterator<Item = (usize, &str)>), ParseError> {
         let mut rows = self.rows(b);
         let Some((cline, ctext)) = rows.next() else {
             return Err(self.short_block(b, 1, 0, "count line"));
@@ -630,15 +632,22 @@ impl GomDocument {
             self.doc.error_at(
                 cline,
                 0,
-                format!(
-                    "expected the number of fixed nodes, found `{}`",
-                    ctext.trim()
-                ),
+                format!("expected the number of {what}, found `{}`", ctext.trim()),
             )
         })?;
+        Ok((count[0] as usize, rows))
+    }
+
+    fn read_fixity(
+        &self,
+        b: usize,
+        n_dim: usize,
+        fixity: &mut [[bool; 3]],
+    ) -> Result<(), ParseError> {
+        let (count, rows) = self.counted_rows(b, "fixed nodes")?;
         let mut seen = 0;
         let mut values = [0u64; 4];
-        for (i, line) in rows.take(count[0] as usize) {
+        for (i, line) in rows.take(count) {
             lex::uints(line, &mut values[..1 + n_dim]).map_err(|bad| {
                 self.numbers_error(
                     i,
@@ -664,8 +673,8 @@ impl GomDocument {
             }
             seen += 1;
         }
-        if seen < count[0] as usize {
-            return Err(self.short_block(b, count[0] as usize, seen, "fixity lines"));
+        if seen < count {
+            return Err(self.short_block(b, count, seen, "fixity lines"));
         }
         // The count line comes first, then exactly `count` node lines.
         if let Some((i, _)) = self.rows(b).nth(1 + seen) {
@@ -697,22 +706,7 @@ impl GomDocument {
     ) -> Result<LoadBlock, ParseError> {
         let (phase, target, system) = load_kind(keyword);
         let (ids_per_side, corners) = if n_dim == 3 { (6, 3) } else { (2, 2) };
-        let mut rows = self.rows(b);
-        let Some((cline, ctext)) = rows.next() else {
-            return Err(self.short_block(b, 1, 0, "count line"));
-        };
-        let mut count = [0u64];
-        lex::uints(ctext, &mut count).map_err(|_| {
-            self.doc.error_at(
-                cline,
-                0,
-                format!(
-                    "expected the number of loaded sides, found `{}`",
-                    ctext.trim()
-                ),
-            )
-        })?;
-        let count = count[0] as usize;
+        let (count, mut rows) = self.counted_rows(b, "loaded sides")?;
         let mut sides = Vec::with_capacity(count.min(1 << 20));
         let width = ids_per_side * (1 + n_dim);
         let mut numbers = vec![0.0; width];
