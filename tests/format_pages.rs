@@ -6,7 +6,7 @@
 //! A rule block is a fenced code block whose info string is `rule`:
 //!
 //! ```text
-//! reader: gom                       (gom, cps, mapf, mps-csv, fem-csv, ply, fem-vtu, fem-pvd)
+//! reader: gom                       (gom, cps, mapf, mps-csv, fem-csv, ply, fem-vtu, fem-pvd, hhbf)
 //! base: anura3d-mini/TwoMat.GOM     (a file under fixtures/, or `none`)
 //! append: text after $$FINISH\n     (edits, in order; `\n` is a line break)
 //! replace: old text => new text     (the first occurrence)
@@ -104,6 +104,7 @@ fn file_name(reader: &str) -> &'static str {
         "ply" => "Mesh.ply",
         "fem-vtu" => "result.vtu",
         "fem-pvd" => "series.pvd",
+        "hhbf" => "example.HHBF",
         other => panic!("unknown reader `{other}`"),
     }
 }
@@ -131,6 +132,9 @@ fn read(reader: &str, path: &Path) -> Result<(), String> {
                 .map_err(|x| e(&x))
         }
         "ply" => ply::read_ply_mesh(path).map(drop).map_err(|x| e(&x)),
+        "hhbf" => a3d_init::formats::hhbf::read(path)
+            .map(drop)
+            .map_err(|x| e(&x)),
         other => panic!("unknown reader `{other}`"),
     }
 }

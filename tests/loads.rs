@@ -49,8 +49,8 @@ fn write_project(dir: &std::path::Path, gom: &str, cps: &str) -> Project {
     Project::load(&dir.join("slope.GOM")).unwrap()
 }
 
-/// Runs the project with the CPS's damping and without gravity (the CPS's
-/// `$$GRAVITY_LOAD off`) for `time` s from rest; the MPs' displacements and
+/// Runs the project with the CPS's damping and gravity for `time` s from
+/// rest; the MPs' displacements and
 /// pore pressures.
 fn run_ours(
     project: &Project,
@@ -66,8 +66,13 @@ fn run_ours(
         project.points.len()
     ];
     let base = runner::with_cps(RunSettings::dynamic(time), project.cps.as_ref(), None);
-    let (mut settings, _) = runner::with_project(base, project);
-    settings.gravity = 0.0;
+    let (mut settings, _) = runner::with_project(base, project).unwrap();
+    // The runner's gravity is on in full; as the CPS's `$$GRAVITY_LOAD off`
+    // switches the kernel's off, so here.
+    let cps = project.cps.as_ref().unwrap();
+    if cps.get_token("$$GRAVITY_LOAD", 0) == Some("off") {
+        settings.gravity = 0.0;
+    }
     let mut sim = Simulation::new(&project.model, &project.points, &states, &settings).unwrap();
     if let Some(dt) = dt {
         // The same Δt as the kernel's: scale the Courant number.
@@ -338,4 +343,101 @@ fn face_loads_in_3d_move_the_column_as_the_kernel_does() {
             assert!((a - b).abs() < 0.02 * b, "{block}: {a:e} m against {b:e} m");
         }
     }
+}
+
+#[test]
+#[allow(clippy::print_stderr)] // the measured values belong in the test output
+fn a_water_level_from_a_file_loads_the_column_as_the_kernel_does() {
+    let Some(kernel) = anura3d_kernel_or_skip("a_water_level_from_a_file") else {
+        return;
+    };
+    // The coupled column of the liquid test with its traction switched off:
+    // `$$HYDRAULIC_HEAD file` with the head rising from 1.2 m to 1.6 m over
+    // 0.004 s in slope.HHBF, over an area holding the column's top side
+    // (y = 1 m, under the two empty elements): a water pressure
+    // −γw·(h − 1) on the water and on the mixture there.
+    let (gom, cps) = column_project(
+        "$$START_LOAD_ON_NODES_SOLID",
+        Some(COUPLED),
+        "$$BOUNDARY_HYDRAULIC_HEAD_AREA\n-1 1\n0.95 1.05\n",
+    );
+    // γw is the liquid's density × g × the gravity multiplier: gravity on.
+    let cps = cps
+        .replace("$$SOLID_TRACTION\nstep", "$$SOLID_TRACTION\noff")
+        .replace(
+            "$$GRAVITY_LOAD\noff  0.0  1.0",
+            "$$GRAVITY_LOAD\nstep  1.0  1.0",
+        )
+        .replace("$$END", "$$HYDRAULIC_HEAD\nfile 0.0\n$$END");
+    let time = 0.004;
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path();
+    std::fs::write(dir.join("slope.HHBF"), "0.0 1.2\n0.004 1.6\n1.0 1.6\n").unwrap();
+    let project = write_project(dir, &gom, &timed(&cps, time, 0.0));
+    let vtk = run_anura3d(&kernel, dir);
+    let out = String::from_utf8_lossy(&std::fs::read(dir.join("slope.OUT")).unwrap()).into_owned();
+    let dt: f64 = out
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("TimeIncrement:"))
+        .and_then(|v| v.trim().parse().ok())
+        .expect("the kernel's TimeIncrement in slope.OUT");
+    let (ours, p_ours, notes) = run_ours(&project, time, Some(dt));
+    assert!(notes.is_empty(), "{notes:?}");
+    let theirs = vtk_vectors(&vtk, "displacement_solid");
+    let p_theirs = vtk_scalars(
+        &vtk.with_file_name("slope_MPScalar_001.vtk"),
+        "pressure_liquid",
+    );
+    let (a, b) = (largest(&ours), largest(&theirs));
+    let mean = |p: &[f64]| p.iter().sum::<f64>() / p.len() as f64;
+    let (pa, pb) = (mean(&p_ours), mean(&p_theirs));
+    eprintln!(
+        "water level: largest displacement {a:.4e} m (kernel {b:.4e} m), mean p {pa:.4} kPa (kernel {pb:.4} kPa)"
+    );
+    assert!(
+        b > 1e-6 && pb.abs() > 0.1,
+        "the water level moved nothing in the kernel"
+    );
+    assert!((a - b).abs() < 0.02 * b, "{a:e} m against {b:e} m");
+    assert!(
+        (pa - pb).abs() < 0.02 * pb.abs(),
+        "mean p {pa} against {pb} kPa"
+    );
+}
+
+/// `map` carries the water level's file into the folder it writes, and a
+/// missing one stops `verify` with exit code 2, naming it.
+#[test]
+fn the_head_file_travels_with_map_and_a_missing_one_is_an_error() {
+    let (gom, cps) = column_project(
+        "$$START_LOAD_ON_NODES_SOLID",
+        Some(COUPLED),
+        "$$BOUNDARY_HYDRAULIC_HEAD_AREA\n-1 1\n0.95 1.05\n",
+    );
+    let cps = cps.replace("$$END", "$$HYDRAULIC_HEAD\nfile 0.0\n$$END");
+    let tmp = tempfile::tempdir().unwrap();
+    let input = tmp.path().join("in");
+    write_project(&input, &gom, &cps);
+    std::fs::write(input.join("slope.HHBF"), "0 1.2\n1 1.6\n").unwrap();
+    let fem = tmp.path().join("fem.csv");
+    std::fs::write(
+        &fem,
+        common::hydrostatic_grid_csv("x,y,pwp", 1, 3, 9.81, 1.0),
+    )
+    .unwrap();
+    let out = tmp.path().join("out");
+    let (code, text) = common::run_map(&input.join("slope.GOM"), &fem, &out, &[]);
+    assert_eq!(code, 0, "{text}");
+    assert_eq!(
+        std::fs::read(out.join("slope.HHBF")).unwrap(),
+        b"0 1.2\n1 1.6\n".to_vec()
+    );
+    std::fs::write(out.join("slope.HHBF"), "0 1.2\n0 1.6\n").unwrap();
+    let (code, text) = common::run(&["verify", out.to_str().unwrap()]);
+    assert_eq!(code, 2, "{text}");
+    common::assert_contains(&text, &["slope.HHBF:2:1:", "times must increase"]);
+    std::fs::remove_file(out.join("slope.HHBF")).unwrap();
+    let (code, text) = common::run(&["verify", out.to_str().unwrap()]);
+    assert_eq!(code, 2, "{text}");
+    common::assert_contains(&text, &["slope.HHBF"]);
 }

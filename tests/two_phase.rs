@@ -768,18 +768,19 @@ fn hydraulic_areas_are_read_from_the_gom() {
     );
 }
 
-/// What the runner does not apply is said, not dropped (a hydraulic head
-/// from a file); the GOM loads the CPS switches on (test-1001: nodal solid
-/// loads under `$$SOLID_TRACTION step`) are applied, not noted.
+/// What the CPS asks for and the GOM lacks is said, not dropped (a seepage
+/// face or a head from a file without their areas); the GOM loads the CPS
+/// switches on (test-1001: nodal solid loads under `$$SOLID_TRACTION step`)
+/// are applied, not noted.
 #[test]
-fn heads_the_runner_does_not_apply_are_noted() {
+fn what_the_gom_lacks_is_noted_and_its_loads_are_read() {
     use a3d_init::pipeline::{Project, runner};
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/anura3d/test-1001");
     let mut project = Project::load(&dir).unwrap();
     let (boundaries, notes) = runner::hydraulic(&project);
     assert!(boundaries.is_empty());
     assert!(notes.is_empty(), "{notes:?}");
-    let loads = runner::loads(&project);
+    let (loads, _) = runner::loads(&project).unwrap();
     assert_eq!(loads.blocks.len(), 1);
     assert_eq!(loads.blocks[0].keyword, "$$START_LOAD_ON_NODES_SOLID");
     assert_eq!(loads.blocks[0].sides[0].corners, vec![3, 2]);
@@ -798,7 +799,14 @@ fn heads_the_runner_does_not_apply_are_noted() {
         a3d_init::formats::cps::CpsDocument::parse(&dir.join("test-1001.CPS_001"), cps).unwrap(),
     );
     let (_, notes) = runner::hydraulic(&project);
-    assert_eq!(notes.len(), 2, "{notes:?}");
-    assert!(notes.iter().any(|n| n.contains("$$HYDRAULIC_HEAD file")));
-    assert!(notes.iter().any(|n| n.contains("$$BOUNDARY_SEEPAGE_AREA")));
+    assert_eq!(notes.len(), 1, "{notes:?}");
+    assert!(notes[0].contains("$$BOUNDARY_SEEPAGE_AREA"), "{notes:?}");
+    // A head from a file needs the GOM's area; without it, a note.
+    let (loads, notes) = runner::loads(&project).unwrap();
+    assert!(loads.head.is_none());
+    assert_eq!(notes.len(), 1, "{notes:?}");
+    assert!(
+        notes[0].contains("$$BOUNDARY_HYDRAULIC_HEAD_AREA"),
+        "{notes:?}"
+    );
 }

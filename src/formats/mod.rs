@@ -12,6 +12,7 @@ pub mod fem_csv;
 pub mod fem_vtu;
 pub mod gom;
 pub mod gsz;
+pub mod hhbf;
 pub mod input;
 pub mod keyword_doc;
 pub mod lex;

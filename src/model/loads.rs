@@ -110,6 +110,39 @@ impl Multiplier {
     }
 }
 
+/// A prescribed external water level (CPS `$$HYDRAULIC_HEAD file`): the
+/// head h(t) of `<project>.HHBF` on the free-surface sides inside the GOM's
+/// `$$BOUNDARY_HYDRAULIC_HEAD_AREA`, a water pressure γw·(h − y) below it.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct HeadSeries {
+    /// `[min, max]` per axis (x, y[, z]; unused axes unbounded).
+    pub area: [[f64; 2]; 3],
+    /// (time s, head m), times strictly increasing.
+    pub points: Vec<(f64, f64)>,
+}
+
+impl HeadSeries {
+    /// The head at `time` as the kernel's `GetHydraulicHeadForTimeStep`
+    /// interpolates it: linear between the file's rows, the last value after
+    /// the last time (and, here, the first before the first time).
+    pub fn at(&self, time: f64) -> f64 {
+        let Some(&(t_last, h_last)) = self.points.last() else {
+            return 0.0;
+        };
+        if time > t_last {
+            return h_last;
+        }
+        match self.points.iter().position(|&(t, _)| t > time) {
+            Some(0) | None => self.points[0].1,
+            Some(i) => {
+                let (t0, h0) = self.points[i - 1];
+                let (t1, h1) = self.points[i];
+                h0 + (h1 - h0) / (t1 - t0) * (time - t0)
+            }
+        }
+    }
+}
+
 /// The GOM's loads with the CPS's multipliers and load-step timing: what the
 /// runner needs to apply them.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -123,6 +156,8 @@ pub struct ProjectLoads {
     pub load_steps: usize,
     /// `$$TIME_PER_LOADSTEP` (s).
     pub step_time: f64,
+    /// A water level from a file, when the CPS prescribes one.
+    pub head: Option<HeadSeries>,
 }
 
 /// Reports name each block with its number of sides (not every side), the
@@ -143,20 +178,21 @@ impl serde::Serialize for ProjectLoads {
                 sides: b.sides.len(),
             })
             .collect();
-        let mut s = serializer.serialize_struct("ProjectLoads", 5)?;
+        let mut s = serializer.serialize_struct("ProjectLoads", 6)?;
         s.serialize_field("blocks", &blocks)?;
         s.serialize_field("solid", &self.solid)?;
         s.serialize_field("liquid", &self.liquid)?;
         s.serialize_field("load_steps", &self.load_steps)?;
         s.serialize_field("step_time", &self.step_time)?;
+        s.serialize_field("head", &self.head)?;
         s.end()
     }
 }
 
 impl ProjectLoads {
-    /// No block has a side.
+    /// No block has a side and no water level is prescribed.
     pub fn is_empty(&self) -> bool {
-        self.blocks.iter().all(|b| b.sides.is_empty())
+        self.blocks.iter().all(|b| b.sides.is_empty()) && self.head.is_none()
     }
 
     /// The multiplier of `phase`'s load system `system` at `time`.
@@ -190,6 +226,18 @@ mod tests {
         assert_eq!(s.at(0.1000001, 4, 0.1), 0.5);
         assert_eq!(s.at(9.0, 4, 0.1), 1.0);
         assert_eq!(m(MultiplierKind::Off, 0.0, 1.0).at(0.05, 1, 0.1), 0.0);
+    }
+
+    #[test]
+    fn heads_are_interpolated_between_rows_and_held_after_the_last() {
+        let h = HeadSeries {
+            area: [[0.0; 2]; 3],
+            points: vec![(0.0, 2.0), (1.0, 1.0), (3.0, 1.0)],
+        };
+        assert_eq!(h.at(0.0), 2.0);
+        assert!((h.at(0.25) - 1.75).abs() < 1e-12);
+        assert_eq!(h.at(2.0), 1.0);
+        assert_eq!(h.at(9.0), 1.0);
     }
 
     #[test]

@@ -149,12 +149,17 @@ fn side_corners(dim: usize) -> &'static [&'static [usize]] {
 /// (grid node, force) pairs.
 type NodalForces<const D: usize> = (LoadPhase, usize, Vec<(u32, [f64; D])>);
 
+/// The water level's sides: per grid node its force under a unit pressure
+/// (outward, tension positive) and its height y; with γw (kN/m³).
+type WaterLevel<const D: usize> = (Vec<(u32, [f64; D], f64)>, f64);
+
 /// The loads of a run, built for its grid and MPs.
 pub(crate) struct ExternalLoads<const D: usize> {
     loads: ProjectLoads,
     nodal: Vec<NodalForces<D>>,
     /// (phase, system, MP index, force at multiplier 1).
     on_mps: Vec<(LoadPhase, usize, u32, [f64; D])>,
+    head: Option<WaterLevel<D>>,
     /// What was not applied, and why.
     pub notes: Vec<String>,
 }
@@ -189,17 +194,19 @@ fn side_geometry<const D: usize>(corners: &[[f64; D]]) -> ([f64; D], f64) {
 
 impl<const D: usize> ExternalLoads<D> {
     /// Builds the loads of `loads` on `grid` for the MPs `points` (in
-    /// Anura3D's order; `elements[i]` is MP i's grid element now).
-    /// `axisymmetric`: 2D-axisymmetric weighting; `liquid`: some MP runs
-    /// two-phase.
+    /// Anura3D's order, each with its grid element now).
+    /// `axisymmetric`: 2D-axisymmetric weighting; `gamma_w`: the unit weight
+    /// of the water of the two-phase materials (kN/m³), `None` when no MP
+    /// runs two-phase.
     pub fn new<const NC: usize>(
         loads: &ProjectLoads,
         grid: &Grid<D, NC>,
         mesh: &Mesh,
         points: &[MaterialPoint],
         axisymmetric: bool,
-        liquid: bool,
+        gamma_w: Option<f64>,
     ) -> ExternalLoads<D> {
+        let liquid = gamma_w.is_some();
         let compact = grid.compact_nodes();
         // The MPs of each element, by local number, and the active elements.
         let mut in_element: HashMap<u32, Vec<u32>> = HashMap::new();
@@ -223,8 +230,47 @@ impl<const D: usize> ExternalLoads<D> {
             loads: loads.clone(),
             nodal: Vec::new(),
             on_mps: Vec::new(),
+            head: None,
             notes: Vec::new(),
         };
+        if let Some(series) = &loads.head {
+            match gamma_w {
+                None => out.notes.push(
+                    "$$HYDRAULIC_HEAD file: the water level loads two-phase materials, and none runs two-phase here; not applied"
+                        .into(),
+                ),
+                Some(gamma) => {
+                    let sides = head_sides(grid, &active, &coords, &series.area);
+                    if sides.is_empty() {
+                        out.notes.push(
+                            "$$HYDRAULIC_HEAD file: no free-surface side lies in $$BOUNDARY_HYDRAULIC_HEAD_AREA; not applied"
+                                .into(),
+                        );
+                    }
+                    // The kernel's unit pressure on every corner.
+                    let unit = SideLoad {
+                        corners: Vec::new(),
+                        values: vec![[1.0; 3]; D],
+                        line: 0,
+                    };
+                    let mut forces: Vec<(u32, [f64; D], f64)> = Vec::new();
+                    for (e, nodes) in sides {
+                        let x: Vec<[f64; D]> =
+                            nodes.iter().map(|&n| coords(grid.mesh_node[n as usize])).collect();
+                        let mut at = Side::new(&unit, x);
+                        at.turn_out_of(grid, e, &nodes, &coords);
+                        let f = at.nodal_forces(LoadPhase::Liquid, axisymmetric);
+                        for (k, &node) in nodes.iter().enumerate() {
+                            match forces.iter_mut().find(|(n, _, _)| *n == node) {
+                                Some((_, sum, _)) => (0..D).for_each(|d| sum[d] += f[k][d]),
+                                None => forces.push((node, f[k], at.x[k][1])),
+                            }
+                        }
+                    }
+                    out.head = Some((forces, gamma));
+                }
+            }
+        }
         for block in &loads.blocks {
             if block.sides.is_empty() {
                 continue;
@@ -271,22 +317,7 @@ impl<const D: usize> ExternalLoads<D> {
                             // side, in element order: the kernel's loops leave
                             // it pointing out of the last one.
                             for &e in holders.iter().filter(|&&e| active(e)) {
-                                let el = &grid.elements[e];
-                                for &c in &el.corners {
-                                    if grid_nodes.contains(&c) {
-                                        continue;
-                                    }
-                                    let other = coords(grid.mesh_node[c as usize]);
-                                    let dot: f64 = (0..D)
-                                        .map(|d| (other[d] - at.x[0][d]) * at.normal[d])
-                                        .sum();
-                                    if dot > 0.0 {
-                                        at.normal.iter_mut().for_each(|v| *v = -*v);
-                                        break;
-                                    } else if dot < 0.0 {
-                                        break;
-                                    }
-                                }
+                                at.turn_out_of(grid, e, &grid_nodes, &coords);
                             }
                         }
                         let forces = at.nodal_forces(block.phase, axisymmetric);
@@ -348,6 +379,14 @@ impl<const D: usize> ExternalLoads<D> {
         out
     }
 
+    /// The prescribed water level at `time`: its area and head, when one is
+    /// applied.
+    pub fn level(&self, time: f64) -> Option<([[f64; 2]; 3], f64)> {
+        self.head.as_ref()?;
+        let series = self.loads.head.as_ref()?;
+        Some((series.area, series.at(time)))
+    }
+
     /// Adds the loads at `time` (s): solid ones to `solid` (per grid node),
     /// liquid ones to `liquid`. MP loads go to the corners of each MP's
     /// element with its shape values `shape(mp)`.
@@ -372,6 +411,25 @@ impl<const D: usize> ExternalLoads<D> {
                 }
             }
         }
+        if let Some((forces, gamma_w)) = &self.head {
+            // `UpdateMultipliersWaterForSpaceDependency`: each node's unit
+            // force × its pressure −γw·(h − y) below the level (h = 0 taken
+            // as 1e-6, as the kernel does), on the liquid and the mixture.
+            let series = self.loads.head.as_ref().expect("a head with its series");
+            let mut h = series.at(time);
+            if h == 0.0 {
+                h = 1e-6;
+            }
+            for (node, f, y) in forces {
+                let p = if *y <= h { -gamma_w * (h - y) } else { 0.0 };
+                for d in 0..D {
+                    solid[*node as usize][d] += p * f[d];
+                    if let Some(l) = liquid.as_deref_mut() {
+                        l[*node as usize][d] += p * f[d];
+                    }
+                }
+            }
+        }
         for (phase, system, mp, f) in &self.on_mps {
             let Some((corners, shape)) = corners_and_shape(*mp) else {
                 continue;
@@ -390,6 +448,43 @@ impl<const D: usize> ExternalLoads<D> {
             }
         }
     }
+}
+
+/// The free-surface sides of the water level: per active element (in order)
+/// each side whose neighbour exists and holds no MP (the kernel's
+/// `BoundaryElementSurface` = 1; a side on the mesh's edge is not one) and
+/// whose corners all lie in `area`; with the element and the side's grid
+/// nodes (`GetAndUpdateHydraulicHeadLoad`).
+fn head_sides<const D: usize, const NC: usize>(
+    grid: &Grid<D, NC>,
+    active: &dyn Fn(usize) -> bool,
+    coords: &dyn Fn(u32) -> [f64; D],
+    area: &[[f64; 2]; 3],
+) -> Vec<(usize, Vec<u32>)> {
+    let inside = |node: u32| {
+        let x = coords(grid.mesh_node[node as usize]);
+        (0..D).all(|d| x[d] >= area[d][0] && x[d] <= area[d][1])
+    };
+    let mut sides = Vec::new();
+    for (e, el) in grid.elements.iter().enumerate() {
+        if !active(e) {
+            continue;
+        }
+        for local in side_corners(D) {
+            let opposite = (0..NC)
+                .find(|k| !local.contains(k))
+                .expect("a corner off the side");
+            let across = grid.neighbours[e][opposite];
+            if across == NO_ELEMENT || active(across as usize) {
+                continue;
+            }
+            let nodes: Vec<u32> = local.iter().map(|&k| el.corners[k]).collect();
+            if nodes.iter().all(|&n| inside(n)) {
+                sides.push((e, nodes));
+            }
+        }
+    }
+    sides
 }
 
 /// The kernel's side number (1-based) of the side with corners `nodes` in
@@ -436,6 +531,33 @@ impl<'a, const D: usize> Side<'a, D> {
             x,
             normal,
             measure,
+        }
+    }
+
+    /// Turns the normal out of grid element `e`, which holds the side's grid
+    /// nodes `nodes`, as the kernel's `Load2D`/`Load3D` do: against the first
+    /// of its other corners that is off the side's line or plane.
+    fn turn_out_of<const NC: usize>(
+        &mut self,
+        grid: &Grid<D, NC>,
+        e: usize,
+        nodes: &[u32],
+        coords: &dyn Fn(u32) -> [f64; D],
+    ) {
+        for &c in &grid.elements[e].corners {
+            if nodes.contains(&c) {
+                continue;
+            }
+            let other = coords(grid.mesh_node[c as usize]);
+            let dot: f64 = (0..D)
+                .map(|d| (other[d] - self.x[0][d]) * self.normal[d])
+                .sum();
+            if dot > 0.0 {
+                self.normal.iter_mut().for_each(|v| *v = -*v);
+                return;
+            } else if dot < 0.0 {
+                return;
+            }
         }
     }
 

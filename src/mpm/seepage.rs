@@ -59,6 +59,10 @@ pub(super) struct SurfaceFlow<const D: usize> {
     active: Vec<bool>,
     kind: Vec<Surface>,
     normal: Vec<[f64; D]>,
+    /// This step's prescribed water level (`$$HYDRAULIC_HEAD file`): its
+    /// area and head. Surface nodes in the area at or below the head are
+    /// submerged, not seepage faces (the kernel's `DetectSeepageFaceNodes`).
+    pub(super) level: Option<(Area, f64)>,
 }
 
 impl<const D: usize> SurfaceFlow<D> {
@@ -82,6 +86,7 @@ impl<const D: usize> SurfaceFlow<D> {
             position,
             active: vec![false; grid.elements.len()],
             kind: vec![Surface::None; n_nodes],
+            level: None,
             normal: vec![[0.0; D]; n_nodes],
         }
     }
@@ -172,6 +177,8 @@ impl<const D: usize> SurfaceFlow<D> {
                 }
             }
         }
+        let level = self.level;
+        let submerged = |x: &[f64; D]| level.is_some_and(|(area, h)| inside(&area, x) && x[1] <= h);
         for (e, element) in grid.elements.iter().enumerate() {
             if !self.active[e] {
                 continue;
@@ -191,7 +198,7 @@ impl<const D: usize> SurfaceFlow<D> {
                     let kind = match (&self.boundaries.infiltration, &self.boundaries.seepage_area)
                     {
                         (Some((area, _)), _) if inside(area, x) => Surface::Infiltration,
-                        (_, Some(area)) if inside(area, x) => Surface::Seepage,
+                        (_, Some(area)) if inside(area, x) && !submerged(x) => Surface::Seepage,
                         _ => Surface::None,
                     };
                     if kind != Surface::None {

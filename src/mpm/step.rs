@@ -413,13 +413,19 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                     ..*point
                 })
                 .collect();
+            // γw of the kernel's `ComputeWaterSpecificWeight`: the liquid
+            // density of the last two-phase material, times g.
+            let gamma_w = waters.iter().rev().find_map(|w| match w {
+                Some(Water::Coupled(c)) => Some(c.density * settings.gravity),
+                _ => None,
+            });
             ExternalLoads::new(
                 &settings.loads,
                 &grid,
                 &model.mesh,
                 &located,
                 axisymmetric,
-                coupled,
+                gamma_w.filter(|_| coupled),
             )
         });
         Ok(Solver {
@@ -649,6 +655,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
 
         // 2b. Seepage faces and infiltration ([`super::seepage`]).
         if let (Some(flow), Some(l)) = (self.surface.as_mut(), self.liquid.as_mut()) {
+            flow.level = self.external.as_ref().and_then(|e| e.level(self.time + dt));
             flow.apply(
                 grid,
                 &self.particles,

@@ -110,7 +110,7 @@ fn causes(check: Option<&KernelCheck>, run: Option<&mpm::RunReport>) -> Vec<Stri
 /// Runs the equilibrium check on a loaded start (writes nothing).
 pub fn check(start: &Start, options: &VerifyOptions) -> Result<VerifyOutcome, PipelineError> {
     let (settings, notes) =
-        runner::with_project(options.settings(start.project.cps.as_ref()), &start.project);
+        runner::with_project(options.settings(start.project.cps.as_ref()), &start.project)?;
     // A model the runner cannot simulate still gets its Anura3D-side checks
     // and start.csv; the verdict then says why no run was made.
     let mut run_error = None;

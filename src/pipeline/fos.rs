@@ -410,7 +410,7 @@ pub fn analyse_state(
     };
     let strength_reduction = if run_srm {
         let mut settings = options.settings(project.cps.as_ref());
-        settings.run = runner::with_project(settings.run, project).0;
+        settings.run = runner::with_project(settings.run, project)?.0;
         Some(analyse(&project.model, &start.points, states, &settings)?)
     } else {
         None

@@ -497,7 +497,7 @@ fn srm_at(
     settings.run = runner::with_project(
         runner::with_cps(settings.run, project.cps.as_ref(), options.srm_damping),
         &mapped.project,
-    )
+    )?
     .0;
     let report = strength_reduction(
         &mapped.project.model,

@@ -42,8 +42,7 @@ pub fn with_cps(
 
 /// The seepage face and infiltration the project's CPS switches on
 /// (`$$APPLY_SEEPAGE_FACE 1`, `$$APPLY_INFILTRATION 1`) over its GOM's
-/// areas, and notes on what the runner does not apply (a hydraulic head from
-/// a file).
+/// areas, and notes on what the CPS asks for and the GOM lacks.
 pub fn hydraulic(project: &super::Project) -> (mpm::seepage::HydraulicBoundaries, Vec<String>) {
     let mut notes = Vec::new();
     let Some(cps) = project.cps.as_ref() else {
@@ -70,36 +69,59 @@ pub fn hydraulic(project: &super::Project) -> (mpm::seepage::HydraulicBoundaries
             ),
         }
     }
-    if cps
-        .get_token("$$HYDRAULIC_HEAD", 0)
-        .is_some_and(|t| t.eq_ignore_ascii_case("file"))
-    {
-        notes.push(
-            "the CPS prescribes a hydraulic head from a file ($$HYDRAULIC_HEAD file): this runner does not apply it".into(),
-        );
-    }
     (boundaries, notes)
 }
 
 /// `s` with what the project adds to gravity: its seepage face and
 /// infiltration ([`hydraulic`]) and its GOM loads ([`loads`]); with the notes
 /// on what the runner does not apply.
-pub fn with_project(mut s: RunSettings, project: &super::Project) -> (RunSettings, Vec<String>) {
-    let (hydraulic, notes) = hydraulic(project);
+pub fn with_project(
+    mut s: RunSettings,
+    project: &super::Project,
+) -> Result<(RunSettings, Vec<String>), PipelineError> {
+    let (hydraulic, mut notes) = hydraulic(project);
     s.hydraulic = hydraulic;
-    s.loads = loads(project);
-    (s, notes)
+    let (loads, more) = loads(project)?;
+    s.loads = loads;
+    notes.extend(more);
+    Ok((s, notes))
 }
 
 /// The GOM's load blocks with the CPS's multipliers (`$$SOLID_TRACTION[_B]`,
 /// `$$LIQUID_PRESSURE[_B]`; the kernel's `step 0 1` where the CPS names
-/// none, and no loads without a CPS) and load-step timing.
-pub fn loads(project: &super::Project) -> crate::model::loads::ProjectLoads {
+/// none, and no loads without a CPS) and load-step timing, and the water level
+/// of `$$HYDRAULIC_HEAD file` (`<project>.HHBF` over the GOM's
+/// `$$BOUNDARY_HYDRAULIC_HEAD_AREA`; a missing or bad file is an error, a
+/// missing area a note).
+pub fn loads(
+    project: &super::Project,
+) -> Result<(crate::model::loads::ProjectLoads, Vec<String>), PipelineError> {
+    let mut notes = Vec::new();
     let Some(cps) = project.cps.as_ref() else {
-        return Default::default();
+        return Ok((Default::default(), notes));
     };
     let (load_steps, step_time) = cps.load_steps();
-    crate::model::loads::ProjectLoads {
+    let from_file = cps
+        .get_token("$$HYDRAULIC_HEAD", 0)
+        .is_some_and(|t| t == "file");
+    let head = match (from_file, project.info.hydraulic.hydraulic_head) {
+        (false, _) => None,
+        (true, None) => {
+            notes.push(
+                "the CPS prescribes a hydraulic head from a file but the GOM has no $$BOUNDARY_HYDRAULIC_HEAD_AREA: none applied"
+                    .into(),
+            );
+            None
+        }
+        (true, Some(area)) => {
+            let path = hhbf_path(project);
+            Some(crate::model::loads::HeadSeries {
+                area,
+                points: crate::formats::hhbf::read(&path)?,
+            })
+        }
+    };
+    let loads = crate::model::loads::ProjectLoads {
         blocks: project.info.loads.clone(),
         solid: [
             cps.multiplier("$$SOLID_TRACTION"),
@@ -111,7 +133,17 @@ pub fn loads(project: &super::Project) -> crate::model::loads::ProjectLoads {
         ],
         load_steps,
         step_time,
-    }
+        head,
+    };
+    Ok((loads, notes))
+}
+
+/// `<project>.HHBF` beside the project's files, where Anura3D looks for it.
+pub fn hhbf_path(project: &super::Project) -> PathBuf {
+    project
+        .files
+        .dir
+        .join(format!("{}.HHBF", project.files.name))
 }
 
 /// The runner's error as a pipeline error: an unsupported element or material

@@ -84,7 +84,7 @@ pub fn run(
     let (settings, notes) = runner::with_project(
         options.settings(start.project.cps.as_ref())?,
         &start.project,
-    );
+    )?;
     let dir = OutputDir::create(&target, to.replace, &reads)?;
     let mut output = mpm::run(
         &start.project.model,

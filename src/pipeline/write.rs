@@ -89,6 +89,14 @@ pub fn write_project(
         }
         written.push(opd_name.clone());
     }
+    // A water level from a file travels with the project (Anura3D reads
+    // `<project>.HHBF` beside the CPS).
+    let hhbf = super::runner::hhbf_path(project);
+    if hhbf.is_file() {
+        let hhbf_name = format!("{name}.HHBF");
+        out.copy(&hhbf, &hhbf_name)?;
+        written.push(hhbf_name);
+    }
     let mapf_name = format!("{name}.MAPF");
     out.write(&mapf_name, |w| {
         mapf::write(
