@@ -67,12 +67,7 @@ fn run_ours(
     ];
     let base = runner::with_cps(RunSettings::dynamic(time), project.cps.as_ref(), None);
     let (mut settings, _) = runner::with_project(base, project).unwrap();
-    // The runner's gravity is on in full; as the CPS's `$$GRAVITY_LOAD off`
-    // switches the kernel's off, so here.
-    let cps = project.cps.as_ref().unwrap();
-    if cps.get_token("$$GRAVITY_LOAD", 0) == Some("off") {
-        settings.gravity = 0.0;
-    }
+    // test-1001's `$$GRAVITY_LOAD off` switches gravity off in both codes.
     let mut sim = Simulation::new(&project.model, &project.points, &states, &settings).unwrap();
     if let Some(dt) = dt {
         // The same Δt as the kernel's: scale the Courant number.
@@ -440,4 +435,55 @@ fn the_head_file_travels_with_map_and_a_missing_one_is_an_error() {
     let (code, text) = common::run(&["verify", out.to_str().unwrap()]);
     assert_eq!(code, 2, "{text}");
     common::assert_contains(&text, &["slope.HHBF"]);
+}
+
+#[test]
+#[allow(clippy::print_stderr)] // the measured values belong in the test output
+fn gravity_follows_the_cps_multiplier_as_in_the_kernel() {
+    let Some(kernel) = anura3d_kernel_or_skip("gravity_follows_the_cps_multiplier") else {
+        return;
+    };
+    // The dry column without its traction: under `$$GRAVITY_LOAD linear 0 1`
+    // (gravity ramped over the load step) for 0.05 s undamped, where a
+    // ramp and a step part by far; under `step 1 1` damped to rest, where a
+    // column of height H fixed at its base has settled
+    // u(y) = γ·(H·y − y²/2)/M at height y.
+    let (gom, cps) = column_project("$$START_LOAD_ON_NODES_SOLID", None, "");
+    let cps = cps.replace("$$SOLID_TRACTION\nstep", "$$SOLID_TRACTION\noff");
+    let tmp = tempfile::tempdir().unwrap();
+    let gamma = (1.0 - 0.3) * 2.6 * 9.81;
+    let modulus = 1e4 * 0.8 / (1.2 * 0.6);
+    for (multiplier, time, alpha) in [
+        ("linear  0.0  1.0", 0.05, 0.0),
+        ("step  1.0  1.0", 0.5, 0.75),
+    ] {
+        let cps = cps.replace(
+            "$$GRAVITY_LOAD\noff  0.0  1.0",
+            &format!("$$GRAVITY_LOAD\n{multiplier}"),
+        );
+        let dir = tmp
+            .path()
+            .join(multiplier.split_whitespace().next().unwrap());
+        let (project, a, b) = both_settle(&kernel, &dir, (&gom, &cps), time, alpha);
+        eprintln!(
+            "gravity {multiplier}, {time} s, α = {alpha}: top settlement {a:.5e} m (kernel {b:.5e} m)"
+        );
+        assert!(
+            (a - b).abs() < 0.02 * b,
+            "{multiplier}: {a:e} m against {b:e} m"
+        );
+        if alpha > 0.0 {
+            let y = project
+                .points
+                .iter()
+                .map(|p| p.position[1])
+                .fold(0.0, f64::max);
+            let exact = gamma * (1.0 * y - y * y / 2.0) / modulus;
+            eprintln!("  closed form at rest: {exact:.5e} m");
+            assert!(
+                (a - exact).abs() < 0.01 * exact,
+                "{a:e} m against {exact:e} m"
+            );
+        }
+    }
 }

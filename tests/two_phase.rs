@@ -801,12 +801,17 @@ fn what_the_gom_lacks_is_noted_and_its_loads_are_read() {
     let (_, notes) = runner::hydraulic(&project);
     assert_eq!(notes.len(), 1, "{notes:?}");
     assert!(notes[0].contains("$$BOUNDARY_SEEPAGE_AREA"), "{notes:?}");
-    // A head from a file needs the GOM's area; without it, a note.
+    // A head from a file needs the GOM's area; without it, a note; and
+    // test-1001's `$$GRAVITY_LOAD off` is said too.
     let (loads, notes) = runner::loads(&project).unwrap();
     assert!(loads.head.is_none());
-    assert_eq!(notes.len(), 1, "{notes:?}");
+    assert_eq!(notes.len(), 2, "{notes:?}");
     assert!(
         notes[0].contains("$$BOUNDARY_HYDRAULIC_HEAD_AREA"),
+        "{notes:?}"
+    );
+    assert!(
+        notes[1].contains("$$GRAVITY_LOAD starts gravity at 0.000·g (off"),
         "{notes:?}"
     );
 }

@@ -14,7 +14,8 @@ use super::lex;
 use crate::model::loads::{Multiplier, MultiplierKind};
 
 /// The load multipliers the runner applies (GOM loads × these).
-pub const MULTIPLIERS: [&str; 4] = [
+pub const MULTIPLIERS: [&str; 5] = [
+    "$$GRAVITY_LOAD",
     "$$SOLID_TRACTION",
     "$$SOLID_TRACTION_B",
     "$$LIQUID_PRESSURE",

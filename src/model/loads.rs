@@ -81,6 +81,13 @@ impl Default for Multiplier {
 }
 
 impl Multiplier {
+    /// On in full from the start (`step 1 1`).
+    pub const FULL: Multiplier = Multiplier {
+        kind: MultiplierKind::Step,
+        realised: 1.0,
+        final_value: 1.0,
+    };
+
     /// The multiplier at `time` (s) from the start of a calculation of
     /// `load_steps` load steps of `step_time` s each, as the kernel's
     /// `UpdateMultipliersForTimeDepencency` forms it for the step that ends
@@ -152,6 +159,9 @@ pub struct ProjectLoads {
     pub solid: [Multiplier; 2],
     /// `$$LIQUID_PRESSURE`, `$$LIQUID_PRESSURE_B`.
     pub liquid: [Multiplier; 2],
+    /// `$$GRAVITY_LOAD`: the multiplier of gravity (the kernel's `step 0 1`
+    /// when absent, full gravity in a run of one load step).
+    pub gravity: Multiplier,
     /// `$$NUMBER_OF_LOADSTEPS` (at least 1).
     pub load_steps: usize,
     /// `$$TIME_PER_LOADSTEP` (s).
@@ -178,10 +188,11 @@ impl serde::Serialize for ProjectLoads {
                 sides: b.sides.len(),
             })
             .collect();
-        let mut s = serializer.serialize_struct("ProjectLoads", 6)?;
+        let mut s = serializer.serialize_struct("ProjectLoads", 7)?;
         s.serialize_field("blocks", &blocks)?;
         s.serialize_field("solid", &self.solid)?;
         s.serialize_field("liquid", &self.liquid)?;
+        s.serialize_field("gravity", &self.gravity)?;
         s.serialize_field("load_steps", &self.load_steps)?;
         s.serialize_field("step_time", &self.step_time)?;
         s.serialize_field("head", &self.head)?;
@@ -193,6 +204,11 @@ impl ProjectLoads {
     /// No block has a side and no water level is prescribed.
     pub fn is_empty(&self) -> bool {
         self.blocks.iter().all(|b| b.sides.is_empty()) && self.head.is_none()
+    }
+
+    /// The gravity multiplier at `time`.
+    pub fn gravity_at(&self, time: f64) -> f64 {
+        self.gravity.at(time, self.load_steps, self.step_time)
     }
 
     /// The multiplier of `phase`'s load system `system` at `time`.

@@ -417,6 +417,8 @@ impl<const D: usize> ExternalLoads<D> {
             // as 1e-6, as the kernel does), on the liquid and the mixture.
             let series = self.loads.head.as_ref().expect("a head with its series");
             let mut h = series.at(time);
+            // γw = ρw·g × the gravity multiplier (`ComputeWaterSpecificWeight`).
+            let gamma_w = gamma_w * self.loads.gravity_at(time);
             if h == 0.0 {
                 h = 1e-6;
             }

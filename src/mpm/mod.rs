@@ -135,7 +135,9 @@ impl Default for Thresholds {
 /// Settings of an MPM run.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct RunSettings {
-    /// Gravitational acceleration g (m/s²), acting along −y.
+    /// Gravitational acceleration g (m/s²), acting along −y, scaled each
+    /// step by [`RunSettings::loads`]' gravity multiplier (`$$GRAVITY_LOAD`;
+    /// full by default).
     pub gravity: f64,
     /// Local damping factor α in [0, 1) (CPS `$$HOMOGENEOUS_LOCAL_DAMPING 1 α`).
     pub damping: f64,

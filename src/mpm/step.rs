@@ -165,6 +165,10 @@ pub(crate) struct Solver<const D: usize, const NC: usize> {
     p2g: Vec<[Contribution<D>; NC]>,
     remap: Vec<[[f64; D]; NC]>,
     gravity: [f64; D],
+    /// g (m/s²), before the gravity multiplier.
+    g: f64,
+    /// The CPS's gravity multiplier and load-step timing.
+    gravity_load: (crate::model::loads::Multiplier, usize, f64),
     damping: f64,
     pub dt: f64,
     pub time: f64,
@@ -443,6 +447,12 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             p2g: vec![[Contribution::ZERO; NC]; n_points],
             remap: vec![[[0.0; D]; NC]; n_points],
             gravity,
+            g: settings.gravity,
+            gravity_load: (
+                settings.loads.gravity,
+                settings.loads.load_steps,
+                settings.loads.step_time,
+            ),
             damping: settings.damping,
             dt,
             time: 0.0,
@@ -461,6 +471,12 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             external,
             load_now: vec![[0.0; D]; n_nodes],
         })
+    }
+
+    /// The gravity multiplier at `time`.
+    fn loads_gravity(&self, time: f64) -> f64 {
+        let (m, steps, step_time) = self.gravity_load;
+        m.at(time, steps, step_time)
     }
 
     /// Replaces the constant external nodal forces.
@@ -495,6 +511,10 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         let grid = &self.grid;
         let axisymmetric = self.axisymmetric;
         let radius_floor = self.radius_floor;
+
+        // Gravity at the CPS's `$$GRAVITY_LOAD` multiplier of the step that
+        // ends at t + Δt.
+        self.gravity[1] = -self.g * self.loads_gravity(self.time + dt);
 
         // 1. P2G contributions, per MP in parallel.
         per_live_mp(

@@ -411,6 +411,9 @@ pub fn analyse_state(
     let strength_reduction = if run_srm {
         let mut settings = options.settings(project.cps.as_ref());
         settings.run = runner::with_project(settings.run, project)?.0;
+        // A factor of safety is of the slope under its full weight, whatever
+        // gravity ramp the CPS runs Anura3D with.
+        settings.run.loads.gravity = crate::model::loads::Multiplier::FULL;
         Some(analyse(&project.model, &start.points, states, &settings)?)
     } else {
         None

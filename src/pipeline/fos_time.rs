@@ -499,6 +499,8 @@ fn srm_at(
         &mapped.project,
     )?
     .0;
+    // A factor of safety is of the slope under its full weight.
+    settings.run.loads.gravity = crate::model::loads::Multiplier::FULL;
     let report = strength_reduction(
         &mapped.project.model,
         &mapped.project.points,

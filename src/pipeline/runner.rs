@@ -88,8 +88,9 @@ pub fn with_project(
 }
 
 /// The GOM's load blocks with the CPS's multipliers (`$$SOLID_TRACTION[_B]`,
-/// `$$LIQUID_PRESSURE[_B]`; the kernel's `step 0 1` where the CPS names
-/// none, and no loads without a CPS) and load-step timing, and the water level
+/// `$$LIQUID_PRESSURE[_B]`, and `$$GRAVITY_LOAD` for gravity; the kernel's
+/// `step 0 1` where the CPS names none, full gravity and no loads without a
+/// CPS) and load-step timing, and the water level
 /// of `$$HYDRAULIC_HEAD file` (`<project>.HHBF` over the GOM's
 /// `$$BOUNDARY_HYDRAULIC_HEAD_AREA`; a missing or bad file is an error, a
 /// missing area a note).
@@ -121,6 +122,17 @@ pub fn loads(
             })
         }
     };
+    let gravity = cps.multiplier("$$GRAVITY_LOAD");
+    // The first step's gravity: below 1, a mapped state at full weight
+    // starts out of balance in Anura3D (and in this runner, which follows it).
+    let start = gravity.at(0.0, load_steps, step_time);
+    if start < 1.0 {
+        notes.push(format!(
+            "the CPS's $$GRAVITY_LOAD starts gravity at {start:.3}·g ({}): Anura3D and this runner follow it, so a state mapped at full weight starts out of balance; `step 1.0 1.0` holds full gravity from the start",
+            cps.get("$$GRAVITY_LOAD")
+                .map_or_else(|| "absent: the kernel's step 0 1".to_string(), |v| v.join(" "))
+        ));
+    }
     let loads = crate::model::loads::ProjectLoads {
         blocks: project.info.loads.clone(),
         solid: [
@@ -131,6 +143,7 @@ pub fn loads(
             cps.multiplier("$$LIQUID_PRESSURE"),
             cps.multiplier("$$LIQUID_PRESSURE_B"),
         ],
+        gravity,
         load_steps,
         step_time,
         head,
