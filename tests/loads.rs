@@ -4,7 +4,7 @@
 
 mod common;
 use common::anura3d_kernel_or_skip;
-use common::kernel_run::{vtk_scalars, vtk_vectors};
+use common::kernel_run::{run_in_place, vtk_scalars, vtk_vectors};
 
 use a3d_init::model::MpState;
 use a3d_init::mpm::{RunSettings, Simulation};
@@ -90,27 +90,48 @@ fn timed(cps: &str, time: f64, alpha: f64) -> String {
     )
 }
 
-/// Runs the kernel on the project in `dir` (`slope.*`); its MP VTK.
-fn run_anura3d(kernel: &std::path::Path, dir: &std::path::Path) -> std::path::PathBuf {
-    let status = std::process::Command::new(kernel)
-        .arg("slope")
-        .current_dir(dir)
-        .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .status()
-        .unwrap();
-    let vtk = dir.join("slope_MPVector_001.vtk");
-    assert!(
-        status.success() || vtk.is_file(),
-        "the kernel failed in {}",
-        dir.display()
-    );
-    vtk
-}
-
 /// The largest vertical displacement magnitude.
 fn largest(u: &[[f64; 3]]) -> f64 {
     u.iter().map(|v| v[1].abs()).fold(0.0, f64::max)
+}
+
+/// What the coupled comparisons read: per MP, displacements and pore
+/// pressures, here and in the kernel.
+struct Coupled {
+    ours: Vec<[f64; 3]>,
+    p_ours: Vec<f64>,
+    theirs: Vec<[f64; 3]>,
+    p_theirs: Vec<f64>,
+}
+
+/// Runs the project in `dir` for `time` s undamped in the kernel, then here
+/// at the kernel's Δt: its two-phase critical step (Mieremet's, read from
+/// `slope.OUT`) is not this runner's, and the comparison runs both with the
+/// same Δt.
+fn both_at_the_kernels_step(
+    kernel: &std::path::Path,
+    dir: &std::path::Path,
+    project: &Project,
+    time: f64,
+) -> Coupled {
+    let vtk = run_in_place(kernel, dir);
+    let out = String::from_utf8_lossy(&std::fs::read(dir.join("slope.OUT")).unwrap()).into_owned();
+    let dt: f64 = out
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("TimeIncrement:"))
+        .and_then(|v| v.trim().parse().ok())
+        .expect("the kernel's TimeIncrement in slope.OUT");
+    let (ours, p_ours, notes) = run_ours(project, time, Some(dt));
+    assert!(notes.is_empty(), "{notes:?}");
+    Coupled {
+        ours,
+        p_ours,
+        theirs: vtk_vectors(&vtk, "displacement_solid"),
+        p_theirs: vtk_scalars(
+            &vtk.with_file_name("slope_MPScalar_001.vtk"),
+            "pressure_liquid",
+        ),
+    }
 }
 
 /// Runs the project `gom`/`cps` for `time` s at local damping `alpha` in
@@ -126,7 +147,7 @@ fn both_settle(
     let project = write_project(dir, gom, &timed(cps, time, alpha));
     let (ours, _, notes) = run_ours(&project, time, None);
     assert!(notes.is_empty(), "{notes:?}");
-    let theirs = vtk_vectors(&run_anura3d(kernel, dir), "displacement_solid");
+    let theirs = vtk_vectors(&run_in_place(kernel, dir), "displacement_solid");
     let (a, b) = (largest(&ours), largest(&theirs));
     assert!(b > 1e-4, "the load moved nothing in the kernel");
     (project, a, b)
@@ -200,23 +221,12 @@ fn liquid_pressures_on_nodes_and_on_mps_load_the_water_as_the_kernel_does() {
         let time = 0.004;
         let dir = tmp.path().join(&block[15..]);
         let project = write_project(&dir, &gom, &timed(&cps, time, 0.0));
-        let vtk = run_anura3d(&kernel, &dir);
-        // The kernel's Δt comes from its two-phase critical step (Mieremet's);
-        // the comparison runs both codes with the same Δt.
-        let out =
-            String::from_utf8_lossy(&std::fs::read(dir.join("slope.OUT")).unwrap()).into_owned();
-        let dt: f64 = out
-            .lines()
-            .find_map(|l| l.trim().strip_prefix("TimeIncrement:"))
-            .and_then(|v| v.trim().parse().ok())
-            .expect("the kernel's TimeIncrement in slope.OUT");
-        let (ours, p_ours, notes) = run_ours(&project, time, Some(dt));
-        assert!(notes.is_empty(), "{notes:?}");
-        let theirs = vtk_vectors(&vtk, "displacement_solid");
-        let p_theirs = vtk_scalars(
-            &vtk.with_file_name("slope_MPScalar_001.vtk"),
-            "pressure_liquid",
-        );
+        let Coupled {
+            ours,
+            p_ours,
+            theirs,
+            p_theirs,
+        } = both_at_the_kernels_step(&kernel, &dir, &project, time);
         let (a, b) = (largest(&ours), largest(&theirs));
         let pa = p_ours.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
         let pb = p_theirs.iter().fold(0.0_f64, |m, v| m.max(v.abs()));
@@ -369,20 +379,12 @@ fn a_water_level_from_a_file_loads_the_column_as_the_kernel_does() {
     let dir = tmp.path();
     std::fs::write(dir.join("slope.HHBF"), "0.0 1.2\n0.004 1.6\n1.0 1.6\n").unwrap();
     let project = write_project(dir, &gom, &timed(&cps, time, 0.0));
-    let vtk = run_anura3d(&kernel, dir);
-    let out = String::from_utf8_lossy(&std::fs::read(dir.join("slope.OUT")).unwrap()).into_owned();
-    let dt: f64 = out
-        .lines()
-        .find_map(|l| l.trim().strip_prefix("TimeIncrement:"))
-        .and_then(|v| v.trim().parse().ok())
-        .expect("the kernel's TimeIncrement in slope.OUT");
-    let (ours, p_ours, notes) = run_ours(&project, time, Some(dt));
-    assert!(notes.is_empty(), "{notes:?}");
-    let theirs = vtk_vectors(&vtk, "displacement_solid");
-    let p_theirs = vtk_scalars(
-        &vtk.with_file_name("slope_MPScalar_001.vtk"),
-        "pressure_liquid",
-    );
+    let Coupled {
+        ours,
+        p_ours,
+        theirs,
+        p_theirs,
+    } = both_at_the_kernels_step(&kernel, dir, &project, time);
     let (a, b) = (largest(&ours), largest(&theirs));
     let mean = |p: &[f64]| p.iter().sum::<f64>() / p.len() as f64;
     let (pa, pb) = (mean(&p_ours), mean(&p_theirs));

@@ -91,6 +91,15 @@ impl CpsDocument {
         }
     }
 
+    /// The value tokens of block `b`, in order: (0-based line, byte offset,
+    /// text).
+    fn value_tokens(&self, b: usize) -> impl Iterator<Item = (usize, usize, &str)> {
+        self.doc.blocks()[b]
+            .data
+            .clone()
+            .flat_map(|i| lex::tokens(self.doc.line(i)).map(move |(o, t)| (i, o, t)))
+    }
+
     /// A load multiplier, when present, is `type realised final` with a type
     /// the kernel takes (`linear`, `step` or `off`, as written) and two
     /// numbers; Anura3D stops on anything else.
@@ -99,10 +108,7 @@ impl CpsDocument {
             return;
         };
         let block = &self.doc.blocks()[b];
-        let mut tokens = block
-            .data
-            .clone()
-            .flat_map(|i| lex::tokens(self.doc.line(i)).map(move |(o, t)| (i, o, t)));
+        let mut tokens = self.value_tokens(b);
         match tokens.next() {
             Some((_, _, "linear" | "step" | "off")) => {}
             Some((i, o, tok)) => errors.push(self.doc.error_at(
@@ -192,11 +198,7 @@ impl CpsDocument {
             return;
         };
         let block = &self.doc.blocks()[b];
-        let found = block
-            .data
-            .clone()
-            .flat_map(|i| lex::tokens(self.doc.line(i)).map(move |(o, t)| (i, o, t)))
-            .nth(index);
+        let found = self.value_tokens(b).nth(index);
         match found {
             Some((i, o, tok)) => match lex::parse_real(tok) {
                 Some(v) if (lo..=hi).contains(&v) => {}
@@ -236,10 +238,7 @@ impl CpsDocument {
         let block = &self.doc.blocks()[b];
         let expected = [0.0, -1.0, 0.0];
         let wanted = if n_dim == 3 { "0 -1 0" } else { "0 -1" };
-        let mut tokens = block
-            .data
-            .clone()
-            .flat_map(|i| lex::tokens(self.doc.line(i)).map(move |(o, t)| (i, o, t)));
+        let mut tokens = self.value_tokens(b);
         let mut errors = Vec::new();
         for (k, want) in expected.iter().enumerate().take(n_dim) {
             match tokens.next() {

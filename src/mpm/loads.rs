@@ -153,9 +153,9 @@ type NodalForces<const D: usize> = (LoadPhase, usize, Vec<(u32, [f64; D])>);
 /// (outward, tension positive) and its height y; with γw (kN/m³).
 type WaterLevel<const D: usize> = (Vec<(u32, [f64; D], f64)>, f64);
 
-/// The loads of a run, built for its grid and MPs.
+/// The loads of a run, built for its grid and MPs; the multipliers that
+/// scale them stay in the caller's [`ProjectLoads`].
 pub(crate) struct ExternalLoads<const D: usize> {
-    loads: ProjectLoads,
     nodal: Vec<NodalForces<D>>,
     /// (phase, system, MP index, force at multiplier 1).
     on_mps: Vec<(LoadPhase, usize, u32, [f64; D])>,
@@ -227,7 +227,6 @@ impl<const D: usize> ExternalLoads<D> {
             x
         };
         let mut out = ExternalLoads {
-            loads: loads.clone(),
             nodal: Vec::new(),
             on_mps: Vec::new(),
             head: None,
@@ -379,31 +378,29 @@ impl<const D: usize> ExternalLoads<D> {
         out
     }
 
-    /// The prescribed water level at `time`: its area and head, when one is
-    /// applied.
-    pub fn level(&self, time: f64) -> Option<([[f64; 2]; 3], f64)> {
+    /// The prescribed water level of `loads` (these loads' project) at
+    /// `time`: its area and head, when one is applied.
+    pub fn level(&self, loads: &ProjectLoads, time: f64) -> Option<([[f64; 2]; 3], f64)> {
         self.head.as_ref()?;
-        let series = self.loads.head.as_ref()?;
+        let series = loads.head.as_ref()?;
         Some((series.area, series.at(time)))
     }
 
-    /// Adds the loads at `time` (s): solid ones to `solid` (per grid node),
-    /// liquid ones to `liquid`. MP loads go to the corners of each MP's
-    /// element with its shape values `shape(mp)`.
+    /// Adds the loads at `time` (s), at the multipliers of `loads` (these
+    /// loads' project): solid ones to `solid` (per grid node), liquid ones to
+    /// `liquid`. MP loads go to the corners of each MP's element with its
+    /// shape values `shape(mp)`.
     pub fn add<const NC: usize>(
         &self,
+        loads: &ProjectLoads,
         time: f64,
         corners_and_shape: impl Fn(u32) -> Option<([u32; NC], [f64; NC])>,
         solid: &mut [[f64; D]],
         mut liquid: Option<&mut [[f64; D]]>,
     ) {
         for (phase, system, forces) in &self.nodal {
-            let m = self.loads.multiplier(*phase, *system, time);
-            let target = match phase {
-                LoadPhase::Solid => Some(&mut *solid),
-                LoadPhase::Liquid => liquid.as_deref_mut(),
-            };
-            if let Some(target) = target {
+            let m = loads.multiplier(*phase, *system, time);
+            if let Some(target) = target_of(*phase, solid, &mut liquid) {
                 for (node, f) in forces {
                     for d in 0..D {
                         target[*node as usize][d] += m * f[d];
@@ -415,10 +412,10 @@ impl<const D: usize> ExternalLoads<D> {
             // `UpdateMultipliersWaterForSpaceDependency`: each node's unit
             // force × its pressure −γw·(h − y) below the level (h = 0 taken
             // as 1e-6, as the kernel does), on the liquid and the mixture.
-            let series = self.loads.head.as_ref().expect("a head with its series");
+            let series = loads.head.as_ref().expect("a head with its series");
             let mut h = series.at(time);
             // γw = ρw·g × the gravity multiplier (`ComputeWaterSpecificWeight`).
-            let gamma_w = gamma_w * self.loads.gravity_at(time);
+            let gamma_w = gamma_w * loads.gravity_at(time);
             if h == 0.0 {
                 h = 1e-6;
             }
@@ -436,12 +433,8 @@ impl<const D: usize> ExternalLoads<D> {
             let Some((corners, shape)) = corners_and_shape(*mp) else {
                 continue;
             };
-            let m = self.loads.multiplier(*phase, *system, time);
-            let target = match phase {
-                LoadPhase::Solid => Some(&mut *solid),
-                LoadPhase::Liquid => liquid.as_deref_mut(),
-            };
-            if let Some(target) = target {
+            let m = loads.multiplier(*phase, *system, time);
+            if let Some(target) = target_of(*phase, solid, &mut liquid) {
                 for i in 0..NC {
                     for d in 0..D {
                         target[corners[i] as usize][d] += m * shape[i] * f[d];
@@ -449,6 +442,19 @@ impl<const D: usize> ExternalLoads<D> {
                 }
             }
         }
+    }
+}
+
+/// Where a load of `phase` goes: the solid's (mixture's) nodal forces, or
+/// the liquid's when there is a liquid.
+fn target_of<'a, const D: usize>(
+    phase: LoadPhase,
+    solid: &'a mut [[f64; D]],
+    liquid: &'a mut Option<&mut [[f64; D]]>,
+) -> Option<&'a mut [[f64; D]]> {
+    match phase {
+        LoadPhase::Solid => Some(solid),
+        LoadPhase::Liquid => liquid.as_deref_mut(),
     }
 }
 

@@ -167,8 +167,9 @@ pub(crate) struct Solver<const D: usize, const NC: usize> {
     gravity: [f64; D],
     /// g (m/s²), before the gravity multiplier.
     g: f64,
-    /// The CPS's gravity multiplier and load-step timing.
-    gravity_load: (crate::model::loads::Multiplier, usize, f64),
+    /// The CPS's multipliers (gravity's among them) and load-step timing,
+    /// and the GOM's loads they scale ([`RunSettings::loads`]).
+    loads: crate::model::loads::ProjectLoads,
     damping: f64,
     pub dt: f64,
     pub time: f64,
@@ -448,11 +449,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             remap: vec![[[0.0; D]; NC]; n_points],
             gravity,
             g: settings.gravity,
-            gravity_load: (
-                settings.loads.gravity,
-                settings.loads.load_steps,
-                settings.loads.step_time,
-            ),
+            loads: settings.loads.clone(),
             damping: settings.damping,
             dt,
             time: 0.0,
@@ -471,12 +468,6 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             external,
             load_now: vec![[0.0; D]; n_nodes],
         })
-    }
-
-    /// The gravity multiplier at `time`.
-    fn loads_gravity(&self, time: f64) -> f64 {
-        let (m, steps, step_time) = self.gravity_load;
-        m.at(time, steps, step_time)
     }
 
     /// Replaces the constant external nodal forces.
@@ -514,7 +505,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
 
         // Gravity at the CPS's `$$GRAVITY_LOAD` multiplier of the step that
         // ends at t + Δt.
-        self.gravity[1] = -self.g * self.loads_gravity(self.time + dt);
+        self.gravity[1] = -self.g * self.loads.gravity_at(self.time + dt);
 
         // 1. P2G contributions, per MP in parallel.
         per_live_mp(
@@ -589,6 +580,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         if let Some(external) = self.external.as_ref() {
             let particles = &self.particles;
             external.add::<NC>(
+                &self.loads,
                 self.time + dt,
                 |mp| {
                     let p = &particles[mp as usize];
@@ -675,7 +667,10 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
 
         // 2b. Seepage faces and infiltration ([`super::seepage`]).
         if let (Some(flow), Some(l)) = (self.surface.as_mut(), self.liquid.as_mut()) {
-            flow.level = self.external.as_ref().and_then(|e| e.level(self.time + dt));
+            flow.level = self
+                .external
+                .as_ref()
+                .and_then(|e| e.level(&self.loads, self.time + dt));
             flow.apply(
                 grid,
                 &self.particles,

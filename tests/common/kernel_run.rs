@@ -21,15 +21,25 @@ pub fn run_kernel(bin: &Path, out: &Path, run: &Path, time: f64) -> PathBuf {
             std::fs::write(run.join(&name), edited).unwrap();
         }
     }
+    run_in_place(bin, run)
+}
+
+/// Runs the kernel on the project `slope` in `dir` as it is; the VTK of its
+/// material points at the end.
+pub fn run_in_place(bin: &Path, dir: &Path) -> PathBuf {
     let status = std::process::Command::new(bin)
         .arg("slope")
-        .current_dir(run)
+        .current_dir(dir)
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::null())
         .status()
         .unwrap();
-    let vtk = run.join("slope_MPVector_001.vtk");
-    assert!(status.success() || vtk.is_file());
+    let vtk = dir.join("slope_MPVector_001.vtk");
+    assert!(
+        status.success() || vtk.is_file(),
+        "the kernel failed in {}",
+        dir.display()
+    );
     vtk
 }
 
