@@ -48,6 +48,84 @@ impl Position {
     }
 }
 
+/// Line starts of a text, for turning many byte offsets into positions in
+/// O(log lines) each ([`Position::of_byte`] scans from the start: quadratic
+/// when a reader places thousands of tags).
+#[derive(Clone, Debug)]
+pub struct LineIndex<'a> {
+    text: &'a str,
+    /// Byte offset of the start of each line after the first.
+    starts: Vec<usize>,
+}
+
+impl<'a> LineIndex<'a> {
+    pub fn new(text: &'a str) -> LineIndex<'a> {
+        let starts = memchr::memchr_iter(b'\n', text.as_bytes())
+            .map(|i| i + 1)
+            .collect();
+        LineIndex { text, starts }
+    }
+
+    /// Position of `byte` (column counted in characters), as
+    /// [`Position::of_byte`] gives it.
+    pub fn position(&self, byte: usize) -> Position {
+        let byte = byte.min(self.text.len());
+        let lines_before = self.starts.partition_point(|&s| s <= byte);
+        let line_start = if lines_before == 0 {
+            0
+        } else {
+            self.starts[lines_before - 1]
+        };
+        let column = String::from_utf8_lossy(&self.text.as_bytes()[line_start..byte])
+            .chars()
+            .count()
+            + 1;
+        Position {
+            line: lines_before + 1,
+            column,
+            byte,
+        }
+    }
+}
+
+/// Longest run of non-blank characters a message repeats whole; longer ones
+/// (a 50 MB token in a bad file) are cut to their first
+/// [`CLIPPED_HEAD`] and last [`CLIPPED_TAIL`] characters.
+pub const MAX_ECHOED_WORD: usize = 120;
+/// Characters kept from the start of a clipped word.
+pub const CLIPPED_HEAD: usize = 40;
+/// Characters kept from the end of a clipped word.
+pub const CLIPPED_TAIL: usize = 12;
+
+/// `message` with every run of non-blank characters longer than `max`
+/// characters cut in the middle (`head…tail (N characters)`), so that an
+/// error never echoes a huge token from its input.
+pub fn clip_long_words(message: &str, max: usize) -> std::borrow::Cow<'_, str> {
+    let long = |w: &str| w.len() > max && w.chars().count() > max;
+    if !message.split_whitespace().any(long) {
+        return std::borrow::Cow::Borrowed(message);
+    }
+    let mut out = String::with_capacity(message.len().min(4 * max));
+    let mut rest = message;
+    while !rest.is_empty() {
+        let blank = rest.len() - rest.trim_start().len();
+        out.push_str(&rest[..blank]);
+        rest = &rest[blank..];
+        let end = rest.find(char::is_whitespace).unwrap_or(rest.len());
+        let word = &rest[..end];
+        if long(word) {
+            let n = word.chars().count();
+            let head: String = word.chars().take(CLIPPED_HEAD).collect();
+            let tail: String = word.chars().skip(n - CLIPPED_TAIL).collect();
+            out.push_str(&format!("{head}…{tail} ({n} characters)"));
+        } else {
+            out.push_str(word);
+        }
+        rest = &rest[end..];
+    }
+    std::borrow::Cow::Owned(out)
+}
+
 /// A reader error with the file and the place it refers to.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ParseError {
@@ -57,11 +135,18 @@ pub struct ParseError {
 }
 
 impl ParseError {
+    /// An error at `position`. A word of the message longer than
+    /// [`MAX_ECHOED_WORD`] characters (a token quoted from the input) is cut.
     pub fn new(path: &Path, position: Position, message: impl Into<String>) -> ParseError {
+        let message = message.into();
+        let message = match clip_long_words(&message, MAX_ECHOED_WORD) {
+            std::borrow::Cow::Borrowed(_) => message,
+            std::borrow::Cow::Owned(clipped) => clipped,
+        };
         ParseError {
             path: path.to_path_buf(),
             position,
-            message: message.into(),
+            message,
         }
     }
 
@@ -133,10 +218,13 @@ impl FormatError {
         }
     }
 
+    /// A whole-file error; a word of the message longer than
+    /// [`MAX_ECHOED_WORD`] characters is cut, as in [`ParseError::new`].
     pub fn file(path: &Path, message: impl Into<String>) -> FormatError {
+        let message = message.into();
         FormatError::File {
             path: path.to_path_buf(),
-            message: message.into(),
+            message: clip_long_words(&message, MAX_ECHOED_WORD).into_owned(),
         }
     }
 

@@ -80,7 +80,8 @@ pub struct FarNode {
     /// The axis (0, 1, 2) and the coordinate on it.
     pub axis: usize,
     pub value: f64,
-    /// The largest interquartile range of the nodes' coordinates (m).
+    /// The largest median absolute deviation of the nodes' coordinates (m):
+    /// half the nodes lie within it of the median on that axis.
     pub spread: f64,
 }
 
@@ -88,7 +89,7 @@ impl std::fmt::Display for FarNode {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         write!(
             f,
-            "{} = {:?} lies more than 10^6 times the spread of the nodes away from them (their middle half spans {:.4} m): a coordinate that cannot be meant",
+            "{} = {:?} lies more than 10^6 times the spread of the nodes away from them (half of them lie within {:.4} m of their median): a coordinate that cannot be meant",
             ["x", "y", "z"][self.axis],
             self.value,
             self.spread
@@ -97,28 +98,30 @@ impl std::fmt::Display for FarNode {
 }
 
 /// The first node (in the given order) farther from the median on some axis
-/// than 10^6 times the spread of the nodes' middle half (the largest of the
-/// axes' interquartile ranges), or `None`. Such an extent cannot be meant (one
+/// than 10^6 times the spread of the nodes (the largest of the axes' median
+/// absolute deviations, which one far node cannot inflate however few the
+/// nodes are, unlike an interquartile range of four), or `None`. Such an extent cannot be meant (one
 /// node at 1e308 beside a slope of 50 m): it would also make every other pair
 /// of nodes coincident within 1e-9 of the diagonal, and a grid or bins sized
-/// by the extent useless, so the readers refuse it first (#30). The quartiles come from at most about 4096 evenly strided
-/// nodes: O(n) with a small constant, and deterministic.
+/// by the extent useless, so the readers refuse it first (#30). The medians
+/// come from at most about 4096 evenly strided nodes: O(n) with a small
+/// constant, and deterministic.
 pub fn far_outlier(positions: &[[f64; 3]]) -> Option<FarNode> {
     let n = positions.len();
-    if n < 4 {
+    if n < 3 {
         return None;
     }
     let stride = n.div_ceil(4096);
     let mut median = [0.0; 3];
-    // Half the largest interquartile range, from halves (no overflow).
+    // Half the largest median absolute deviation, from halves (no overflow).
     let mut half_spread = 0.0f64;
     for k in 0..3 {
         let mut v: Vec<f64> = positions.iter().step_by(stride).map(|p| p[k]).collect();
         let m = v.len();
-        let mut at = |i: usize| *v.select_nth_unstable_by(i, f64::total_cmp).1;
-        let (q1, q2, q3) = (at(m / 4), at(m / 2), at(3 * m / 4));
-        median[k] = q2;
-        half_spread = half_spread.max(q3 / 2.0 - q1 / 2.0);
+        let mid = *v.select_nth_unstable_by(m / 2, f64::total_cmp).1;
+        median[k] = mid;
+        let mut deviations: Vec<f64> = v.iter().map(|x| (x / 2.0 - mid / 2.0).abs()).collect();
+        half_spread = half_spread.max(*deviations.select_nth_unstable_by(m / 2, f64::total_cmp).1);
     }
     if !(half_spread > 0.0 && half_spread.is_finite()) {
         return None;

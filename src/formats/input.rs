@@ -34,6 +34,21 @@ pub const ENTRY_EXPANSION: u64 = 32;
 /// … or to this many bytes, whichever is larger (32 MiB).
 pub const ENTRY_FLOOR_BYTES: u64 = 32 << 20;
 
+/// Most bytes the arrays of one VTK file may decode to, whatever its size
+/// (4 GiB of f64 values).
+pub const MAX_DECODED_BYTES: u64 = 4 << 30;
+
+/// The decoded size (as f64 values, 8 bytes each) allowed for all the arrays
+/// of a VTK file of `file_bytes`: [`ENTRY_EXPANSION`] times its size, at
+/// least [`ENTRY_FLOOR_BYTES`], at most [`MAX_DECODED_BYTES`]. Real OGS
+/// output decodes to 1–10× its size; a zlib bomb or a declared count the
+/// file cannot hold is refused before anything is allocated.
+pub fn decoded_limit(file_bytes: u64) -> u64 {
+    file_bytes
+        .saturating_mul(ENTRY_EXPANSION)
+        .clamp(ENTRY_FLOOR_BYTES, MAX_DECODED_BYTES)
+}
+
 /// The uncompressed size allowed for one entry of an archive of `archive_bytes`.
 pub fn entry_limit(archive_bytes: u64) -> u64 {
     archive_bytes
@@ -110,6 +125,13 @@ fn record(path: &Path) {
     for reads in live {
         push_once(&reads, path);
     }
+}
+
+/// Notes `path` in every live [`ReadLog`] without reading it: a file the
+/// command depends on but does not open (the other outputs of a `.pvd`
+/// series), which no output may then replace or delete.
+pub fn protect(path: &Path) {
+    record(path);
 }
 
 /// Opens `path` for reading if it is a regular file (symlinks followed) and

@@ -25,7 +25,7 @@ pub enum CellKind {
 impl CellKind {
     /// The kind of VTK cell type `code`; `Err` names what the code is when it
     /// is a type a3d-init does not read.
-    pub fn from_vtk(code: u8) -> Result<CellKind, String> {
+    pub fn from_vtk(code: i64) -> Result<CellKind, String> {
         Ok(match code {
             1 => CellKind::Vertex,
             5 => CellKind::Tri3,
@@ -185,5 +185,16 @@ mod tests {
         }
         assert!(CellKind::from_vtk(3).unwrap_err().contains("line"));
         assert!(CellKind::from_vtk(29).unwrap_err().contains("29"));
+        // Codes past a byte are named as written, not as a wrapped byte.
+        assert!(
+            CellKind::from_vtk(300)
+                .unwrap_err()
+                .contains("cell type 300 ")
+        );
+        assert!(
+            CellKind::from_vtk(-5)
+                .unwrap_err()
+                .contains("cell type -5 ")
+        );
     }
 }

@@ -27,6 +27,11 @@ pub fn values(
         .checked_mul(tag.components)
         .ok_or_else(|| too_many(path, tag))?;
     let label = label(tag);
+    // Nothing is allocated on a declared count before the file's budget
+    // allows it.
+    xml.budget
+        .take(count)
+        .map_err(|why| ParseError::new(path, tag.at, format!("{label}: {why}")))?;
     match &tag.place {
         Place::Ascii(range) => ascii(path, bytes, range.clone(), count, tag),
         Place::Binary(range) => {
@@ -274,7 +279,8 @@ fn block(
             )));
         }
         let sizes = source.take(n_blocks as usize * h).map_err(fail)?;
-        let mut out = Vec::with_capacity(expected);
+        // Grown with the data inflated, not reserved on the header's word.
+        let mut out = Vec::with_capacity(expected.min(1 << 20));
         for k in 0..n_blocks as usize {
             let csize = read_uint(&sizes[k * h..], layout) as usize;
             let want = if k + 1 == n_blocks as usize {

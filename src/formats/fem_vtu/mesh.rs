@@ -161,8 +161,18 @@ pub fn read(
                     ),
                 )
             })?;
-        let code = u8::try_from(types[c] as i64).unwrap_or(0);
-        let kind = match CellKind::from_vtk(code) {
+        let code = types[c];
+        if !(code.fract() == 0.0 && code.abs() < 1e15) {
+            return Err(ParseError::new(
+                path,
+                xml.types.at,
+                format!(
+                    "cell {}: type {code} is not an integer (a VTK cell type code)",
+                    c + 1
+                ),
+            ));
+        }
+        let kind = match CellKind::from_vtk(code as i64) {
             Ok(kind) => kind,
             Err(message) => {
                 *refused.entry(message).or_default() += 1;

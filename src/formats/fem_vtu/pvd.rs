@@ -48,10 +48,16 @@ pub fn time_text(t: f64) -> String {
     }
 }
 
-/// Reads the series of a `.pvd` (the files listed are not opened).
+/// Reads the series of a `.pvd`. The files listed are not opened, but each
+/// is protected as an input ([`crate::formats::input::protect`]): no output
+/// folder may hold or replace one.
 pub fn read(path: &Path) -> Result<Series, FormatError> {
     let text = crate::formats::input::read_text(path)?;
-    parse(path, &text)
+    let series = parse(path, &text)?;
+    for output in &series.outputs {
+        crate::formats::input::protect(&output.file);
+    }
+    Ok(series)
 }
 
 /// Parses the text of a `.pvd` at `path`.

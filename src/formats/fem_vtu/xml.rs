@@ -8,7 +8,7 @@
 use std::ops::Range;
 use std::path::Path;
 
-use crate::formats::error::{ParseError, Position};
+use crate::formats::error::{LineIndex, ParseError, Position};
 
 /// Scalar type of a `DataArray`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -130,6 +130,47 @@ pub struct VtuXml {
     pub cell_data: Vec<ArrayTag>,
     /// A short description of the encodings met (`appended base64, zlib, UInt64 headers`).
     pub encoding: String,
+    /// What the file's arrays may still decode to ([`super::decode::values`]
+    /// draws on it before it allocates).
+    pub budget: Budget,
+}
+
+/// Bytes of decoded values (8 per value) the arrays of one file may take in
+/// all: [`crate::formats::input::decoded_limit`] of the file's size.
+#[derive(Clone, Debug)]
+pub struct Budget {
+    pub file_bytes: u64,
+    pub limit: u64,
+    pub left: std::cell::Cell<u64>,
+}
+
+impl Budget {
+    pub fn of_file(file_bytes: usize) -> Budget {
+        let file_bytes = file_bytes as u64;
+        let limit = crate::formats::input::decoded_limit(file_bytes);
+        Budget {
+            file_bytes,
+            limit,
+            left: std::cell::Cell::new(limit),
+        }
+    }
+
+    /// Takes `values` values from the budget, or says why not.
+    pub fn take(&self, values: usize) -> Result<(), String> {
+        let bytes = (values as u64).saturating_mul(8);
+        let left = self.left.get();
+        if bytes > left {
+            return Err(format!(
+                "{values} values take {bytes} bytes decoded, past the {} bytes that the arrays of a file of {} bytes may decode to ({}× its size, at least {} MiB; a zlib bomb, or a count the file cannot hold?)",
+                self.limit,
+                self.file_bytes,
+                crate::formats::input::ENTRY_EXPANSION,
+                crate::formats::input::ENTRY_FLOOR_BYTES >> 20
+            ));
+        }
+        self.left.set(left - bytes);
+        Ok(())
+    }
 }
 
 fn err(path: &Path, at: Position, message: impl Into<String>) -> ParseError {
@@ -149,7 +190,9 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<VtuXml, ParseError> {
             "the XML is not valid UTF-8 (is this a legacy binary .vtk file?)",
         )
     })?;
-    let pos = |byte: usize| Position::of_byte(head, byte);
+    // One index of the line starts: positions of thousands of tags stay linear.
+    let lines = LineIndex::new(head);
+    let pos = |byte: usize| lines.position(byte);
     // Without the appended data the document lacks its closing tag: add it.
     let mut xml = head.to_string();
     if appended_at.is_some() {
@@ -348,6 +391,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<VtuXml, ParseError> {
         point_data,
         cell_data,
         encoding,
+        budget: Budget::of_file(bytes.len()),
     })
 }
 
