@@ -331,7 +331,7 @@ fn e2e(args: &BenchArgs) -> anyhow::Result<()> {
     let mapped = mapping::compute(&job)?;
     let compute_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
-    let out = OutputDir::create(&dir.join("out"), true, &reads)?;
+    let out = OutputDir::create(&dir.join("out"), true, &reads, "bench")?;
     let written = crate::pipeline::write::write_project(&mapped, &out.staging(), args.fem_vtu)?;
     let write_s = t.elapsed().as_secs_f64();
     // The commit: every file and the folder synced to disk, the rename, the

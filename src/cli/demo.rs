@@ -178,7 +178,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         fem_vtu: false,
     };
     let mapped = mapping::compute(&job)?;
-    let out = OutputDir::create(&args.out, args.force, &reads)?;
+    let out = OutputDir::create(&args.out, args.force, &reads, "demo")?;
     let mut written = crate::pipeline::write::write_project(&mapped, &out.staging(), false)?;
     calibrate::plot_curve(&out.path("calibration.svg"), &outcome)?;
     let pts = &mapped.project.points;

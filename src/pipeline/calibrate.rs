@@ -318,7 +318,7 @@ pub fn calibrate(
         }
         None => None,
     };
-    let dir = super::output::OutputDir::create(out, force, &reads)?;
+    let dir = super::output::OutputDir::create(out, force, &reads, "calibrate")?;
     plot_curve(&dir.path("calibration.svg"), &outcome)?;
     if let Some(c) = &check {
         super::plot::scatter_1to1(

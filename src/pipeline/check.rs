@@ -40,6 +40,20 @@ impl Default for VerifyOptions {
 }
 
 impl VerifyOptions {
+    /// Refuses a damping outside [0, 1) and a step limit past
+    /// [`mpm::MAX_RUN_STEPS`].
+    pub fn check(&self) -> Result<(), PipelineError> {
+        runner::check_damping(self.damping)?;
+        if self.max_steps > mpm::MAX_RUN_STEPS {
+            return Err(PipelineError::Option(format!(
+                "{} steps: a run takes at most {}",
+                self.max_steps,
+                mpm::MAX_RUN_STEPS
+            )));
+        }
+        Ok(())
+    }
+
     /// The runner's settings for this project's CPS.
     pub fn settings(&self, cps: Option<&crate::formats::cps::CpsDocument>) -> RunSettings {
         let mut s = runner::with_cps(RunSettings::verify(), cps, self.damping);
@@ -109,6 +123,7 @@ fn causes(check: Option<&KernelCheck>, run: Option<&mpm::RunReport>) -> Vec<Stri
 
 /// Runs the equilibrium check on a loaded start (writes nothing).
 pub fn check(start: &Start, options: &VerifyOptions) -> Result<VerifyOutcome, PipelineError> {
+    options.check()?;
     let (settings, notes) =
         runner::with_project(options.settings(start.project.cps.as_ref()), &start.project)?;
     // A model the runner cannot simulate still gets its Anura3D-side checks
@@ -234,10 +249,11 @@ pub fn verify(
     to: Destination<'_>,
 ) -> Result<(VerifyOutcome, PathBuf), PipelineError> {
     // Rerunning `verify DIR` replaces its own default subfolder.
+    options.check()?;
     let own_folder = to.folder.is_none() && matches!(source, StateSource::Folder(_));
     let (reads, start, target) = runner::begin(source, to, "verify")?;
     let force = to.replace || (own_folder && target.join("verify.json").is_file());
-    let dir = OutputDir::create(&target, force, &reads)?;
+    let dir = OutputDir::create(&target, force, &reads, "verify")?;
     let outcome = check(&start, options)?;
     write(&outcome, &start, &dir)?;
     Ok((outcome, dir.commit()?))

@@ -393,6 +393,7 @@ pub fn analyse_state(
     states: &[MpState],
     options: &FosOptions,
 ) -> Result<FosAnalysis, PipelineError> {
+    runner::check_damping(options.damping)?;
     let project = &start.project;
     let gravity = project
         .cps
@@ -481,7 +482,7 @@ pub fn analyse_into(
     reads: &ReadLog,
 ) -> Result<(FosAnalysis, PathBuf), PipelineError> {
     // The output is checked before the analysis: a refusal comes at once.
-    let dir = OutputDir::create(out, force, reads)?;
+    let dir = OutputDir::create(out, force, reads, "fos")?;
     let analysis = analyse_state(start, states, options)?;
     let field: Vec<(f64, f64, f64)> = start
         .points

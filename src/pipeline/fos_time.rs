@@ -90,6 +90,21 @@ impl Default for FosTimeOptions {
     }
 }
 
+impl FosTimeOptions {
+    /// Refuses a bracket width that is not a positive number of seconds and
+    /// a damping outside [0, 1).
+    pub fn check(&self) -> Result<(), PipelineError> {
+        if let Some(t) = self.bisect_tolerance
+            && !(t.is_finite() && t > 0.0)
+        {
+            return Err(PipelineError::Option(format!(
+                "bisection tolerance {t}: expected a positive number of seconds"
+            )));
+        }
+        super::runner::check_damping(self.srm_damping)
+    }
+}
+
 /// One point of the curve.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct CurvePoint {
@@ -336,6 +351,7 @@ pub fn fos_over_time(
     options: &FosTimeOptions,
 ) -> Result<FosTimeReport, PipelineError> {
     let started = Instant::now();
+    options.check()?;
     let section = series_section(project)?;
     let fields: Vec<Field> = series
         .iter()
@@ -535,11 +551,12 @@ pub fn fos_time(
     options: &FosTimeOptions,
     to: Destination<'_>,
 ) -> Result<(FosTimeReport, PathBuf), PipelineError> {
+    options.check()?;
     let reads = ReadLog::start();
     let project = Project::load(model)?;
     let series = load_series(input)?;
     let target = to.or(|| project.files.dir.join("fos_time"));
-    let dir = OutputDir::create(&target, to.replace, &reads)?;
+    let dir = OutputDir::create(&target, to.replace, &reads, "fos-time")?;
     let report = fos_over_time(&project, &series, options)?;
     write_outputs(&dir, &report, &series)?;
     Ok((report, dir.commit()?))

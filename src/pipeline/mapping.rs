@@ -87,7 +87,7 @@ pub fn map(job: &MapJob, to: Destination<'_>) -> Result<(Mapped, Written), Pipel
     let mapped = compute(job)?;
     let files = &mapped.project.files;
     let target = to.or(|| default_out(&files.dir, &files.name));
-    let dir = OutputDir::create(&target, to.replace, &reads)?;
+    let dir = OutputDir::create(&target, to.replace, &reads, "map")?;
     let files = super::write::write_project(&mapped, &dir.staging(), job.fem_vtu)?;
     let folder = dir.commit()?;
     Ok((mapped, Written { files, folder }))

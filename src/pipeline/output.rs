@@ -167,6 +167,53 @@ fn parent_of(path: &Path) -> PathBuf {
     }
 }
 
+/// The file every output folder holds, naming the tool and the command that
+/// wrote it: `force` replaces a folder only when it holds this (or is empty),
+/// so a mistyped `--out` cannot delete a folder of the user's.
+pub const MARKER: &str = ".a3d-init-output";
+
+/// The first line of [`MARKER`], by which an output folder is recognised.
+const MARKER_HEAD: &str = "a3d-init output folder";
+
+fn marker_text(command: &str) -> String {
+    format!(
+        "{MARKER_HEAD}\ntool: a3d-init {}\ncommand: {command}\n\nWritten by a3d-init; `--force` may replace this folder whole.\n",
+        env!("CARGO_PKG_VERSION")
+    )
+}
+
+/// Whether the existing `target` may be replaced: an empty folder, or a
+/// folder holding a3d-init's [`MARKER`] (symlinks followed). Anything else is
+/// an error naming the folder and why.
+fn replaceable(target: &Path) -> Result<(), PipelineError> {
+    let meta = std::fs::metadata(target).map_err(|e| io_error(target.display(), e))?;
+    if !meta.is_dir() {
+        return Err(refused(format!(
+            "{} exists and is not a folder; refusing to replace it",
+            target.display()
+        )));
+    }
+    let mut entries = std::fs::read_dir(target).map_err(|e| io_error(target.display(), e))?;
+    if entries.next().is_none() {
+        return Ok(());
+    }
+    let marker = target.join(MARKER);
+    // Read directly, not as an input (an input is never replaced).
+    let is_ours = std::fs::symlink_metadata(&marker).is_ok_and(|m| m.is_file())
+        && std::fs::File::open(&marker).is_ok_and(|f| {
+            let mut head = Vec::new();
+            std::io::Read::read_to_end(&mut std::io::Read::take(f, 256), &mut head).is_ok()
+                && head.starts_with(MARKER_HEAD.as_bytes())
+        });
+    if is_ours {
+        return Ok(());
+    }
+    Err(refused(format!(
+        "refusing to replace {}: it is not empty and a3d-init did not write it (no {MARKER} in it); `--force` replaces only a3d-init's own output folders: choose another output path",
+        target.display()
+    )))
+}
+
 /// An output folder under construction. Files go into a hidden temporary sibling;
 /// [`OutputDir::commit`] syncs it and moves it to the final name. Dropping it
 /// without commit removes everything, and so does every failed commit.
@@ -181,10 +228,16 @@ impl<'a> OutputDir<'a> {
     /// Prepares `target`. `reads` holds the files this command read: the target
     /// may neither be nor hold any of them, whatever `force` says (checked now
     /// and again at the commit).
+    ///
+    /// An existing `target` is replaced (under `force`) only when it is an
+    /// empty folder or an output folder of a3d-init (it holds [`MARKER`]);
+    /// anything else is refused whatever `force` says. `command` names the
+    /// command in the new folder's marker.
     pub fn create(
         target: &Path,
         force: bool,
         reads: &'a ReadLog,
+        command: &str,
     ) -> Result<OutputDir<'a>, PipelineError> {
         refuse_inputs(target, &reads.files())?;
         // `.`, `..`, `/` or a folder holding the working directory: replacing it
@@ -205,17 +258,11 @@ impl<'a> OutputDir<'a> {
                 target.display()
             )));
         }
-        if let Ok(meta) = std::fs::symlink_metadata(target) {
+        if std::fs::symlink_metadata(target).is_ok() {
             if !force {
                 return Err(PipelineError::Exists(target.to_path_buf()));
             }
-            let is_dir = std::fs::metadata(target).is_ok_and(|m| m.is_dir());
-            if !meta.is_symlink() && !is_dir {
-                return Err(refused(format!(
-                    "{} exists and is not a folder; refusing to replace it",
-                    target.display()
-                )));
-            }
+            replaceable(target)?;
         }
         let parent = parent_of(target);
         std::fs::create_dir_all(&parent)
@@ -224,12 +271,14 @@ impl<'a> OutputDir<'a> {
             .prefix(".a3d-init-staging-")
             .tempdir_in(&parent)
             .map_err(|e| io_error(format_args!("creating a folder in {}", parent.display()), e))?;
-        Ok(OutputDir {
+        let dir = OutputDir {
             target: target.to_path_buf(),
             staging: Some(staging),
             force,
             reads,
-        })
+        };
+        dir.write(MARKER, |w| w.write_all(marker_text(command).as_bytes()))?;
+        Ok(dir)
     }
 
     /// Path of `name` inside the staging folder.
@@ -572,18 +621,66 @@ pub mod trace {
 mod tests {
     use super::*;
 
-    /// A temporary folder holding `out/old.txt`: (the folder, `out`).
+    /// A temporary folder holding an earlier output `out/` (its marker and
+    /// `old.txt`): (the folder, `out`).
     fn old_output() -> (tempfile::TempDir, PathBuf) {
         let tmp = tempfile::tempdir().unwrap();
         let target = tmp.path().join("out");
         std::fs::create_dir(&target).unwrap();
         std::fs::write(target.join("old.txt"), "old").unwrap();
+        std::fs::write(target.join(MARKER), marker_text("map")).unwrap();
         (tmp, target)
+    }
+
+    #[test]
+    fn force_replaces_only_an_empty_folder_or_an_own_output() {
+        let tmp = tempfile::tempdir().unwrap();
+        let reads = ReadLog::start();
+        // A folder of the user's: refused, untouched, nothing left beside it.
+        let documents = tmp.path().join("Documents");
+        std::fs::create_dir(&documents).unwrap();
+        std::fs::write(documents.join("paper.docx"), "thesis").unwrap();
+        let e = OutputDir::create(&documents, true, &reads, "map")
+            .err()
+            .unwrap()
+            .to_string();
+        assert!(e.contains("a3d-init did not write it"), "{e}");
+        assert!(e.contains("Documents"), "{e}");
+        // A marker that is not ours does not count.
+        std::fs::write(documents.join(MARKER), "something else").unwrap();
+        assert!(OutputDir::create(&documents, true, &reads, "map").is_err());
+        assert_eq!(
+            std::fs::read_to_string(documents.join("paper.docx")).unwrap(),
+            "thesis"
+        );
+        let names: Vec<_> = std::fs::read_dir(tmp.path()).unwrap().collect();
+        assert_eq!(names.len(), 1);
+        // An empty folder is replaced, and the new folder carries the marker.
+        let empty = tmp.path().join("empty");
+        std::fs::create_dir(&empty).unwrap();
+        let out = OutputDir::create(&empty, true, &reads, "verify").unwrap();
+        out.commit().unwrap();
+        let marker = std::fs::read_to_string(empty.join(MARKER)).unwrap();
+        assert!(
+            marker.starts_with(MARKER_HEAD) && marker.contains("command: verify"),
+            "{marker}"
+        );
+        // So it can be replaced again; the marker was not read as an input.
+        OutputDir::create(&empty, true, &reads, "verify")
+            .unwrap()
+            .commit()
+            .unwrap();
+        assert!(
+            !reads.files().iter().any(|f| f.ends_with(MARKER)),
+            "{:?}",
+            reads.files()
+        );
     }
 
     /// `out` holds `new.txt` and not `old.txt`, and nothing is left beside it.
     fn assert_replaced(tmp: &Path, target: &Path) {
         assert!(!target.join("old.txt").exists());
+        assert!(target.join(MARKER).exists());
         assert_eq!(
             std::fs::read_to_string(target.join("new.txt")).unwrap(),
             "new"
@@ -599,7 +696,7 @@ mod tests {
     fn force_replaces_a_folder_completely_and_leaves_no_staging() {
         let (tmp, target) = old_output();
         let reads = ReadLog::start();
-        let out = OutputDir::create(&target, true, &reads).unwrap();
+        let out = OutputDir::create(&target, true, &reads, "test").unwrap();
         out.write("new.txt", |w| w.write_all(b"new")).unwrap();
         out.commit().unwrap();
         assert_replaced(tmp.path(), &target);
@@ -610,6 +707,7 @@ mod tests {
         let (tmp, target) = old_output();
         let staging = tempfile::tempdir_in(tmp.path()).unwrap();
         std::fs::write(staging.path().join("new.txt"), "new").unwrap();
+        std::fs::write(staging.path().join(MARKER), marker_text("map")).unwrap();
         replace_by_two_renames(staging, &target).unwrap();
         assert_replaced(tmp.path(), &target);
     }
@@ -631,7 +729,7 @@ mod tests {
     fn a_file_read_after_the_folder_was_prepared_is_still_protected_at_commit() {
         let (tmp, target) = old_output();
         let reads = ReadLog::start();
-        let out = OutputDir::create(&target, true, &reads).unwrap();
+        let out = OutputDir::create(&target, true, &reads, "test").unwrap();
         crate::formats::input::read_bytes(&target.join("old.txt")).unwrap();
         out.write("new.txt", |w| w.write_all(b"new")).unwrap();
         let e = out.commit().unwrap_err().to_string();

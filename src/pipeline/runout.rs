@@ -38,6 +38,7 @@ impl RunOptions {
         &self,
         cps: Option<&crate::formats::cps::CpsDocument>,
     ) -> Result<RunSettings, PipelineError> {
+        runner::check_damping(self.damping)?;
         if !(self.time.is_finite() && self.time > 0.0) {
             return Err(PipelineError::Option(format!(
                 "simulated time {}: expected a positive number of seconds",
@@ -49,6 +50,21 @@ impl RunOptions {
                 "snapshot time {t}: expected a number of seconds ≥ 0"
             )));
         }
+        if self.snapshots.len() > MAX_SNAPSHOTS {
+            return Err(PipelineError::Option(format!(
+                "{} snapshot times: a run writes at most {MAX_SNAPSHOTS}",
+                self.snapshots.len()
+            )));
+        }
+        let mut sorted = self.snapshots.clone();
+        sorted.sort_by(f64::total_cmp);
+        if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
+            return Err(PipelineError::Option(format!(
+                "snapshot time {} is given twice",
+                w[0]
+            )));
+        }
+
         let damping = self
             .damping
             .or_else(|| cps.and_then(|c| c.local_damping_setting()))
@@ -85,28 +101,75 @@ pub fn run(
         options.settings(start.project.cps.as_ref())?,
         &start.project,
     )?;
-    let dir = OutputDir::create(&target, to.replace, &reads)?;
-    let mut output = mpm::run(
+    let dir = OutputDir::create(&target, to.replace, &reads, "run")?;
+    // Each snapshot is written as it is taken, under the name of the time
+    // asked for: memory does not grow with their number.
+    let names = snapshot_names(&settings.snapshot_times);
+    let mut snapshots = Vec::new();
+    let mut report = mpm::run_streaming(
         &start.project.model,
         &start.points,
         start.states(),
         &settings,
+        &mut |asked, s| {
+            let name = names
+                .iter()
+                .find(|(t, _)| *t == asked)
+                .map_or_else(|| format!("mps_t{asked}.vtu"), |(_, n)| n.clone());
+            write_snapshot(&dir, &name, &s).map_err(|e| e.to_string())?;
+            snapshots.push(name);
+            Ok(())
+        },
     )
     .map_err(runner::runner_error)?;
-    output.report.notes.splice(0..0, notes);
-    let json = serde_json::to_string_pretty(&output.report)
+    report.notes.splice(0..0, notes);
+    let late: Vec<String> = settings
+        .snapshot_times
+        .iter()
+        .filter(|&&t| t > options.time)
+        .map(|t| t.to_string())
+        .collect();
+    if !late.is_empty() {
+        report.notes.push(format!(
+            "snapshot times past the end of the run ({} s) are not taken: {} s",
+            options.time,
+            late.join(", ")
+        ));
+    }
+    let json = serde_json::to_string_pretty(&report)
         .map_err(|e| PipelineError::Output(format!("run.json: {e}")))?;
     dir.write("run.json", |w| w.write_all(json.as_bytes()))?;
-    history_plot(&dir.path("run_history.svg"), &output.report)?;
-    let mut snapshots = Vec::new();
-    for s in &output.snapshots {
-        let name = format!("mps_t{:.2}.vtu", s.time);
-        write_snapshot(&dir, &name, s)?;
-        snapshots.push(name);
-    }
+    history_plot(&dir.path("run_history.svg"), &report)?;
     Ok(RunOutcome {
-        report: output.report,
+        report,
         snapshots,
         folder: dir.commit()?,
     })
+}
+
+/// Most snapshot times one run takes.
+pub const MAX_SNAPSHOTS: usize = 1000;
+
+/// The file name of each snapshot time: `mps_t<time>.vtu` with two decimals
+/// (`mps_t0.30.vtu`), or as many more as it takes for distinct times to get
+/// distinct names (`mps_t0.001.vtu`, `mps_t0.002.vtu`); sorted by time.
+pub fn snapshot_names(times: &[f64]) -> Vec<(f64, String)> {
+    let mut sorted = times.to_vec();
+    sorted.sort_by(f64::total_cmp);
+    sorted.dedup();
+    let distinct = |names: &[(f64, String)]| names.windows(2).all(|w| w[0].1 != w[1].1);
+    for decimals in 2..=17 {
+        let names: Vec<(f64, String)> = sorted
+            .iter()
+            .map(|&t| (t, format!("mps_t{t:.decimals$}.vtu")))
+            .collect();
+        if distinct(&names) {
+            return names;
+        }
+    }
+    // Rust's shortest round-trip form differs for every distinct number.
+    sorted
+        .iter()
+        .map(|&t| (t, format!("mps_t{t}.vtu")))
+        .collect()
 }
