@@ -183,9 +183,9 @@ def test_verify_and_fos_on_a_mapped_folder(tmp_path):
     assert isinstance(verdict["equilibrium"], bool)
     assert verdict["anura3d"]["mps_csv"]["compared"] == 12
     assert Path(verdict["folder"]) == out / "verify"
-    # Held pore pressures on request: every material drained, p unchanged.
+    # Held pore pressures on request: p unchanged (both materials are dry).
     held = a3d_init.verify(out, drained=True, force=True)
-    assert {f for _, f in held["run"]["formulations"]} == {"drained"}
+    assert {f for _, f in held["run"]["formulations"]} == {"dry"}
     assert len(held["run"]["final_pore_pressures"]) == 12
     report = a3d_init.fos(out)
     assert report["factor"] > 0 and Path(report["folder"]) == out / "fos"

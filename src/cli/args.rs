@@ -318,6 +318,9 @@ impl LeArgs {
         if self.trials == 0 {
             bail!("--trials must be at least 1");
         }
+        if self.phi_b.is_some() && self.suction != SuctionArg::PhiB {
+            bail!("--phi-b applies with --suction phi-b");
+        }
         let defaults = crate::pipeline::slope::LeOptions::default();
         Ok(crate::pipeline::slope::LeOptions {
             method: self.method(method).unwrap_or(defaults.method),

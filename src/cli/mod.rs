@@ -141,9 +141,16 @@ pub fn main() -> ExitCode {
     let cli = match Cli::try_parse() {
         Ok(cli) => cli,
         Err(e) => {
-            let code = if e.use_stderr() { 2 } else { 0 };
-            let _ = e.print();
-            return ExitCode::from(code);
+            if !e.use_stderr() {
+                // --help and --version.
+                let _ = e.print();
+                return ExitCode::SUCCESS;
+            }
+            // clap repeats a bad value whole: cut a long one.
+            let text = e.render().to_string();
+            let text = crate::formats::error::clip_long_words(&text, MAX_PRINTED_WORD);
+            let _ = write!(std::io::stderr(), "{text}");
+            return ExitCode::from(2);
         }
     };
     // Last line of defence: a panic is a bug, but it still ends as exit 2 with one
@@ -187,15 +194,21 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// Longest word an error line repeats whole (paths included); every reader
+/// already cuts the tokens it quotes to
+/// [`crate::formats::error::MAX_ECHOED_WORD`] characters.
+const MAX_PRINTED_WORD: usize = 512;
+
 /// The error's chain as one line, with the command-line flag where the
-/// library names a concept.
+/// library names a concept, and no word longer than [`MAX_PRINTED_WORD`].
 fn message(e: &anyhow::Error) -> String {
-    match e.downcast_ref::<crate::pipeline::PipelineError>() {
+    let text = match e.downcast_ref::<crate::pipeline::PipelineError>() {
         Some(crate::pipeline::PipelineError::Exists(path)) => {
             format!("{} exists; pass --force to replace it", path.display())
         }
         _ => format!("{e:#}"),
-    }
+    };
+    crate::formats::error::clip_long_words(&text, MAX_PRINTED_WORD).into_owned()
 }
 
 /// Runs one parsed command.

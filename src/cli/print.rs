@@ -129,20 +129,26 @@ pub fn table_comparison(t: &crate::pipeline::verify::TableComparison) -> Vec<Str
     lines
 }
 
-/// Names the formulation each material ran with, when any is not drained.
-pub fn formulations(list: &[(u32, mpm::Formulation)]) {
-    if list.iter().all(|(_, f)| *f == mpm::Formulation::Drained) {
+/// Names the formulation each material ran with (by its GOM index and name),
+/// when any material has water that is not held.
+pub fn formulations(list: &[(u32, mpm::Formulation)], names: &[String]) {
+    use mpm::Formulation::{Coupled, Drained, Dry, UndrainedEffective};
+    if list.iter().all(|(_, f)| matches!(f, Drained | Dry)) {
         return;
     }
     let words: Vec<String> = list
         .iter()
         .map(|(m, f)| {
-            let name = match f {
-                mpm::Formulation::Drained => "drained (pwp frozen)",
-                mpm::Formulation::UndrainedEffective => "undrained effective (Δp = K_w/n·Δε_v)",
-                mpm::Formulation::Coupled => "two-phase coupled (the water flows)",
+            let how = match f {
+                Dry => "dry",
+                Drained => "drained (pwp held)",
+                UndrainedEffective => "undrained effective (Δp = K_w/n·Δε_v)",
+                Coupled => "two-phase coupled (the water flows)",
             };
-            format!("material {m}: {name}")
+            match (*m as usize).checked_sub(1).and_then(|i| names.get(i)) {
+                Some(name) => format!("material {m} `{name}`: {how}"),
+                None => format!("material {m}: {how}"),
+            }
         })
         .collect();
     say!("water      {}", words.join("; "));
@@ -162,7 +168,7 @@ fn area_words(area: &[[f64; 2]; 3]) -> String {
 /// The water of a run: each material's formulation, the seepage face and
 /// infiltration applied, and what the run did not apply.
 pub fn water(r: &mpm::RunReport) {
-    formulations(&r.formulations);
+    formulations(&r.formulations, &r.material_names);
     if let Some(area) = &r.hydraulic.seepage_area {
         say!(
             "water      seepage face on the free surface in {}",

@@ -171,6 +171,13 @@ impl CpsDocument {
         }
     }
 
+    /// The 1-based line of `keyword`, when present.
+    pub fn keyword_line(&self, keyword: &str) -> Option<usize> {
+        self.doc
+            .find(keyword, true)
+            .map(|b| self.doc.blocks()[b].line + 1)
+    }
+
     /// `$$NUMBER_OF_LOADSTEPS` (at least 1; 1 when absent) and
     /// `$$TIME_PER_LOADSTEP` (s; the kernel's 0.5 when absent).
     pub fn load_steps(&self) -> (usize, f64) {

@@ -333,6 +333,13 @@ pub fn strength_reduction(
         let gravity = settings.run.gravity.max(f64::MIN_POSITIVE);
         (20.0 * period).max(4.0 * (height / gravity).sqrt())
     });
+    let window_steps = (window / time_step).ceil();
+    if window_steps.is_nan() || window_steps > settings.run.max_steps as f64 {
+        return Err(FosError::InvalidSettings(format!(
+            "a window of {window:.3e} s takes {window_steps:.3e} steps at the model's time step of {time_step:.3e} s, more than the {} a trial may take",
+            settings.run.max_steps
+        )));
+    }
     let limits = Limits {
         window,
         threshold: settings.failure_fraction * height,

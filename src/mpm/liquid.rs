@@ -167,8 +167,10 @@ impl Coupled {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum Formulation {
-    /// One phase, pore pressure frozen (dry or drained materials, or every
-    /// material under `--drained`).
+    /// One phase, no water (`dry_material`): no pore pressure to hold.
+    Dry,
+    /// One phase, pore pressure frozen (drained materials, or every material
+    /// with water under `--drained`).
     Drained,
     /// One phase, pore pressure from the solid's volumetric strain.
     UndrainedEffective,
@@ -255,9 +257,15 @@ impl Water {
         let porosity = || -> Result<f64, MpmError> {
             match material.porosity {
                 Some(n) if n > 0.0 && n < 1.0 => Ok(n),
-                other => Err(MpmError::InvalidProperty {
+                Some(n) => Err(MpmError::InvalidProperty {
                     material: material.index,
-                    reason: format!("porosity {other:?} must be in (0, 1)"),
+                    reason: format!(
+                        "POROSITY_SOLID {n} must be in (0, 1) for a material with water"
+                    ),
+                }),
+                None => Err(MpmError::MissingProperty {
+                    material: material.index,
+                    property: "POROSITY_SOLID",
                 }),
             }
         };

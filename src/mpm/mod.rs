@@ -46,8 +46,8 @@ pub use liquid::Formulation;
 pub use material::{Elasticity, SolidModel};
 pub use mohr_coulomb::{MohrCoulomb, ReturnKind, ReturnMap};
 pub use run::{
-    ElementScore, Reason, RunOutput, RunReport, Snapshot, StepRecord, StopReason, Verdict, run,
-    verify,
+    ElementScore, MAX_RUN_STEPS, Reason, RunOutput, RunReport, Snapshot, StepRecord, StopReason,
+    Verdict, run, run_streaming, verify,
 };
 pub use simulation::Simulation;
 
@@ -99,6 +99,18 @@ pub enum MpmError {
     InvalidSettings(String),
     #[error("the simulation became unstable (non-finite values) at step {step}")]
     Unstable { step: usize },
+    #[error(
+        "a run of {time:.3e} s at the model's time step of {dt:.3e} s would take {steps:.3e} steps, more than the {limit} a run may take: give a shorter time"
+    )]
+    TooManySteps {
+        time: f64,
+        dt: f64,
+        steps: f64,
+        limit: usize,
+    },
+    /// A snapshot could not be handed on (written) during the run.
+    #[error("{0}")]
+    Snapshot(String),
 }
 
 /// Limits of the equilibrium verdict. A state is reported in equilibrium only

@@ -197,6 +197,8 @@ pub struct RunReport {
     /// How each material with MPs ran ([`super::liquid`]): (1-based
     /// material index, formulation).
     pub formulations: Vec<(u32, super::Formulation)>,
+    /// The GOM's material names, in its order (material k is entry k − 1).
+    pub material_names: Vec<String>,
     /// The seepage face and infiltration the run applied ([`super::seepage`]).
     pub hydraulic: super::seepage::HydraulicBoundaries,
     /// What the project asks for that the run did not apply.
@@ -231,17 +233,53 @@ pub fn run(
     states: &[MpState],
     settings: &RunSettings,
 ) -> Result<RunOutput, MpmError> {
+    let mut snapshots = Vec::new();
+    let report = run_streaming(model, points, states, settings, &mut |_, s| {
+        snapshots.push(s);
+        Ok(())
+    })?;
+    Ok(RunOutput { report, snapshots })
+}
+
+/// Most steps a run with an end time may take (10⁷): a duration that needs
+/// more at the model's time step is refused before the first step, naming
+/// the count ([`MpmError::TooManySteps`]).
+pub const MAX_RUN_STEPS: usize = 10_000_000;
+
+/// [`run`], handing each snapshot to `sink` as it is taken (with the time it
+/// was asked for, in [`RunSettings::snapshot_times`]) instead of keeping it:
+/// memory does not grow with the number of snapshots. An error from `sink`
+/// ends the run ([`MpmError::Snapshot`]).
+pub fn run_streaming(
+    model: &AnuraModel,
+    points: &[MaterialPoint],
+    states: &[MpState],
+    settings: &RunSettings,
+    sink: &mut dyn FnMut(f64, Snapshot) -> Result<(), String>,
+) -> Result<RunReport, MpmError> {
     let mut simulation = Simulation::new(model, points, states, settings)?;
-    drive(&mut simulation, model, settings)
+    drive(&mut simulation, model, settings, sink)
 }
 
 fn drive(
     simulation: &mut Simulation,
     model: &AnuraModel,
     settings: &RunSettings,
-) -> Result<RunOutput, MpmError> {
+    sink: &mut dyn FnMut(f64, Snapshot) -> Result<(), String>,
+) -> Result<RunReport, MpmError> {
     let height = model_height(model);
     let dt = simulation.time_step();
+    if let Some(end) = settings.end_time {
+        let steps = (end / dt).ceil();
+        if steps.is_nan() || steps > MAX_RUN_STEPS as f64 {
+            return Err(MpmError::TooManySteps {
+                time: end,
+                dt,
+                steps,
+                limit: MAX_RUN_STEPS,
+            });
+        }
+    }
     let period = 4.0 * height / simulation.wave_speed();
     let min_time = settings.min_time.unwrap_or(2.0 * period);
     let window = ((period / dt).ceil() as usize).max(1);
@@ -250,7 +288,6 @@ fn drive(
     let mut snapshot_times = settings.snapshot_times.clone();
     snapshot_times.sort_by(f64::total_cmp);
     let mut next_snapshot = 0;
-    let mut snapshots = Vec::new();
 
     let mut records = Vec::new();
     let mut calm_steps = 0usize;
@@ -289,7 +326,8 @@ fn drive(
         while next_snapshot < snapshot_times.len()
             && simulation.time() >= snapshot_times[next_snapshot] - 1e-9 * dt
         {
-            snapshots.push(snapshot(simulation));
+            sink(snapshot_times[next_snapshot], snapshot(simulation))
+                .map_err(MpmError::Snapshot)?;
             next_snapshot += 1;
         }
         if settings.stop_at_equilibrium && simulation.time() >= min_time && calm_steps >= window {
@@ -388,11 +426,22 @@ fn drive(
         final_stresses: simulation.effective_stresses(),
         final_plastic: simulation.plastic_flags(),
         final_pore_pressures: simulation.pore_pressures(),
-        formulations: simulation.formulations(),
+        formulations: simulation
+            .formulations()
+            .into_iter()
+            .map(|(m, f)| {
+                let dry = model
+                    .materials
+                    .get((m as usize).wrapping_sub(1))
+                    .is_some_and(|mat| mat.material_type == "dry_material");
+                (m, if dry { super::Formulation::Dry } else { f })
+            })
+            .collect(),
+        material_names: model.materials.iter().map(|m| m.name.clone()).collect(),
         hydraulic: simulation.hydraulic(),
         notes: simulation.notes(),
     };
-    Ok(RunOutput { report, snapshots })
+    Ok(report)
 }
 
 /// `value < limit`, false for NaN: a measurement that is not a number fails.

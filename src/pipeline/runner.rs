@@ -17,6 +17,18 @@ use crate::mpm::{self, RunSettings};
 /// Local damping α when neither the caller nor the CPS gives one.
 pub const DEFAULT_DAMPING: f64 = 0.75;
 
+/// Refuses a local damping α the caller gives that is not a number in
+/// [0, 1) (a CPS's value is clamped as Anura3D reads it; a caller's is not
+/// silently changed).
+pub fn check_damping(damping: Option<f64>) -> Result<(), PipelineError> {
+    match damping {
+        Some(d) if !(0.0..1.0).contains(&d) => Err(PipelineError::Option(format!(
+            "local damping {d}: expected a number in [0, 1)"
+        ))),
+        _ => Ok(()),
+    }
+}
+
 /// `s` with the CPS's gravity, submerged-calculation switch and Courant number (capped at 0.9) and the local
 /// damping α: `damping`, else the CPS `$$HOMOGENEOUS_LOCAL_DAMPING`, else
 /// [`DEFAULT_DAMPING`], clamped to [0, 0.99].
@@ -123,14 +135,9 @@ pub fn loads(
         }
     };
     let gravity = cps.multiplier("$$GRAVITY_LOAD");
-    // The first step's gravity: below 1, a mapped state at full weight
-    // starts out of balance in Anura3D (and in this runner, which follows it).
-    let start = gravity.at(0.0, load_steps, step_time);
-    if start < 1.0 {
+    if let Some(words) = start_gravity_words(cps) {
         notes.push(format!(
-            "the CPS's $$GRAVITY_LOAD starts gravity at {start:.3}·g ({}): Anura3D and this runner follow it, so a state mapped at full weight starts out of balance; `step 1.0 1.0` holds full gravity from the start",
-            cps.get("$$GRAVITY_LOAD")
-                .map_or_else(|| "absent: the kernel's step 0 1".to_string(), |v| v.join(" "))
+            "{words}: Anura3D and this runner follow it, so a state mapped at full weight starts out of balance; `step 1.0 1.0` holds full gravity from the start"
         ));
     }
     let loads = crate::model::loads::ProjectLoads {
@@ -151,6 +158,35 @@ pub fn loads(
     Ok((loads, notes))
 }
 
+/// When the CPS's `$$GRAVITY_LOAD` gives the first step less (or more) than
+/// full gravity: the words naming the multiplier, its line and its value
+/// (`the CPS's $$GRAVITY_LOAD (line 57: `off 0.0 1.0`) starts gravity at
+/// 0.000·g`). A state mapped at full weight then starts out of balance, in
+/// Anura3D as in this runner.
+pub fn start_gravity_words(cps: &CpsDocument) -> Option<String> {
+    let (load_steps, step_time) = cps.load_steps();
+    let start = cps
+        .multiplier("$$GRAVITY_LOAD")
+        .at(0.0, load_steps, step_time);
+    if start == 1.0 {
+        return None;
+    }
+    let place = match (
+        cps.keyword_line("$$GRAVITY_LOAD"),
+        cps.get("$$GRAVITY_LOAD"),
+    ) {
+        (Some(line), Some(v)) => format!(
+            "{}:{line}: `$$GRAVITY_LOAD {}`",
+            cps.document().path().display(),
+            v.join(" ")
+        ),
+        _ => "$$GRAVITY_LOAD absent: the kernel's `step 0 1`".to_string(),
+    };
+    Some(format!(
+        "the CPS's gravity starts at {start:.3}·g ({place})"
+    ))
+}
+
 /// `<project>.HHBF` beside the project's files, where Anura3D looks for it.
 pub fn hhbf_path(project: &super::Project) -> PathBuf {
     project
@@ -166,6 +202,8 @@ pub fn runner_error(e: mpm::MpmError) -> PipelineError {
         mpm::MpmError::Unsupported(_) | mpm::MpmError::UnsupportedMaterialModel { .. } => {
             PipelineError::Model(e.to_string())
         }
+        mpm::MpmError::TooManySteps { .. } => PipelineError::Option(e.to_string()),
+        mpm::MpmError::Snapshot(message) => PipelineError::Output(message),
         _ => PipelineError::Numerical(e.to_string()),
     }
 }

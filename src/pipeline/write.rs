@@ -91,10 +91,16 @@ pub fn write_project(
     }
     // A water level from a file travels with the project (Anura3D reads
     // `<project>.HHBF` beside the CPS).
+    // It is read and checked first, as `verify` and Anura3D read it: a
+    // ready-to-run project never carries a water level Anura3D would refuse,
+    // and anything in its place that is not a regular file is an error, not
+    // left out.
     let hhbf = super::runner::hhbf_path(project);
-    if hhbf.is_file() {
+    if std::fs::symlink_metadata(&hhbf).is_ok() {
+        let text = crate::formats::input::read_text(&hhbf)?;
+        crate::formats::hhbf::parse(&hhbf, &text)?;
         let hhbf_name = format!("{name}.HHBF");
-        out.copy(&hhbf, &hhbf_name)?;
+        out.write(&hhbf_name, |w| w.write_all(text.as_bytes()))?;
         written.push(hhbf_name);
     }
     let mapf_name = format!("{name}.MAPF");

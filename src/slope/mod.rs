@@ -136,6 +136,17 @@ impl Problem<'_> {
                 self.n_slices
             ));
         }
+        if self.n_slices > MAX_SLICES {
+            return bad(format!(
+                "{} slices; at most {MAX_SLICES} (30 to 100 resolve any surface)",
+                self.n_slices
+            ));
+        }
+        if let Suction::PhiB(Some(phi_b)) = self.suction
+            && !(0.0..90.0).contains(&phi_b)
+        {
+            return bad(format!("φᵇ = {phi_b}° must lie in [0°, 90°)"));
+        }
         if !(self.tolerance > 0.0 && self.tolerance < 0.1) {
             return bad(format!("tolerance {} must lie in (0, 0.1)", self.tolerance));
         }
@@ -273,6 +284,12 @@ pub fn evaluate_surface(
 /// Circles refined from distinct places of the search.
 const STARTS: usize = 3;
 
+/// Most slices a surface is cut into.
+pub const MAX_SLICES: usize = 10_000;
+
+/// Most trial circles one search generates.
+pub const MAX_TRIALS: usize = 1_000_000;
+
 /// Best distinct circles clipped at each material interface.
 const COMPOSITE_CIRCLES: usize = 40;
 
@@ -283,6 +300,12 @@ pub fn analyse(
     settings: &SearchSettings,
 ) -> Result<Analysis, SlopeError> {
     problem.check()?;
+    if settings.trials > MAX_TRIALS {
+        return Err(SlopeError::Settings(format!(
+            "{} trial circles; at most {MAX_TRIALS} (the search refines the best of them)",
+            settings.trials
+        )));
+    }
     let inputs = problem.inputs();
     let (list, space) = search::circles(&inputs, settings);
     let tol = problem.tolerance;

@@ -169,9 +169,25 @@ fn check_range(
 ) -> Result<(), ParseError> {
     let bad = match prop {
         _ if !v.is_finite() => Some("must be a finite number"),
-        "POROSITY_SOLID" | "K0_VALUE_SOLID" if !(0.0..=1.0).contains(&v) => {
-            Some("must lie in [0, 1]")
+        "POROSITY_SOLID" if !(0.0..1.0).contains(&v) => {
+            Some("must lie in [0, 1) (at 1 there is no solid)")
         }
+        "K0_VALUE_SOLID" if !(0.0..=1.0).contains(&v) => Some("must lie in [0, 1]"),
+        "YOUNG_MODULUS" if v <= 0.0 => Some("must be > 0"),
+        "POISSON_RATIO" | "POISSON_RATIO_UNDRAINED" if !(v > -1.0 && v < 0.5) => {
+            Some("must lie in (−1, 0.5)")
+        }
+        "FRICTION_ANGLE"
+        | "PEAK_FRICTION_ANGLE"
+        | "RESIDUAL_FRICTION_ANGLE"
+        | "DILATANCY_ANGLE"
+        | "PEAK_DILATANCY_ANGLE"
+        | "RESIDUAL_DILATANCY_ANGLE"
+            if !(0.0..90.0).contains(&v) =>
+        {
+            Some("must lie in [0°, 90°)")
+        }
+        "COHESION" | "PEAK_COHESION" | "RESIDUAL_COHESION" if v < 0.0 => Some("must be ≥ 0"),
         "DENSITY_SOLID" if v <= 0.0 => Some("must be > 0"),
         "DENSITY_LIQUID" | "DENSITY_GAS" if v < 0.0 => Some("must be ≥ 0"),
         "BULK_MODULUS_LIQUID" | "BULK_MODULUS_GAS" if v <= 0.0 => Some("must be > 0"),

@@ -75,6 +75,16 @@ pub fn map(
     let mut notes: Vec<String> = fem.notes.clone();
     let mut warnings = inputs::read_warnings(&project, &fem);
     let dim = project.n_dim();
+    if let Some(words) = project
+        .cps
+        .as_ref()
+        .and_then(super::runner::start_gravity_words)
+        && config.stress != StressSource::Zero
+    {
+        warnings.push(format!(
+            "{words}, but the MAPF holds a stress under full gravity: Anura3D starts it out of balance (set `$$GRAVITY_LOAD step 1.0 1.0` to hold full gravity from the start)"
+        ));
+    }
 
     inputs::check_fem(&project, &fem)?;
     let resolved = inputs::stress_source(config.stress, &project, &fem)?;
