@@ -1,6 +1,10 @@
 //! Builds `fixtures/anura3d-rapid-drawdown/rapid_drawdown.GOM`: an Anura3D TRI3
 //! model over the GeoStudio rapid-drawdown mesh (`Mesh.ply`), made by splitting
 //! every FEM element into counter-clockwise triangles (quads along a diagonal).
+//! The base is fixed and the sides are on rollers, found from the outline: a
+//! node of a boundary side facing down (the embankment's base at y = 0, the
+//! toe block's step and its base at y = −1) is fixed in x and y, a node of a
+//! vertical side (the toe block's end at x = 50) in x.
 //! Run: `cargo run --example rapid_drawdown_gom`. The output is deterministic.
 
 #![allow(clippy::print_stdout)]
@@ -62,7 +66,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         retention: None,
         permeability: 1e-11,
     };
-    let model = generate::single_material_model(mesh, &spec, 3);
+    let fixity = base_and_side_fixities(&mesh);
+    let mut model = generate::single_material_model(mesh, &spec, 3);
+    model.solid_fixity = fixity;
     let out = root.join("fixtures/anura3d-rapid-drawdown");
     std::fs::create_dir_all(&out)?;
     std::fs::write(
@@ -70,9 +76,56 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         model_to_text(&model, "2023"),
     )?;
     println!(
-        "{} nodes, {} triangles",
+        "{} nodes, {} triangles, {} nodes fixed, {} on rollers",
         model.mesh.n_nodes(),
-        model.mesh.n_elements()
+        model.mesh.n_elements(),
+        model.solid_fixity.iter().filter(|f| f[0] && f[1]).count(),
+        model.solid_fixity.iter().filter(|f| f[0] && !f[1]).count()
     );
     Ok(())
+}
+
+/// Per node: fixed in x and y on a boundary side whose outward normal points
+/// down (n_y < 0), fixed in x on a vertical one (n_y = 0); free elsewhere.
+fn base_and_side_fixities(mesh: &Mesh) -> Vec<[bool; 3]> {
+    use std::collections::HashMap;
+    let mut sides: HashMap<(u32, u32), usize> = HashMap::new();
+    let triangles: Vec<[u32; 3]> = mesh
+        .connectivity
+        .chunks_exact(3)
+        .map(|t| [t[0], t[1], t[2]])
+        .collect();
+    for t in &triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            *sides.entry((a.min(b), a.max(b))).or_default() += 1;
+        }
+    }
+    let mut fixity = vec![[false; 3]; mesh.nodes.len()];
+    for t in &triangles {
+        // Counter-clockwise: the outward normal of side a→b is (dy, −dx).
+        for k in 0..3 {
+            let (a, b) = (t[k], t[(k + 1) % 3]);
+            if sides[&(a.min(b), a.max(b))] != 1 {
+                continue;
+            }
+            let (p, q) = (mesh.nodes[a as usize], mesh.nodes[b as usize]);
+            let (dx, dy) = (q[0] - p[0], q[1] - p[1]);
+            let (nx, ny) = (dy, -dx);
+            let length = dx.hypot(dy);
+            let fixed = if ny < -1e-9 * length {
+                [true, true]
+            } else if ny.abs() <= 1e-9 * length && nx.abs() > 0.0 {
+                [true, false]
+            } else {
+                continue;
+            };
+            for n in [a, b] {
+                let f = &mut fixity[n as usize];
+                f[0] |= fixed[0];
+                f[1] |= fixed[1];
+            }
+        }
+    }
+    fixity
 }

@@ -345,19 +345,29 @@ fn real_geostudio_node_csv_with_mesh_ply() {
     let node = dir.join("1-initial-steady-state_001_node.csv");
     let ply = dir.join("1-initial-steady-state_Mesh.ply");
     let gom = fixture("anura3d-rapid-drawdown/rapid_drawdown.GOM");
-    // The model's fixed base is only the strip where it reaches y = −1 m
-    // (x = 40..50 m of a 47 m wide embankment): its equilibrium under gravity
-    // concentrates stresses there that the Mohr–Coulomb soil cannot carry
-    // (`auto` would say so and exit 1); this test is about reading.
-    let mesh_args = [
-        "--fem-mesh",
-        ply.to_str().unwrap(),
-        "--generate-cps",
-        "--stress",
-        "geostatic",
-    ];
+    // The embankment stands on its fixed base (#38: the base at y = 0 was
+    // free, and no state at rest existed): `auto` solves for equilibrium
+    // under the steady-state pore pressures and finds it.
+    let mesh_args = ["--fem-mesh", ply.to_str().unwrap(), "--generate-cps"];
     let (code, stderr) = run_map(&gom, &node, &out, &mesh_args);
     assert_eq!(code, 0, "{stderr}");
+    assert_contains(
+        &stderr,
+        &["stress: equilibrium", "equilibrium: IN EQUILIBRIUM"],
+    );
+    // And the runner keeps the state it was given at rest (the state as
+    // intended: Anura3D's MAPF reader would first move τxy into σ'zz).
+    let (code, text) = run(&[
+        "verify",
+        "--mpm",
+        out.join("rapid_drawdown.GOM").to_str().unwrap(),
+        "--state",
+        out.join("mps.csv").to_str().unwrap(),
+        "--out",
+        tmp.path().join("v").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{text}");
+    assert_contains(&text, &["verdict    IN EQUILIBRIUM"]);
     let (points, states) = mps_table::read_states(&out.join("mps.csv")).unwrap();
     assert_eq!(points.len(), 992 * 3);
     // GeoStudio: −38.8 .. 78.5 kPa (positive below the water table). Anura3D: flipped.
