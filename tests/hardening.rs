@@ -87,7 +87,7 @@ fn no_staging_left(dir: &Path) {
     for entry in std::fs::read_dir(dir).unwrap() {
         let name = entry.unwrap().file_name().to_string_lossy().into_owned();
         assert!(
-            !name.starts_with(".a3d-init"),
+            !name.starts_with(".a3d-init") || name == a3d_init::pipeline::output::MARKER,
             "{name} left in {}",
             dir.display()
         );
@@ -200,7 +200,9 @@ fn verify_run_and_fos_out_may_not_hold_the_state_and_fem_mesh_is_an_input() {
 fn force_replaces_an_output_folder_whole_and_leaves_no_staging() {
     let (tmp, gom, fem) = mini_project();
     let out = tmp.path().join("out");
-    std::fs::create_dir(&out).unwrap();
+    // An earlier output, with a file a3d-init no longer writes.
+    let (code, text) = map(&fem, &gom, &out, &[]);
+    assert_eq!(code, 0, "{text}");
     std::fs::write(out.join("stale.txt"), "old run").unwrap();
     let (code, text) = map(&fem, &gom, &out, &["--force"]);
     assert_eq!(code, 0, "{text}");
@@ -820,4 +822,723 @@ fn a_3d_gom_node_at_z_1e308_is_refused_not_a_capacity_overflow() {
         );
         assert!(!out.exists());
     }
+}
+
+// ---- #38: the readers and commands added since #30, against crafted input ----
+
+/// The crafted files of #38 stay under this address-space limit (1 GiB):
+/// the binary runs under `prlimit --as`, so an allocation on a declared size
+/// aborts (exit 134) instead of passing unseen. Without `prlimit` it runs
+/// unlimited.
+const MEMORY_LIMIT: u64 = 1 << 30;
+
+/// A run of the binary is killed after this long (a hang guard, not a speed
+/// target: every command here answers at once).
+const KILL_AFTER_S: u32 = 120;
+
+/// Whether `tool --version` runs here.
+fn have(tool: &str) -> bool {
+    use std::process::Stdio;
+    Command::new(tool)
+        .arg("--version")
+        .stdout(Stdio::null())
+        .stderr(Stdio::null())
+        .status()
+        .is_ok_and(|s| s.success())
+}
+
+/// [`run`] with the address space capped at [`MEMORY_LIMIT`] (`prlimit`)
+/// and killed after [`KILL_AFTER_S`] (`timeout`): (exit code, stderr +
+/// stdout).
+fn run_capped(args: &[&dyn AsRef<std::ffi::OsStr>]) -> (i32, String) {
+    run_capped_at(MEMORY_LIMIT, args)
+}
+
+/// [`run_capped`] with an address-space limit of `limit` bytes.
+fn run_capped_at(limit: u64, args: &[&dyn AsRef<std::ffi::OsStr>]) -> (i32, String) {
+    use std::process::Stdio;
+    let bin = env!("CARGO_BIN_EXE_a3d-init");
+    let mut wrappers: Vec<String> = Vec::new();
+    if have("timeout") {
+        wrappers.extend([
+            "timeout".into(),
+            "-s".into(),
+            "KILL".into(),
+            KILL_AFTER_S.to_string(),
+        ]);
+    }
+    if have("prlimit") {
+        wrappers.extend(["prlimit".into(), format!("--as={limit}"), "--".into()]);
+    }
+    let mut command = match wrappers.split_first() {
+        Some((first, rest)) => {
+            let mut c = Command::new(first);
+            c.args(rest).arg(bin);
+            c
+        }
+        None => Command::new(bin),
+    };
+    let os: Vec<&std::ffi::OsStr> = args.iter().map(|a| a.as_ref()).collect();
+    command.args(&os);
+    let started = std::time::Instant::now();
+    let out = command
+        .stdin(Stdio::null())
+        .output()
+        .expect("the binary runs");
+    let text = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stderr),
+        String::from_utf8_lossy(&out.stdout)
+    );
+    assert!(
+        started.elapsed() < std::time::Duration::from_secs(KILL_AFTER_S.into()),
+        "{os:?} ran {:?} and was killed",
+        started.elapsed()
+    );
+    assert!(!text.contains("panicked"), "{text}");
+    assert!(!text.contains("memory allocation"), "{text}");
+    (out.status.code().unwrap_or(-1), text)
+}
+
+/// A small ASCII VTU of two triangles on four points (the unit square) with
+/// a `pressure` array; `edit` rewrites its text before it is written.
+fn crafted_vtu(dir: &Path, name: &str, edit: impl FnOnce(String) -> String) -> PathBuf {
+    let text = r#"<?xml version="1.0"?>
+<VTKFile type="UnstructuredGrid" version="1.0" byte_order="LittleEndian" header_type="UInt64" compressor="vtkZLibDataCompressor">
+<UnstructuredGrid>
+<Piece NumberOfPoints="4" NumberOfCells="2">
+<PointData>
+<DataArray type="Float64" Name="pressure" format="ascii">0 0 0 0</DataArray>
+</PointData>
+<Points>
+<DataArray type="Float64" NumberOfComponents="3" format="ascii">0 0 0 1 0 0 1 1 0 0 1 0</DataArray>
+</Points>
+<Cells>
+<DataArray type="Int64" Name="connectivity" format="ascii">0 1 2 0 2 3</DataArray>
+<DataArray type="Int64" Name="offsets" format="ascii">3 6</DataArray>
+<DataArray type="UInt8" Name="types" format="ascii">5 5</DataArray>
+</Cells>
+</Piece>
+</UnstructuredGrid>
+</VTKFile>
+"#;
+    let path = dir.join(name);
+    std::fs::write(&path, edit(text.to_string())).unwrap();
+    path
+}
+
+/// Base64 of a zlib block header (UInt64): one block of `bytes`, and a
+/// compressed size of 10, followed by a few bytes that are no zlib stream.
+fn lying_zlib_header(bytes: u64) -> String {
+    use base64::Engine as _;
+    let mut header = Vec::new();
+    for v in [1u64, bytes, bytes, 10] {
+        header.extend(v.to_le_bytes());
+    }
+    header.extend([0x78, 0x9c, 1, 2, 3, 4, 5, 6, 7, 8]);
+    base64::engine::general_purpose::STANDARD.encode(header)
+}
+
+/// `map --fem VTU` onto the mini model, capped: (exit code, text); the output
+/// folder must not exist afterwards.
+fn map_vtu_capped(tmp: &Path, vtu: &Path) -> (i32, String) {
+    let gom = fixture("anura3d-mini/TwoMat.GOM");
+    let out = tmp.join("out");
+    let result = run_capped(&[&"map", &"--fem", &vtu, &"--mpm", &gom, &"--out", &out]);
+    assert!(!out.exists(), "{}", result.1);
+    result
+}
+
+/// #38 (1): a 600-byte VTU declaring 10¹² points, its zlib header claiming
+/// 24 TB, aborted with "memory allocation of 24000000000000 bytes failed";
+/// so did a connectivity sized by a last offset of 10¹². Nothing is
+/// allocated on a declared size: the file's decode budget refuses both.
+#[test]
+fn regression_38_a_600_byte_vtu_declaring_1e12_points_is_refused_not_an_abort() {
+    let tmp = tempfile::tempdir().unwrap();
+    let points = crafted_vtu(tmp.path(), "points.vtu", |t| {
+        t.replace("NumberOfPoints=\"4\"", "NumberOfPoints=\"1000000000000\"")
+            .replace(
+                "NumberOfComponents=\"3\" format=\"ascii\">0 0 0 1 0 0 1 1 0 0 1 0<",
+                &format!(
+                    "NumberOfComponents=\"3\" format=\"binary\">{}<",
+                    lying_zlib_header(24_000_000_000_000)
+                ),
+            )
+    });
+    assert!(std::fs::metadata(&points).unwrap().len() < 1000);
+    let (code, text) = map_vtu_capped(tmp.path(), &points);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(
+        &text,
+        &[
+            "points.vtu:9:1: the points: 3000000000000 values take",
+            "a zlib bomb",
+        ],
+    );
+    let connectivity = crafted_vtu(tmp.path(), "cells.vtu", |t| {
+        t.replace(">3 6<", ">3 1000000000000<").replace(
+            "Name=\"connectivity\" format=\"ascii\">0 1 2 0 2 3<",
+            &format!(
+                "Name=\"connectivity\" format=\"binary\">{}<",
+                lying_zlib_header(8_000_000_000_000)
+            ),
+        )
+    });
+    let (code, text) = map_vtu_capped(tmp.path(), &connectivity);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(
+        &text,
+        &["cells.vtu:12:1: array `connectivity`: 1000000000000 values take"],
+    );
+}
+
+/// #38 (2): a zlib bomb. Coordinates of zeros in 1.5 MB blocks compress
+/// about a thousand times: a 0.4 MB file inflated to 400 MB of points (and
+/// as many again as f64), past a 512 MiB limit (the issue's 1.4 MB file
+/// reached 2.1 GB). The file's decode budget (32× its size, at least 32 MiB)
+/// refuses it before anything is inflated.
+#[test]
+fn regression_38_a_zlib_bomb_in_a_vtu_is_refused_before_it_inflates() {
+    let tmp = tempfile::tempdir().unwrap();
+    const BLOCK: usize = 24 << 16; // 2¹⁶ points of 3 Float64
+    const BLOCKS: usize = 256;
+    let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::best());
+    z.write_all(&vec![0u8; BLOCK]).unwrap();
+    let compressed = z.finish().unwrap();
+    let mut data = Vec::new();
+    for v in [BLOCKS as u64, BLOCK as u64, BLOCK as u64] {
+        data.extend(v.to_le_bytes());
+    }
+    for _ in 0..BLOCKS {
+        data.extend((compressed.len() as u64).to_le_bytes());
+    }
+    for _ in 0..BLOCKS {
+        data.extend(&compressed);
+    }
+    let n_points = BLOCKS * BLOCK / 24;
+    let head = crafted_vtu(tmp.path(), "head.xml", |t| {
+        t.replace(
+            "NumberOfPoints=\"4\"",
+            &format!("NumberOfPoints=\"{n_points}\""),
+        )
+        .replace(
+            "NumberOfComponents=\"3\" format=\"ascii\">0 0 0 1 0 0 1 1 0 0 1 0</DataArray>",
+            "NumberOfComponents=\"3\" format=\"appended\" offset=\"0\"/>",
+        )
+        .replace("</VTKFile>\n", "<AppendedData encoding=\"raw\">\n_")
+    });
+    let mut bytes = std::fs::read(&head).unwrap();
+    bytes.extend(&data);
+    bytes.extend(b"\n</AppendedData>\n</VTKFile>\n");
+    let bomb = tmp.path().join("bomb.vtu");
+    std::fs::write(&bomb, &bytes).unwrap();
+    assert!(bytes.len() < 1 << 20, "{} bytes", bytes.len());
+    let gom = fixture("anura3d-mini/TwoMat.GOM");
+    let out = tmp.path().join("out");
+    let (code, text) = run_capped_at(
+        512 << 20,
+        &[&"map", &"--fem", &bomb, &"--mpm", &gom, &"--out", &out],
+    );
+    assert!(!out.exists());
+    assert_eq!(code, 2, "{text}");
+    assert_contains(
+        &text,
+        &[
+            "bomb.vtu:9:1: the points: 50331648 values take 402653184 bytes decoded, past the",
+            "a zlib bomb",
+        ],
+    );
+    // `inspect` reads no values, and says what the file holds.
+    let (code, text) = run_capped(&[&"inspect", &bomb]);
+    assert!(matches!(code, 0 | 2), "{text}");
+}
+
+/// The mini model mapped into `<tmp>/mapped`: (folder, GOM, FEM, mapped).
+fn mini_mapped() -> (tempfile::TempDir, PathBuf, PathBuf, PathBuf) {
+    let (tmp, gom, fem) = mini_project();
+    let out = tmp.path().join("mapped");
+    let (code, text) = map(&fem, &gom, &out, &[]);
+    assert_eq!(code, 0, "{text}");
+    (tmp, gom, fem, out)
+}
+
+/// #38 (3): `run --snapshots` with 15,000 entries grew to 3.7 GB (every
+/// snapshot kept until the end), equal times included. Each snapshot is now
+/// written as it is taken; a time given twice and more than 1000 times are
+/// refused.
+#[test]
+fn regression_38_snapshot_lists_are_capped_and_a_repeated_time_refused() {
+    let (tmp, _, _, mapped) = mini_mapped();
+    let out = tmp.path().join("run");
+    let equal = vec!["0.01"; 15_000].join(",");
+    let (code, text) = run_capped(&[
+        &"run",
+        &mapped,
+        &"--time",
+        &"0.05",
+        &"--snapshots",
+        &equal,
+        &"--out",
+        &out,
+    ]);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(&text, &["15000 snapshot times: a run writes at most 1000"]);
+    let distinct: Vec<String> = (1..=15_000).map(|k| k.to_string()).collect();
+    let (code, text) = run_capped(&[
+        &"run",
+        &mapped,
+        &"--time",
+        &"0.05",
+        &"--snapshots",
+        &distinct.join(","),
+        &"--out",
+        &out,
+    ]);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(&text, &["15000 snapshot times: a run writes at most 1000"]);
+    let (code, text) = run_capped(&[
+        &"run",
+        &mapped,
+        &"--time",
+        &"0.05",
+        &"--snapshots",
+        &"0.01,0.02,0.01",
+        &"--out",
+        &out,
+    ]);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(&text, &["snapshot time 0.01 is given twice"]);
+    assert!(!out.exists());
+}
+
+/// #38 (4): a VTU with many arrays parsed in quadratic time (each tag's line
+/// counted from the start of the file): 20,000 arrays took 10.8 s and 100,000
+/// (7 MB) did not finish. Positions come from one index of line starts now.
+#[test]
+fn regression_38_a_vtu_with_100000_arrays_is_read_in_linear_time() {
+    let tmp = tempfile::tempdir().unwrap();
+    let vtu = crafted_vtu(tmp.path(), "many.vtu", |t| {
+        let mut arrays = String::new();
+        for k in 0..100_000 {
+            arrays.push_str(&format!(
+                "<DataArray type=\"Float64\" Name=\"a{k}\" format=\"ascii\">0 0 0 0</DataArray>\n"
+            ));
+        }
+        t.replace("</PointData>", &format!("{arrays}</PointData>"))
+    });
+    assert!(std::fs::metadata(&vtu).unwrap().len() > 7_000_000);
+    // The watchdog's wall limit is a hang guard (the old reader ran for
+    // hours), not a speed target.
+    let dog = Watchdog {
+        idle: std::time::Duration::from_secs(60),
+        wall: std::time::Duration::from_secs(120),
+    };
+    let (code, text) =
+        run_watched(&["inspect".as_ref(), vtu.as_os_str()], dog).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(code, 0, "{text}");
+    assert_contains(&text, &["a99999"]);
+    let out = tmp.path().join("out");
+    let gom = fixture("anura3d-mini/TwoMat.GOM");
+    let (code, text) = run_watched(
+        &[
+            "map".as_ref(),
+            "--fem".as_ref(),
+            vtu.as_os_str(),
+            "--mpm".as_ref(),
+            gom.as_os_str(),
+            "--out".as_ref(),
+            out.as_os_str(),
+        ],
+        dog,
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    assert!(matches!(code, 0 | 2), "{text}");
+}
+
+/// #38 (5): `--out DIR --force` replaced any folder, one a3d-init never
+/// wrote (`Documents/` with `paper.docx`) too. `--force` replaces only an
+/// empty folder or one holding a3d-init's marker; and no output may hold a
+/// file of a `.pvd` series, read or not.
+#[test]
+fn regression_38_force_never_replaces_a_folder_a3d_init_did_not_write() {
+    let (tmp, gom, fem) = mini_project();
+    let documents = tmp.path().join("Documents");
+    std::fs::create_dir(&documents).unwrap();
+    std::fs::write(documents.join("paper.docx"), "years of work").unwrap();
+    for command in [&["map"][..], &["calibrate"]] {
+        let mut args: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![&command[0], &"--fem", &fem];
+        if command[0] == "map" {
+            args.extend([&"--mpm" as &dyn AsRef<std::ffi::OsStr>, &gom]);
+        }
+        args.extend([
+            &"--out" as &dyn AsRef<std::ffi::OsStr>,
+            &documents,
+            &"--force",
+        ]);
+        let (code, text) = run(&args);
+        assert_eq!(code, 2, "{command:?}: {text}");
+        assert_contains(
+            &text,
+            &[
+                "refusing to replace",
+                "Documents: it is not empty and a3d-init did not write it",
+            ],
+        );
+    }
+    assert_eq!(
+        std::fs::read_to_string(documents.join("paper.docx")).unwrap(),
+        "years of work"
+    );
+    // An empty folder and a3d-init's own output are replaced.
+    let empty = tmp.path().join("empty");
+    std::fs::create_dir(&empty).unwrap();
+    let (code, text) = map(&fem, &gom, &empty, &["--force"]);
+    assert_eq!(code, 0, "{text}");
+    let (code, text) = map(&fem, &gom, &empty, &["--force"]);
+    assert_eq!(code, 0, "{text}");
+    assert!(empty.join(a3d_init::pipeline::output::MARKER).is_file());
+    // A series: step 0 beside the .pvd, step 1 inside an earlier output.
+    // Mapping step 0 reads step 1 nowhere, but may not replace its folder.
+    let vtu = crafted_vtu(tmp.path(), "run_0.vtu", |t| t);
+    std::fs::copy(&vtu, empty.join("run_1.vtu")).unwrap();
+    let pvd = tmp.path().join("run.pvd");
+    std::fs::write(
+        &pvd,
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n\
+         <DataSet timestep=\"0\" file=\"run_0.vtu\"/>\n<DataSet timestep=\"1\" file=\"empty/run_1.vtu\"/>\n\
+         </Collection>\n</VTKFile>\n",
+    )
+    .unwrap();
+    let (code, text) = map(&pvd, &gom, &empty, &["--step", "0", "--force"]);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(&text, &["holds the input", "run_1.vtu"]);
+    assert!(empty.join("run_1.vtu").is_file());
+}
+
+/// #38 (6): `run --time 1e300` ran until killed. A duration whose step count
+/// passes 10⁷ at the model's time step is refused, naming the count.
+#[test]
+fn regression_38_a_run_time_no_one_can_mean_is_refused_with_its_step_count() {
+    let (tmp, _, _, mapped) = mini_mapped();
+    let out = tmp.path().join("run");
+    for time in ["1e300", "1e9"] {
+        let (code, text) = run_capped(&[
+            &"run",
+            &mapped,
+            &"--time",
+            &time,
+            &"--snapshots",
+            &"",
+            &"--out",
+            &out,
+        ]);
+        assert_eq!(code, 2, "{text}");
+        assert_contains(
+            &text,
+            &["would take", "steps, more than the 10000000 a run may take"],
+        );
+    }
+    assert!(!out.exists());
+}
+
+/// #38 (7): snapshots were named `mps_t{:.2}`, so 0.001, 0.002 and 0.003 s
+/// were one file and two snapshots were lost. Names carry as many decimals
+/// as distinct times need.
+#[test]
+fn regression_38_every_snapshot_time_gets_its_own_file() {
+    let (tmp, _, _, mapped) = mini_mapped();
+    let out = tmp.path().join("run");
+    let (code, text) = run_capped(&[
+        &"run",
+        &mapped,
+        &"--time",
+        &"0.004",
+        &"--snapshots",
+        &"0.003,0.001,0.002",
+        &"--out",
+        &out,
+    ]);
+    assert_eq!(code, 0, "{text}");
+    assert_contains(&text, &["3 snapshots"]);
+    for name in ["mps_t0.001.vtu", "mps_t0.002.vtu", "mps_t0.003.vtu"] {
+        assert!(out.join(name).is_file(), "{name}: {text}");
+    }
+    let names = a3d_init::pipeline::runout::snapshot_names(&[0.3, 0.8, 1.2, 2.0]);
+    let names: Vec<&str> = names.iter().map(|(_, n)| n.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "mps_t0.30.vtu",
+            "mps_t0.80.vtu",
+            "mps_t1.20.vtu",
+            "mps_t2.00.vtu"
+        ]
+    );
+}
+
+/// #38 (8): `--bisect-tol NaN` and `--bisect-tol=-1` were taken, and the
+/// bisection silently skipped; a damping outside [0, 1) was clamped.
+#[test]
+fn regression_38_bisect_tolerance_and_damping_outside_their_range_are_refused() {
+    let (tmp, gom, fem) = mini_project();
+    let out = tmp.path().join("ft");
+    for bad in [
+        "--bisect-tol=NaN",
+        "--bisect-tol=-1",
+        "--bisect-tol=0",
+        "--damping=1.5",
+    ] {
+        let (code, text) = run(&[
+            &"fos-time",
+            &"--mpm",
+            &gom,
+            &"--fem",
+            &fem,
+            &"--fem",
+            &fem,
+            &"--times",
+            &"0,3600",
+            &bad,
+            &"--out",
+            &out,
+        ]);
+        assert_eq!(code, 2, "{bad}: {text}");
+        let what = if bad.starts_with("--damping") {
+            "local damping 1.5: expected a number in [0, 1)"
+        } else {
+            "expected a positive number of seconds"
+        };
+        assert_contains(&text, &[what]);
+    }
+    let (_mapped_tmp, _, _, mapped) = mini_mapped();
+    for command in ["verify", "run", "fos"] {
+        let mut args: Vec<&dyn AsRef<std::ffi::OsStr>> =
+            vec![&command, &mapped, &"--damping=-0.5", &"--out", &out];
+        if command == "fos" {
+            args.push(&"--method=srm");
+        }
+        let (code, text) = run(&args);
+        assert_eq!(code, 2, "{command}: {text}");
+        assert_contains(&text, &["local damping -0.5: expected a number in [0, 1)"]);
+    }
+    assert!(!out.exists());
+}
+
+/// #38 (9): `map` copied an HHBF whose times do not increase into its
+/// ready-to-run project (exit 0), and left out a FIFO in its place; an
+/// error on a 50 MB token echoed all of it. The HHBF is read as `verify`
+/// reads it; tokens are cut in every message.
+#[test]
+fn regression_38_map_checks_the_hhbf_and_no_error_echoes_a_huge_token() {
+    let (tmp, gom, fem) = mini_project();
+    let hhbf = gom.with_extension("HHBF");
+    let out = tmp.path().join("out");
+    std::fs::write(&hhbf, "0 1.0\n0 2.0\n").unwrap();
+    let (code, text) = map(&fem, &gom, &out, &[]);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(&text, &["TwoMat.HHBF:2:1: time 0 does not follow 0"]);
+    assert!(!out.exists());
+    // A good one travels with the project, byte for byte.
+    std::fs::write(&hhbf, "0 1.0\n10 2.0\n").unwrap();
+    let (code, text) = map(&fem, &gom, &out, &[]);
+    assert_eq!(code, 0, "{text}");
+    assert_eq!(
+        std::fs::read(out.join("TwoMat.HHBF")).unwrap(),
+        b"0 1.0\n10 2.0\n"
+    );
+    std::fs::remove_dir_all(&out).unwrap();
+    // A FIFO in its place: an error at once, not a hang, nothing left out.
+    std::fs::remove_file(&hhbf).unwrap();
+    let made = Command::new("mkfifo").arg(&hhbf).status();
+    if made.is_ok_and(|s| s.success()) {
+        let (code, text) = map(&fem, &gom, &out, &[]);
+        assert_eq!(code, 2, "{text}");
+        assert_contains(&text, &["TwoMat.HHBF: not a regular file"]);
+        assert!(!out.exists());
+        std::fs::remove_file(&hhbf).unwrap();
+    }
+    // A 50 MB token in the HHBF and in the FEM table: a few dozen characters.
+    let token = "9".repeat(50 << 20) + "x";
+    std::fs::write(&hhbf, format!("0 1.0\n1 {token}\n")).unwrap();
+    let (code, text) = run_capped(&[&"map", &"--fem", &fem, &"--mpm", &gom, &"--out", &out]);
+    assert_eq!(code, 2, "{}", &text[..text.len().min(2000)]);
+    assert!(text.len() < 2000, "{} bytes of error", text.len());
+    assert_contains(&text, &["TwoMat.HHBF:2:3:", "9999…9999", "characters)"]);
+    std::fs::remove_file(&hhbf).unwrap();
+    let csv = tmp.path().join("token.csv");
+    std::fs::write(&csv, format!("X,Y,PWP\n0,0,{token}\n1,0,0\n0,1,0\n")).unwrap();
+    let (code, text) = run_capped(&[&"map", &"--fem", &csv, &"--mpm", &gom, &"--out", &out]);
+    assert_eq!(code, 2, "{}", &text[..text.len().min(2000)]);
+    assert!(text.len() < 2000, "{} bytes of error", text.len());
+    assert!(!out.exists());
+}
+
+/// #38 (10): E = −2500 and a porosity of 1 passed `map` and `fos` (exit 0)
+/// and reached Anura3D; only `verify` refused them. The GOM reader checks
+/// every material once, at the model's load, for every command.
+#[test]
+fn regression_38_impossible_materials_are_refused_at_load_by_every_command() {
+    let (tmp, gom, fem, mapped) = mini_mapped();
+    let text = std::fs::read_to_string(&gom).unwrap();
+    let line_of =
+        |text: &str, keyword: &str| text.lines().position(|l| l.trim() == keyword).unwrap() + 2;
+    for (keyword, bad, message) in [
+        (
+            "$$YOUNG_MODULUS",
+            "-2500",
+            "YOUNG_MODULUS = -2500 must be > 0",
+        ),
+        (
+            "$$POROSITY_SOLID",
+            "1",
+            "POROSITY_SOLID = 1 must lie in [0, 1)",
+        ),
+        (
+            "$$FRICTION_ANGLE",
+            "95",
+            "FRICTION_ANGLE = 95 must lie in [0°, 90°)",
+        ),
+    ] {
+        let at = line_of(&text, keyword);
+        let mut lines: Vec<String> = text.lines().map(str::to_string).collect();
+        lines[at - 1] = bad.to_string();
+        let edited = lines.join("\n") + "\n";
+        let expected = format!("TwoMat.GOM:{at}:1: material 1 `clay`: {message}");
+        std::fs::write(&gom, &edited).unwrap();
+        let out = tmp.path().join("out");
+        let (code, output) = map(&fem, &gom, &out, &[]);
+        assert_eq!(code, 2, "{keyword}: {output}");
+        assert_contains(&output, &[&expected]);
+        std::fs::write(&gom, &text).unwrap();
+        // The mapped folder's own GOM, for the commands that read a folder.
+        let mapped_gom = mapped.join("TwoMat.GOM");
+        let original = std::fs::read_to_string(&mapped_gom).unwrap();
+        std::fs::write(&mapped_gom, &edited).unwrap();
+        for command in ["verify", "run", "fos", "inspect"] {
+            let mut args: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![&command];
+            if command == "inspect" {
+                args.push(&mapped_gom);
+            } else {
+                args.extend([&mapped as &dyn AsRef<std::ffi::OsStr>, &"--out", &out]);
+            }
+            let (code, output) = run(&args);
+            assert_eq!(code, 2, "{command} {keyword}: {output}");
+            assert_contains(&output, &[message]);
+        }
+        std::fs::write(&mapped_gom, original).unwrap();
+        assert!(!out.exists());
+    }
+}
+
+/// #38 (11): wrong messages. A VTK cell type 300 was "cell type 0" (cut to
+/// a byte); a `types` array of Float64 5.7 was read as TRI3; four distinct
+/// points, one at x = 1e308, were "two mesh nodes at the same place".
+#[test]
+fn regression_38_vtu_messages_say_what_is_wrong() {
+    let tmp = tempfile::tempdir().unwrap();
+    let type300 = crafted_vtu(tmp.path(), "t300.vtu", |t| {
+        t.replace(
+            "type=\"UInt8\" Name=\"types\" format=\"ascii\">5 5<",
+            "type=\"Int32\" Name=\"types\" format=\"ascii\">5 300<",
+        )
+    });
+    let (code, text) = map_vtu_capped(tmp.path(), &type300);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(&text, &["1 cells: VTK cell type 300 is not read"]);
+    let fractional = crafted_vtu(tmp.path(), "t57.vtu", |t| {
+        t.replace(
+            "type=\"UInt8\" Name=\"types\" format=\"ascii\">5 5<",
+            "type=\"Float64\" Name=\"types\" format=\"ascii\">5.7 5<",
+        )
+    });
+    let (code, text) = map_vtu_capped(tmp.path(), &fractional);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(&text, &["cell 1: type 5.7 is not an integer"]);
+    let far = crafted_vtu(tmp.path(), "far.vtu", |t| {
+        t.replace(">0 0 0 1 0 0 1 1 0 0 1 0<", ">0 0 0 1e308 0 0 1 1 0 0 1 0<")
+    });
+    let (code, text) = map_vtu_capped(tmp.path(), &far);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(&text, &["x = 1e308 lies more than 10^6 times the spread"]);
+    assert!(!text.contains("at the same place"), "{text}");
+}
+
+/// #38 (12): test-1005_3D's CPS switches gravity off at the start
+/// (`$$GRAVITY_LOAD off 0.0 1.0`); `map` wrote a gravity stress into it with
+/// no word, and the column sprang 13 cm out of balance in `verify`. `map`
+/// warns, naming the CPS line, on screen and in the report.
+#[test]
+fn regression_38_map_warns_when_the_cps_starts_gravity_below_full() {
+    let tmp = tempfile::tempdir().unwrap();
+    let src = fixture("anura3d/test-1005_3D");
+    let gom = std::fs::read_to_string(src.join("test-1005_3D.GOM")).unwrap();
+    let lines: Vec<&str> = gom.lines().collect();
+    let start = lines.iter().position(|l| *l == "$$STARTNODES").unwrap() + 1;
+    let mut csv = String::from("X,Y,Z,PWP\n");
+    for l in &lines[start..start + 207] {
+        let v: Vec<f64> = l.split_whitespace().map(|t| t.parse().unwrap()).collect();
+        csv.push_str(&format!("{},{},{},{}\n", v[0], v[1], v[2], 0.0));
+    }
+    let fem = tmp.path().join("fem.csv");
+    std::fs::write(&fem, csv).unwrap();
+    let cps = std::fs::read_to_string(src.join("test-1005_3D.CPS_001")).unwrap();
+    let line = cps
+        .lines()
+        .position(|l| l.trim() == "$$GRAVITY_LOAD")
+        .unwrap()
+        + 1;
+    let out = tmp.path().join("out");
+    let (code, text) = map(&fem, &src, &out, &["--stress", "geostatic"]);
+    assert_eq!(code, 0, "{text}");
+    let place = format!("test-1005_3D.CPS_001:{line}: `$$GRAVITY_LOAD off");
+    assert_contains(
+        &text,
+        &[
+            "warning: the CPS's gravity starts at 0.000·g",
+            &place,
+            "starts it out of balance",
+        ],
+    );
+    let report = std::fs::read_to_string(out.join("report.json")).unwrap();
+    assert!(
+        report.contains("the CPS's gravity starts at 0.000·g"),
+        "{report}"
+    );
+    // The mini model's CPS holds full gravity: no such warning.
+    let (tmp2, gom, fem) = mini_project();
+    let (code, text) = map(&fem, &gom, &tmp2.path().join("o"), &[]);
+    assert_eq!(code, 0, "{text}");
+    assert!(!text.contains("gravity starts"), "{text}");
+}
+
+/// #38 (13): `run` and `verify` named materials by index alone, and called a
+/// dry material "drained (pwp frozen)". Each is named as the GOM names it,
+/// and a dry one is "dry".
+#[test]
+fn regression_38_run_names_each_material_and_says_dry() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("slope");
+    let (code, text) = run_map(
+        &fixture("slope"),
+        &fixture("slope/sand-nodes.csv"),
+        &out,
+        &[],
+    );
+    assert_eq!(code, 0, "{text}");
+    let (code, text) = run(&[&"run", &out, &"--time", &"0.001", &"--snapshots", &""]);
+    assert_eq!(code, 0, "{text}");
+    assert_contains(
+        &text,
+        &[
+            "water      material 1 `silty_sand`: two-phase coupled (the water flows); material 2 `compacted_clay`: dry",
+        ],
+    );
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("run/run.json")).unwrap()).unwrap();
+    assert_eq!(report["formulations"][1], serde_json::json!([2, "dry"]));
+    assert_eq!(
+        report["material_names"],
+        serde_json::json!(["silty_sand", "compacted_clay"])
+    );
 }
