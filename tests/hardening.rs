@@ -775,6 +775,22 @@ fn a_mesh_node_at_1e308_is_refused_not_a_6_gb_allocation() {
     );
 }
 
+/// `<dir>/fem.csv`: the 207 nodes of `test-1005_3D` with the pore pressure
+/// `pwp(z)`.
+fn test_1005_nodes_csv(dir: &Path, pwp: impl Fn(f64) -> f64) -> PathBuf {
+    let gom = std::fs::read_to_string(fixture("anura3d/test-1005_3D/test-1005_3D.GOM")).unwrap();
+    let lines: Vec<&str> = gom.lines().collect();
+    let start = lines.iter().position(|l| *l == "$$STARTNODES").unwrap() + 1;
+    let mut csv = String::from("X,Y,Z,PWP\n");
+    for l in &lines[start..start + 207] {
+        let v: Vec<f64> = l.split_whitespace().map(|t| t.parse().unwrap()).collect();
+        csv.push_str(&format!("{},{},{},{}\n", v[0], v[1], v[2], pwp(v[2])));
+    }
+    let fem = dir.join("fem.csv");
+    std::fs::write(&fem, csv).unwrap();
+    fem
+}
+
 /// #30: z = 1e308 on one node of a 3D GOM made `map` panic with "capacity
 /// overflow" (the geostatic stress's vertical index sized by the extent;
 /// bounded now whatever the mesh, see `state::geostatic`). A node that far
@@ -789,13 +805,7 @@ fn a_3d_gom_node_at_z_1e308_is_refused_not_a_capacity_overflow() {
     let gom = std::fs::read_to_string(src.join("test-1005_3D.GOM")).unwrap();
     let lines: Vec<&str> = gom.lines().collect();
     let start = lines.iter().position(|l| *l == "$$STARTNODES").unwrap() + 1;
-    let mut csv = String::from("X,Y,Z,PWP\n");
-    for l in &lines[start..start + 207] {
-        let v: Vec<f64> = l.split_whitespace().map(|t| t.parse().unwrap()).collect();
-        csv.push_str(&format!("{},{},{},{}\n", v[0], v[1], v[2], -10.0 * v[2]));
-    }
-    let fem = tmp.path().join("fem.csv");
-    std::fs::write(&fem, csv).unwrap();
+    let fem = test_1005_nodes_csv(tmp.path(), |z| -10.0 * z);
     // Node 9, (0, 0, 0), a corner of the first elements.
     assert_eq!(
         lines[start + 8].split_whitespace().collect::<Vec<_>>(),
@@ -1063,6 +1073,20 @@ fn mini_mapped() -> (tempfile::TempDir, PathBuf, PathBuf, PathBuf) {
     (tmp, gom, fem, out)
 }
 
+/// `run MAPPED --time TIME --snapshots SNAPSHOTS --out OUT`, capped.
+fn run_snapshots(mapped: &Path, time: &str, snapshots: &str, out: &Path) -> (i32, String) {
+    run_capped(&[
+        &"run",
+        &mapped,
+        &"--time",
+        &time,
+        &"--snapshots",
+        &snapshots,
+        &"--out",
+        &out,
+    ])
+}
+
 /// #38 (3): `run --snapshots` with 15,000 entries grew to 3.7 GB (every
 /// snapshot kept until the end), equal times included. Each snapshot is now
 /// written as it is taken; a time given twice and more than 1000 times are
@@ -1072,41 +1096,13 @@ fn regression_38_snapshot_lists_are_capped_and_a_repeated_time_refused() {
     let (tmp, _, _, mapped) = mini_mapped();
     let out = tmp.path().join("run");
     let equal = vec!["0.01"; 15_000].join(",");
-    let (code, text) = run_capped(&[
-        &"run",
-        &mapped,
-        &"--time",
-        &"0.05",
-        &"--snapshots",
-        &equal,
-        &"--out",
-        &out,
-    ]);
-    assert_eq!(code, 2, "{text}");
-    assert_contains(&text, &["15000 snapshot times: a run writes at most 1000"]);
     let distinct: Vec<String> = (1..=15_000).map(|k| k.to_string()).collect();
-    let (code, text) = run_capped(&[
-        &"run",
-        &mapped,
-        &"--time",
-        &"0.05",
-        &"--snapshots",
-        &distinct.join(","),
-        &"--out",
-        &out,
-    ]);
-    assert_eq!(code, 2, "{text}");
-    assert_contains(&text, &["15000 snapshot times: a run writes at most 1000"]);
-    let (code, text) = run_capped(&[
-        &"run",
-        &mapped,
-        &"--time",
-        &"0.05",
-        &"--snapshots",
-        &"0.01,0.02,0.01",
-        &"--out",
-        &out,
-    ]);
+    for list in [equal, distinct.join(",")] {
+        let (code, text) = run_snapshots(&mapped, "0.05", &list, &out);
+        assert_eq!(code, 2, "{text}");
+        assert_contains(&text, &["15000 snapshot times: a run writes at most 1000"]);
+    }
+    let (code, text) = run_snapshots(&mapped, "0.05", "0.01,0.02,0.01", &out);
     assert_eq!(code, 2, "{text}");
     assert_contains(&text, &["snapshot time 0.01 is given twice"]);
     assert!(!out.exists());
@@ -1223,16 +1219,7 @@ fn regression_38_a_run_time_no_one_can_mean_is_refused_with_its_step_count() {
     let (tmp, _, _, mapped) = mini_mapped();
     let out = tmp.path().join("run");
     for time in ["1e300", "1e9"] {
-        let (code, text) = run_capped(&[
-            &"run",
-            &mapped,
-            &"--time",
-            &time,
-            &"--snapshots",
-            &"",
-            &"--out",
-            &out,
-        ]);
+        let (code, text) = run_snapshots(&mapped, time, "", &out);
         assert_eq!(code, 2, "{text}");
         assert_contains(
             &text,
@@ -1249,16 +1236,7 @@ fn regression_38_a_run_time_no_one_can_mean_is_refused_with_its_step_count() {
 fn regression_38_every_snapshot_time_gets_its_own_file() {
     let (tmp, _, _, mapped) = mini_mapped();
     let out = tmp.path().join("run");
-    let (code, text) = run_capped(&[
-        &"run",
-        &mapped,
-        &"--time",
-        &"0.004",
-        &"--snapshots",
-        &"0.003,0.001,0.002",
-        &"--out",
-        &out,
-    ]);
+    let (code, text) = run_snapshots(&mapped, "0.004", "0.003,0.001,0.002", &out);
     assert_eq!(code, 0, "{text}");
     assert_contains(&text, &["3 snapshots"]);
     for name in ["mps_t0.001.vtu", "mps_t0.002.vtu", "mps_t0.003.vtu"] {
@@ -1437,31 +1415,33 @@ fn regression_38_impossible_materials_are_refused_at_load_by_every_command() {
 #[test]
 fn regression_38_vtu_messages_say_what_is_wrong() {
     let tmp = tempfile::tempdir().unwrap();
-    let type300 = crafted_vtu(tmp.path(), "t300.vtu", |t| {
-        t.replace(
-            "type=\"UInt8\" Name=\"types\" format=\"ascii\">5 5<",
+    let types = "type=\"UInt8\" Name=\"types\" format=\"ascii\">5 5<";
+    for (name, from, to, expected) in [
+        (
+            "t300.vtu",
+            types,
             "type=\"Int32\" Name=\"types\" format=\"ascii\">5 300<",
-        )
-    });
-    let (code, text) = map_vtu_capped(tmp.path(), &type300);
-    assert_eq!(code, 2, "{text}");
-    assert_contains(&text, &["1 cells: VTK cell type 300 is not read"]);
-    let fractional = crafted_vtu(tmp.path(), "t57.vtu", |t| {
-        t.replace(
-            "type=\"UInt8\" Name=\"types\" format=\"ascii\">5 5<",
+            "1 cells: VTK cell type 300 is not read",
+        ),
+        (
+            "t57.vtu",
+            types,
             "type=\"Float64\" Name=\"types\" format=\"ascii\">5.7 5<",
-        )
-    });
-    let (code, text) = map_vtu_capped(tmp.path(), &fractional);
-    assert_eq!(code, 2, "{text}");
-    assert_contains(&text, &["cell 1: type 5.7 is not an integer"]);
-    let far = crafted_vtu(tmp.path(), "far.vtu", |t| {
-        t.replace(">0 0 0 1 0 0 1 1 0 0 1 0<", ">0 0 0 1e308 0 0 1 1 0 0 1 0<")
-    });
-    let (code, text) = map_vtu_capped(tmp.path(), &far);
-    assert_eq!(code, 2, "{text}");
-    assert_contains(&text, &["x = 1e308 lies more than 10^6 times the spread"]);
-    assert!(!text.contains("at the same place"), "{text}");
+            "cell 1: type 5.7 is not an integer",
+        ),
+        (
+            "far.vtu",
+            ">0 0 0 1 0 0 1 1 0 0 1 0<",
+            ">0 0 0 1e308 0 0 1 1 0 0 1 0<",
+            "x = 1e308 lies more than 10^6 times the spread",
+        ),
+    ] {
+        let vtu = crafted_vtu(tmp.path(), name, |t| t.replace(from, to));
+        let (code, text) = map_vtu_capped(tmp.path(), &vtu);
+        assert_eq!(code, 2, "{name}: {text}");
+        assert_contains(&text, &[expected]);
+        assert!(!text.contains("at the same place"), "{text}");
+    }
 }
 
 /// #38 (12): test-1005_3D's CPS switches gravity off at the start
@@ -1472,16 +1452,7 @@ fn regression_38_vtu_messages_say_what_is_wrong() {
 fn regression_38_map_warns_when_the_cps_starts_gravity_below_full() {
     let tmp = tempfile::tempdir().unwrap();
     let src = fixture("anura3d/test-1005_3D");
-    let gom = std::fs::read_to_string(src.join("test-1005_3D.GOM")).unwrap();
-    let lines: Vec<&str> = gom.lines().collect();
-    let start = lines.iter().position(|l| *l == "$$STARTNODES").unwrap() + 1;
-    let mut csv = String::from("X,Y,Z,PWP\n");
-    for l in &lines[start..start + 207] {
-        let v: Vec<f64> = l.split_whitespace().map(|t| t.parse().unwrap()).collect();
-        csv.push_str(&format!("{},{},{},{}\n", v[0], v[1], v[2], 0.0));
-    }
-    let fem = tmp.path().join("fem.csv");
-    std::fs::write(&fem, csv).unwrap();
+    let fem = test_1005_nodes_csv(tmp.path(), |_| 0.0);
     let cps = std::fs::read_to_string(src.join("test-1005_3D.CPS_001")).unwrap();
     let line = cps
         .lines()

@@ -135,8 +135,8 @@ impl FosSettings {
     fn validate(&self) -> Result<(), FosError> {
         let bad = |s: String| Err(FosError::InvalidSettings(s));
         let positive = |v: f64| v > 0.0 && v.is_finite();
-        if !positive(self.tolerance) {
-            return bad(format!("tolerance {} must be > 0", self.tolerance));
+        if !(positive(self.tolerance) && self.tolerance < 1.0) {
+            return bad(format!("tolerance {} must lie in (0, 1)", self.tolerance));
         }
         if !(positive(self.f_min) && positive(self.f_max) && self.f_min < self.f_max) {
             return bad(format!(

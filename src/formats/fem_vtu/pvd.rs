@@ -86,6 +86,9 @@ pub fn parse(path: &Path, text: &str) -> Result<Series, FormatError> {
         .ok_or_else(|| ParseError::new(path, at(root), "no <Collection>"))?;
     let dir = path.parent().unwrap_or(Path::new(""));
     let mut outputs: Vec<Output> = Vec::new();
+    // Each output is its own file: a file listed twice would be read (and
+    // held by `fos-time`) once per listing.
+    let mut listed: std::collections::HashMap<PathBuf, f64> = std::collections::HashMap::new();
     for node in collection.children().filter(|n| n.has_tag_name("DataSet")) {
         let time = node
             .attribute("timestep")
@@ -127,10 +130,21 @@ pub fn parse(path: &Path, text: &str) -> Result<Series, FormatError> {
                 .into());
             }
         }
-        outputs.push(Output {
-            time,
-            file: dir.join(file.trim()),
-        });
+        let file = dir.join(file.trim());
+        if let Some(first) = listed.insert(file.clone(), time) {
+            return Err(ParseError::new(
+                path,
+                at(node),
+                format!(
+                    "`{}` is listed at t = {} and again at t = {}: each output of a series is its own file",
+                    file.display(),
+                    time_text(first),
+                    time_text(time)
+                ),
+            )
+            .into());
+        }
+        outputs.push(Output { time, file });
     }
     if outputs.is_empty() {
         return Err(
@@ -212,6 +226,16 @@ mod tests {
   </Collection>
 </VTKFile>"#;
         parse(Path::new("d/r.pvd"), text).unwrap()
+    }
+
+    #[test]
+    fn a_file_listed_twice_is_refused_at_its_second_listing() {
+        let text = "<VTKFile type=\"Collection\"><Collection>\n<DataSet timestep=\"0\" file=\"a.vtu\"/>\n<DataSet timestep=\"1\" file=\"a.vtu\"/>\n</Collection></VTKFile>";
+        let e = parse(Path::new("r.pvd"), text).unwrap_err().to_string();
+        assert!(
+            e.starts_with("r.pvd:3:1: `a.vtu` is listed at t = 0 s and again at t = 1 s"),
+            "{e}"
+        );
     }
 
     #[test]
