@@ -44,16 +44,20 @@ pub const MAX_DECODED_BYTES: u64 = 4 << 30;
 /// output decodes to 1–10× its size; a zlib bomb or a declared count the
 /// file cannot hold is refused before anything is allocated.
 pub fn decoded_limit(file_bytes: u64) -> u64 {
-    file_bytes
-        .saturating_mul(ENTRY_EXPANSION)
-        .clamp(ENTRY_FLOOR_BYTES, MAX_DECODED_BYTES)
+    expansion_limit(file_bytes, MAX_DECODED_BYTES)
 }
 
 /// The uncompressed size allowed for one entry of an archive of `archive_bytes`.
 pub fn entry_limit(archive_bytes: u64) -> u64 {
-    archive_bytes
+    expansion_limit(archive_bytes, MAX_ENTRY_BYTES)
+}
+
+/// [`ENTRY_EXPANSION`] times `bytes`, at least [`ENTRY_FLOOR_BYTES`], at most
+/// `most`: what compressed input of `bytes` may expand to.
+fn expansion_limit(bytes: u64, most: u64) -> u64 {
+    bytes
         .saturating_mul(ENTRY_EXPANSION)
-        .clamp(ENTRY_FLOOR_BYTES, MAX_ENTRY_BYTES)
+        .clamp(ENTRY_FLOOR_BYTES, most)
 }
 
 /// The files read while a [`ReadLog`] lives: shared between the log and the

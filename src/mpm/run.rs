@@ -430,9 +430,9 @@ fn drive(
             .formulations()
             .into_iter()
             .map(|(m, f)| {
-                let dry = model
-                    .materials
-                    .get((m as usize).wrapping_sub(1))
+                let dry = (m as usize)
+                    .checked_sub(1)
+                    .and_then(|i| model.materials.get(i))
                     .is_some_and(|mat| mat.material_type == "dry_material");
                 (m, if dry { super::Formulation::Dry } else { f })
             })

@@ -159,10 +159,10 @@ pub fn loads(
 }
 
 /// When the CPS's `$$GRAVITY_LOAD` gives the first step less (or more) than
-/// full gravity: the words naming the multiplier, its line and its value
-/// (`the CPS's $$GRAVITY_LOAD (line 57: `off 0.0 1.0`) starts gravity at
-/// 0.000·g`). A state mapped at full weight then starts out of balance, in
-/// Anura3D as in this runner.
+/// full gravity: the words naming the start value, the CPS file, line and
+/// keyword (``the CPS's gravity starts at 0.000·g (x.CPS_001:57:
+/// `$$GRAVITY_LOAD off 0.0 1.0`)``). A state mapped at full weight then
+/// starts out of balance, in Anura3D as in this runner.
 pub fn start_gravity_words(cps: &CpsDocument) -> Option<String> {
     let (load_steps, step_time) = cps.load_steps();
     let start = cps

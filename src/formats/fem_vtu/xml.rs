@@ -139,9 +139,9 @@ pub struct VtuXml {
 /// all: [`crate::formats::input::decoded_limit`] of the file's size.
 #[derive(Clone, Debug)]
 pub struct Budget {
-    pub file_bytes: u64,
-    pub limit: u64,
-    pub left: std::cell::Cell<u64>,
+    file_bytes: u64,
+    limit: u64,
+    left: std::cell::Cell<u64>,
 }
 
 impl Budget {
