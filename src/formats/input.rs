@@ -40,9 +40,10 @@ pub const MAX_DECODED_BYTES: u64 = 4 << 30;
 
 /// The decoded size (as f64 values, 8 bytes each) allowed for all the arrays
 /// of a VTK file of `file_bytes`: [`ENTRY_EXPANSION`] times its size, at
-/// least [`ENTRY_FLOOR_BYTES`], at most [`MAX_DECODED_BYTES`]. Real OGS
-/// output decodes to 1–10× its size; a zlib bomb or a declared count the
-/// file cannot hold is refused before anything is allocated.
+/// least [`ENTRY_FLOOR_BYTES`], at most [`MAX_DECODED_BYTES`]. Real output
+/// (the shipped OGS files the tests read) stays well inside it; a zlib
+/// bomb or a declared count the file cannot hold is refused before anything
+/// is allocated.
 pub fn decoded_limit(file_bytes: u64) -> u64 {
     expansion_limit(file_bytes, MAX_DECODED_BYTES)
 }
