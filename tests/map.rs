@@ -345,6 +345,20 @@ fn real_geostudio_node_csv_with_mesh_ply() {
     let node = dir.join("1-initial-steady-state_001_node.csv");
     let ply = dir.join("1-initial-steady-state_Mesh.ply");
     let gom = fixture("anura3d-rapid-drawdown/rapid_drawdown.GOM");
+    // The fixities its README states: 57 nodes fixed in x and y on the
+    // downward-facing sides, one on rollers (the toe block's end).
+    let (model, _) = a3d_init::formats::gom::GomDocument::read(&gom)
+        .unwrap()
+        .model()
+        .unwrap();
+    let fixed = |f: [bool; 2]| {
+        model
+            .solid_fixity
+            .iter()
+            .filter(|x| [x[0], x[1]] == f)
+            .count()
+    };
+    assert_eq!((fixed([true, true]), fixed([true, false])), (57, 1));
     // The embankment stands on its fixed base (#38: the base at y = 0 was
     // free, and no state at rest existed): `auto` solves for equilibrium
     // under the steady-state pore pressures and finds it.
