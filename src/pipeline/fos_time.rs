@@ -360,8 +360,13 @@ pub fn fos_over_time(
     let mut curve = Vec::new();
     let mut saved = Vec::new();
     let mut reports = Vec::new();
+    // Each time's search also starts from the best of the critical surfaces
+    // of the times before: where the pore pressures only worsen, the factor
+    // cannot rise by the search missing a surface it found before.
+    let mut le = options.le.clone();
     for ((t, _), f) in series.iter().zip(&fields) {
-        let r = factor_of(project, &section, f, &options.le)?;
+        let r = factor_of(project, &section, f, &le)?;
+        le.search.starts.push(r.critical_surface.clone());
         curve.push(point(*t, "saved", &r));
         saved.push((*t, r.factor));
         reports.push(r);
@@ -394,7 +399,7 @@ pub fn fos_over_time(
                 None
             }
             _ => {
-                let mut bisected = Vec::new();
+                let mut bisected: Vec<(CurvePoint, LeReport, Field)> = Vec::new();
                 let c = first_crossing(&saved, tolerance, |t| {
                     let k = k.unwrap_or(0);
                     let (t0, t1) = (series[k - 1].0, series[k].0);
@@ -410,7 +415,15 @@ pub fn fos_over_time(
                             .collect(),
                         material: a.material.clone(),
                     };
-                    let r = factor_of(project, &section, &f, &options.le)?;
+                    // The critical surfaces of the saved times and of the
+                    // bisection so far as starts too.
+                    let mut le = options.le.clone();
+                    le.search.starts = reports
+                        .iter()
+                        .chain(bisected.iter().map(|b| &b.1))
+                        .map(|r| r.critical_surface.clone())
+                        .collect();
+                    let r = factor_of(project, &section, &f, &le)?;
                     bisected.push((point(t, "bisected", &r), r, f));
                     Ok::<f64, PipelineError>(bisected.last().map_or(f64::NAN, |b| b.0.factor))
                 })?;

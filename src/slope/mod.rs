@@ -35,6 +35,7 @@ pub use methods::{Interslice, Method, Solution};
 pub use search::{CircleSearch, SearchSettings};
 pub use surface::{Circle, Reject, Surface};
 
+use rayon::prelude::*;
 use slices::{SliceInputs, SliceSet};
 
 /// Why an analysis could not run.
@@ -284,14 +285,14 @@ pub fn evaluate_surface(
 /// Circles refined from distinct places of the search.
 const STARTS: usize = 3;
 
+/// Most rounds of the non-circular refinement of the best two starts.
+const POLISH_ROUNDS: usize = 8;
+
 /// Most slices a surface is cut into.
 pub const MAX_SLICES: usize = 10_000;
 
 /// Most trial circles one search generates.
 pub const MAX_TRIALS: usize = 1_000_000;
-
-/// Best distinct circles clipped at each material interface.
-const COMPOSITE_CIRCLES: usize = 40;
 
 /// Searches the critical surface for `method`.
 pub fn analyse(
@@ -312,14 +313,8 @@ pub fn analyse(
     // The best circles of distinct places, each refined: the refinements
     // end in nearby local minima, and taking the lowest of several keeps the
     // answer from hopping between them when the inputs change slightly.
-    let (mut best, counts) = search::best_circles(
-        &list,
-        &inputs,
-        method,
-        tol,
-        problem.n_slices,
-        STARTS.max(COMPOSITE_CIRCLES),
-    );
+    let (mut best, counts) =
+        search::best_circles(&list, &inputs, method, tol, problem.n_slices, STARTS);
     if best.is_empty() {
         let reasons = counts
             .rejected
@@ -343,11 +338,9 @@ pub fn analyse(
             counts.generated
         )));
     }
-    let clipped = best.split_off(STARTS.min(best.len()));
-    let seeds: Vec<&(Surface, Solution)> = best.iter().chain(&clipped).collect();
+    best.truncate(STARTS);
     let mut circles: Vec<((Surface, Solution), search::Refinement)> = best
-        .clone()
-        .into_iter()
+        .into_par_iter()
         .map(|b| {
             search::refine_circle(
                 b,
@@ -364,18 +357,73 @@ pub fn analyse(
     // The ordinary method satisfies no force equilibrium: moving a polyline's
     // vertices only exploits that, so it keeps to circles.
     let refine = settings.refine && method != Method::Ordinary;
+    let lines = if refine {
+        composite::interfaces(inputs.domain)
+    } else {
+        Vec::new()
+    };
     let (composite, composites) = if refine {
-        search::best_composite(&seeds, &inputs, method, tol)
+        let (found, mut counts) =
+            search::best_composite(&list, &lines, &inputs, method, tol, problem.n_slices);
+        let found = found.map(|(c, recipe)| {
+            search::refine_composite(
+                c,
+                recipe,
+                &inputs,
+                method,
+                tol,
+                problem.n_slices,
+                settings.max_refinements,
+            )
+            .0
+        });
+        counts.refined_factor = found.as_ref().map(|c| c.1.factor);
+        (found, counts)
     } else {
         (None, search::CompositeCounts::default())
     };
     let (critical, polyline_refinement) = if refine {
-        circles
+        let (translational, _) =
+            search::best_translational(&inputs, method, tol, settings.segments, 2);
+        // Of the given starts, the best that can be analysed.
+        let given: Option<(Surface, Solution)> = settings
+            .starts
+            .iter()
+            .filter_map(|points| {
+                search::start_from(points, &inputs, method, tol, settings.segments)
+            })
+            .min_by(|a, b| a.1.factor.total_cmp(&b.1.factor));
+        let starts: Vec<&(Surface, Solution)> = circles
             .iter()
             .take(2)
             .map(|(c, _)| c)
             .chain(composite.as_ref())
-            .map(|c| search::refine_polyline(c, &inputs, method, tol, settings))
+            .chain(&translational)
+            .chain(&given)
+            .collect();
+        // Every start polished for two rounds (one of each kind); the best
+        // two polished on until they settle.
+        let mut first: Vec<((Surface, Solution), search::Refinement)> = starts
+            .into_par_iter()
+            .map(|c| search::refine_polyline(c, &inputs, method, tol, settings, 1))
+            .collect();
+        first.sort_by(|a, b| a.0.1.factor.total_cmp(&b.0.1.factor));
+        first.truncate(2);
+        first
+            .into_par_iter()
+            .map(|(c, r)| {
+                let (c, more) =
+                    search::refine_polyline(&c, &inputs, method, tol, settings, POLISH_ROUNDS);
+                let total = search::Refinement {
+                    evaluations: r.evaluations + more.evaluations,
+                    start_factor: r.start_factor,
+                    end_factor: more.end_factor,
+                    final_step_ratio: more.final_step_ratio,
+                };
+                (c, total)
+            })
+            .collect::<Vec<_>>()
+            .into_iter()
             .min_by(|a, b| a.0.1.factor.total_cmp(&b.0.1.factor))
             .map(|(c, r)| (c, Some(r)))
             .unwrap_or((circle.clone(), None))

@@ -44,6 +44,12 @@ pub struct SearchSettings {
     pub segments: usize,
     /// Most surface evaluations of each refinement.
     pub max_refinements: usize,
+    /// Surfaces to start from besides the search's own (polylines, left to
+    /// right, ends on the ground), e.g. the critical surfaces of the earlier
+    /// times of a series: the best of them that can be analysed is refined
+    /// with the search's own starts.
+    #[serde(skip)]
+    pub starts: Vec<Vec<[f64; 2]>>,
 }
 
 impl Default for SearchSettings {
@@ -57,6 +63,7 @@ impl Default for SearchSettings {
             refine: true,
             segments: 12,
             max_refinements: 1500,
+            starts: Vec::new(),
         }
     }
 }
@@ -268,27 +275,58 @@ pub fn best_circles(
 pub struct CompositeCounts {
     /// Material interfaces (x-monotone paths) of the section.
     pub interfaces: usize,
-    /// Circles clipped.
+    /// Circles clipped: every trial circle that cuts the ground.
     pub circles: usize,
     /// Composite surfaces formed (circles that dip below an interface).
     pub formed: usize,
     pub solved: usize,
-    /// The best composite's factor, before the vertex moves.
+    /// The best composite's factor, before its own refinement.
     pub best_factor: Option<f64>,
+    /// The best composite's factor after the pattern search on its circle.
+    pub refined_factor: Option<f64>,
 }
 
-/// Clips each seed circle at each material interface, exactly on it (the
+/// How a composite surface is made: a circle held up at an interface
+/// lowered by a drop ([`composite::clip`]).
+#[derive(Clone, Copy, Debug)]
+pub struct CompositeRecipe<'a> {
+    pub circle: Circle,
+    pub line: &'a [[f64; 2]],
+    pub drop: f64,
+}
+
+impl CompositeRecipe<'_> {
+    /// The composite surface of `circle` clipped as this recipe clips.
+    fn surface(
+        &self,
+        circle: &Circle,
+        inputs: &SliceInputs<'_>,
+        n_slices: usize,
+    ) -> Option<Surface> {
+        let traced = circle.trace(inputs.domain, n_slices).ok()?;
+        composite::clip(circle, &traced, self.line, self.drop, inputs.domain)
+    }
+}
+
+/// The best composite surface and how it was made.
+pub type BestComposite<'a> = ((Surface, Solution), CompositeRecipe<'a>);
+
+/// Clips every trial circle at each material interface, exactly on it (the
 /// strength of the region above) and a hair below (the region below),
 /// evaluates the composites in parallel, and returns the best (the first in
-/// order on a tie) with the counts.
-pub fn best_composite(
-    seeds: &[&(Surface, Solution)],
+/// trial order on a tie) with how it was made, and the counts. Every
+/// circle is clipped, not only the best ones: where the layer below an
+/// interface is unbreakable, the circles that reach it are rejected and the
+/// composites they make are the only surfaces along it.
+pub fn best_composite<'a>(
+    list: &[Circle],
+    lines: &'a [Vec<[f64; 2]>],
     inputs: &SliceInputs<'_>,
     method: Method,
     tol: f64,
-) -> (Option<(Surface, Solution)>, CompositeCounts) {
+    n_slices: usize,
+) -> (Option<BestComposite<'a>>, CompositeCounts) {
     let domain = inputs.domain;
-    let lines = composite::interfaces(domain);
     let height = domain
         .ground()
         .iter()
@@ -296,41 +334,144 @@ pub fn best_composite(
         .fold(f64::NEG_INFINITY, f64::max)
         - domain.bottom();
     let hair = 1e-4 * height;
-    let mut surfaces = Vec::new();
-    for (s, _) in seeds.iter().copied() {
-        let Some(c) = s.circle else { continue };
-        for line in &lines {
-            for drop in [0.0, hair] {
-                if let Some(clipped) = composite::clip(&c, s, line, drop, domain) {
-                    surfaces.push(clipped);
+    let recipes: Vec<CompositeRecipe<'a>> = list
+        .iter()
+        .flat_map(|&circle| {
+            lines.iter().flat_map(move |line| {
+                [-hair, 0.0, hair].map(|drop| CompositeRecipe { circle, line, drop })
+            })
+        })
+        .collect();
+    let results: Vec<(bool, Option<(Surface, Solution)>)> = recipes
+        .par_iter()
+        .map(|r| match r.surface(&r.circle, inputs, n_slices) {
+            None => (false, None),
+            Some(s) => match evaluate(s, inputs, method, tol) {
+                Trial::Solved(found) => (true, Some(*found)),
+                _ => (true, None),
+            },
+        })
+        .collect();
+    let mut counts = CompositeCounts {
+        interfaces: lines.len(),
+        circles: list.len(),
+        ..CompositeCounts::default()
+    };
+    let mut best: Option<BestComposite<'a>> = None;
+    for (recipe, (formed, found)) in recipes.iter().zip(results) {
+        counts.formed += usize::from(formed);
+        let Some(found) = found else { continue };
+        counts.solved += 1;
+        if best.as_ref().is_none_or(|b| found.1.factor < b.0.1.factor) {
+            best = Some((found, *recipe));
+        }
+    }
+    counts.best_factor = best.as_ref().map(|b| b.0.1.factor);
+    (best, counts)
+}
+
+/// A circle as (entry x, exit x, half-angle): the ends of its traced arc on
+/// the ground and the half-angle its lower arc subtends; `None` when the
+/// circle is not [`Circle::through`] its ends (an arc of more than half a
+/// circle).
+fn ends_and_angle(circle: &Circle, traced: &Surface) -> Option<[f64; 3]> {
+    let (a, b) = (traced.points[0], traced.points[traced.points.len() - 1]);
+    let chord = ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+    let theta = (0.5 * chord / circle.r).min(1.0).asin();
+    let again = Circle::through(a, b, theta);
+    let d =
+        (again.xc - circle.xc).abs() + (again.yc - circle.yc).abs() + (again.r - circle.r).abs();
+    (d <= 1e-6 * circle.r).then_some([a[0], b[0], theta])
+}
+
+/// The circle through the ground at `p[0]` and `p[1]` with half-angle `p[2]`.
+fn circle_of(p: &[f64], inputs: &SliceInputs<'_>) -> Option<Circle> {
+    let domain = inputs.domain;
+    let (ya, yb) = (domain.ground_y(p[0])?, domain.ground_y(p[1])?);
+    if !(p[2] > 0.0 && p[2] < std::f64::consts::FRAC_PI_2) || p[0] == p[1] {
+        return None;
+    }
+    Some(Circle::through([p[0], ya], [p[1], yb], p[2]))
+}
+
+/// Compass search from `start` (its surface and solution `best`): each
+/// coordinate moved by ± its step, every move that lowers the factor kept,
+/// all steps halved when none does, until they are `shrink` × their start or
+/// `max_evaluations` are spent. Returns the best, its point, the
+/// evaluations and the final step ratio.
+fn compass(
+    start: Vec<f64>,
+    steps: &[f64],
+    best: (Surface, Solution),
+    shrink: f64,
+    max_evaluations: usize,
+    score: impl Fn(&[f64]) -> Option<(Surface, Solution)>,
+) -> ((Surface, Solution), Vec<f64>, usize, f64) {
+    let mut best = best;
+    let mut current = start;
+    let mut ratio = 1.0;
+    let mut evaluations = 0;
+    while ratio > shrink && evaluations < max_evaluations {
+        let mut improved = false;
+        for (k, step) in steps.iter().enumerate() {
+            for d in [ratio * step, -ratio * step] {
+                let mut p = current.clone();
+                p[k] += d;
+                evaluations += 1;
+                if let Some(found) = score(&p)
+                    && found.1.factor < best.1.factor * (1.0 - 1e-12)
+                {
+                    best = found;
+                    current = p;
+                    improved = true;
+                    break;
                 }
             }
         }
-    }
-    let formed = surfaces.len();
-    let solved: Vec<Option<(Surface, Solution)>> = surfaces
-        .into_par_iter()
-        .map(|s| match evaluate(s, inputs, method, tol) {
-            Trial::Solved(found) => Some(*found),
-            _ => None,
-        })
-        .collect();
-    let mut count = 0;
-    let mut best: Option<(Surface, Solution)> = None;
-    for found in solved.into_iter().flatten() {
-        count += 1;
-        if best.as_ref().is_none_or(|b| found.1.factor < b.1.factor) {
-            best = Some(found);
+        if !improved {
+            ratio *= 0.5;
         }
     }
-    let counts = CompositeCounts {
-        interfaces: lines.len(),
-        circles: seeds.len(),
-        formed,
-        solved: count,
-        best_factor: best.as_ref().map(|b| b.1.factor),
+    (best, current, evaluations, ratio)
+}
+
+/// Pattern search on the circle that makes a composite surface, in (entry x,
+/// exit x, half-angle), each trial clipped as the recipe clips. The start
+/// stays the answer unless a trial beats it.
+pub fn refine_composite<'a>(
+    start: (Surface, Solution),
+    recipe: CompositeRecipe<'a>,
+    inputs: &SliceInputs<'_>,
+    method: Method,
+    tol: f64,
+    n_slices: usize,
+    max_evaluations: usize,
+) -> ((Surface, Solution), CompositeRecipe<'a>) {
+    let Some(p) = recipe
+        .circle
+        .trace(inputs.domain, n_slices)
+        .ok()
+        .and_then(|t| ends_and_angle(&recipe.circle, &t))
+    else {
+        return (start, recipe);
     };
-    (best, counts)
+    let span = (p[1] - p[0]).abs();
+    let (best, at, _, _) = compass(
+        p.to_vec(),
+        &[0.05 * span, 0.05 * span, 0.05],
+        start,
+        1e-4,
+        max_evaluations,
+        |q| {
+            let c = circle_of(q, inputs)?;
+            match evaluate(recipe.surface(&c, inputs, n_slices)?, inputs, method, tol) {
+                Trial::Solved(found) => Some(*found),
+                _ => None,
+            }
+        },
+    );
+    let circle = circle_of(&at, inputs).unwrap_or(recipe.circle);
+    (best, CompositeRecipe { circle, ..recipe })
 }
 
 /// What a refinement did.
@@ -343,7 +484,9 @@ pub struct Refinement {
     pub final_step_ratio: f64,
 }
 
-/// Pattern search on the circle's centre and radius.
+/// Pattern search on the circle: first on its ends on the ground and its
+/// half-angle (moves that keep the ends on the ground, where the factor is
+/// smooth), then on its centre and radius.
 pub fn refine_circle(
     start: (Surface, Solution),
     inputs: &SliceInputs<'_>,
@@ -352,51 +495,56 @@ pub fn refine_circle(
     n_slices: usize,
     max_evaluations: usize,
 ) -> ((Surface, Solution), Refinement) {
+    let start_factor = start.1.factor;
     let Some(circle) = start.0.circle else {
-        let f = start.1.factor;
         return (
             start,
             Refinement {
                 evaluations: 0,
-                start_factor: f,
-                end_factor: f,
+                start_factor,
+                end_factor: start_factor,
                 final_step_ratio: 1.0,
             },
         );
     };
-    let start_factor = start.1.factor;
-    let mut best = start;
-    let mut current = circle;
-    let step0 = 0.05 * circle.r;
-    let mut step = step0;
-    let mut evaluations = 0;
-    while step > 1e-4 * circle.r && evaluations < max_evaluations {
-        let mut improved = false;
-        for k in 0..6 {
-            let mut c = current;
-            let d = if k % 2 == 0 { step } else { -step };
-            match k / 2 {
-                0 => c.xc += d,
-                1 => c.yc += d,
-                _ => c.r += d,
-            }
-            evaluations += 1;
-            let trial = match c.trace(inputs.domain, n_slices) {
-                Ok(s) => evaluate(s, inputs, method, tol),
-                Err(r) => Trial::Rejected(r),
-            };
-            if let Trial::Solved(found) = trial
-                && found.1.factor < best.1.factor * (1.0 - 1e-12)
-            {
-                best = *found;
-                current = c;
-                improved = true;
-            }
-        }
-        if !improved {
-            step *= 0.5;
-        }
+    let traced = |c: &Circle| match c.trace(inputs.domain, n_slices) {
+        Ok(s) => match evaluate(s, inputs, method, tol) {
+            Trial::Solved(found) => Some(*found),
+            _ => None,
+        },
+        Err(_) => None,
+    };
+    let (mut best, mut evaluations) = (start, 0);
+    if let Some(p) = ends_and_angle(&circle, &best.0) {
+        let span = (p[1] - p[0]).abs();
+        let (found, _, n, _) = compass(
+            p.to_vec(),
+            &[0.05 * span, 0.05 * span, 0.05],
+            best,
+            1e-4,
+            max_evaluations / 2,
+            |q| traced(&circle_of(q, inputs)?),
+        );
+        best = found;
+        evaluations += n;
     }
+    let circle = best.0.circle.unwrap_or(circle);
+    let step = 0.05 * circle.r;
+    let (best, _, n, ratio) = compass(
+        vec![circle.xc, circle.yc, circle.r],
+        &[step, step, step],
+        best,
+        1e-4,
+        max_evaluations.saturating_sub(evaluations),
+        |q| {
+            traced(&Circle {
+                xc: q[0],
+                yc: q[1],
+                r: q[2],
+            })
+        },
+    );
+    evaluations += n;
     let end_factor = best.1.factor;
     (
         best,
@@ -404,15 +552,362 @@ pub fn refine_circle(
             evaluations,
             start_factor,
             end_factor,
+            final_step_ratio: ratio,
+        },
+    )
+}
+
+/// Moves the vertices of a polyline made from the surface (a circle, a
+/// composite or a translational surface) to lower the factor, in rounds
+/// that alternate two parametrisations: each round starts again, with the
+/// full step, from the polyline the last one ended on, until two rounds in a
+/// row gain less than 10⁻⁶ of the factor, or after `rounds`.
+pub fn refine_polyline(
+    start: &(Surface, Solution),
+    inputs: &SliceInputs<'_>,
+    method: Method,
+    tol: f64,
+    settings: &SearchSettings,
+    rounds: usize,
+) -> ((Surface, Solution), Refinement) {
+    // Even rounds move the depths below the ground ([`depth_round`]), odd
+    // rounds the vertices along the axis' radii ([`polyline_round`]): each
+    // leaves the other's local minimum.
+    let round = |s: &(Surface, Solution), k: usize| {
+        if k.is_multiple_of(2) {
+            depth_round(s, inputs, method, tol, settings)
+        } else {
+            polyline_round(s, inputs, method, tol, settings)
+        }
+    };
+    let (mut best, mut total) = round(start, 0);
+    let mut stale = 0;
+    for k in 1..rounds {
+        let mut again = best.clone();
+        again.0.circle = None;
+        let (found, r) = round(&again, k);
+        total.evaluations += r.evaluations;
+        total.final_step_ratio = r.final_step_ratio;
+        let gain = best.1.factor - found.1.factor;
+        if found.1.factor < best.1.factor {
+            best = (
+                Surface {
+                    circle: best.0.circle,
+                    ..found.0
+                },
+                found.1,
+            );
+        }
+        stale = if gain < 1e-6 * best.1.factor {
+            stale + 1
+        } else {
+            0
+        };
+        if stale == 2 {
+            break;
+        }
+    }
+    total.end_factor = best.1.factor;
+    (best, total)
+}
+
+/// The kinematic limit on the passive end of a refined surface: no segment
+/// rises towards the toe (the surface's lower end) more steeply than the
+/// Rankine passive wedge, 45° − φ′/2 (φ′ the smallest friction angle of the
+/// section's materials), or than the start surface already does. Without it
+/// the vertex moves dig a steep spike at the toe, where the base's normal
+/// force and the mα factors of Spencer and Morgenstern–Price turn
+/// unphysical, and report factors far below the circles'.
+#[derive(Clone, Copy, Debug)]
+struct Passive {
+    /// The toe is the left end.
+    toe_left: bool,
+    /// tan of the steepest rise allowed.
+    tan_limit: f64,
+}
+
+impl Passive {
+    /// The rule, or the start's steepest rise where that is steeper.
+    fn new(start: &Surface, inputs: &SliceInputs<'_>) -> Passive {
+        let mut limit = Passive::rule(start, inputs);
+        limit.tan_limit = limit.tan_limit.max(limit.steepest(start));
+        limit
+    }
+
+    /// The rule alone, with the toe at the lower end of `surface`.
+    fn rule(surface: &Surface, inputs: &SliceInputs<'_>) -> Passive {
+        let phi = inputs
+            .materials
+            .iter()
+            .filter_map(|m| m.strength.as_ref().map(|s| s.friction_angle))
+            .fold(f64::INFINITY, f64::min);
+        let phi = if phi.is_finite() { phi } else { 0.0 };
+        let rule = (45.0 - 0.5 * phi).to_radians().tan();
+        let p = &surface.points;
+        Passive {
+            toe_left: p[0][1] <= p[p.len() - 1][1],
+            tan_limit: rule,
+        }
+    }
+
+    /// The steepest rise towards the toe of the surface's segments (tan).
+    fn steepest(&self, s: &Surface) -> f64 {
+        s.points
+            .windows(2)
+            .map(|w| {
+                let slope = (w[1][1] - w[0][1]) / (w[1][0] - w[0][0]);
+                if self.toe_left { -slope } else { slope }
+            })
+            .fold(0.0, f64::max)
+    }
+
+    fn allows(&self, s: &Surface) -> bool {
+        self.steepest(s) <= self.tan_limit * (1.0 + 1e-9)
+    }
+}
+
+/// The polyline of [`depth_round`]'s parameters `[xa, xb, d₁, …, d_{m−1}]`
+/// (m segments), if admissible; its moment axis `axis`, else the centre of
+/// the circle through its ends and deepest vertex.
+fn by_depths(
+    p: &[f64],
+    axis: Option<[f64; 2]>,
+    domain: &super::geometry::Domain,
+) -> Option<Surface> {
+    let (xa, xb) = (p[0], p[1]);
+    if xb.partial_cmp(&xa) != Some(std::cmp::Ordering::Greater) {
+        return None;
+    }
+    let m = p.len() - 1;
+    let mut pts = Vec::with_capacity(m + 1);
+    pts.push([xa, domain.ground_y(xa)?]);
+    for (i, d) in p[2..].iter().enumerate() {
+        let x = xa + (xb - xa) * (i + 1) as f64 / m as f64;
+        pts.push([x, domain.ground_y(x)? - d]);
+    }
+    pts.push([xb, domain.ground_y(xb)?]);
+    let s = Surface::polyline(domain, pts, axis).ok()?;
+    s.admissible(domain).then_some(s)
+}
+
+/// A given polyline as a start for [`refine_polyline`]: itself when it can
+/// be analysed, else the polyline of `segments` equal steps in x at its
+/// depths below the ground (a surface whose kinks keep the λ iteration from
+/// closing is often analysable once resampled); `None` when neither is.
+pub fn start_from(
+    points: &[[f64; 2]],
+    inputs: &SliceInputs<'_>,
+    method: Method,
+    tol: f64,
+    segments: usize,
+) -> Option<(Surface, Solution)> {
+    let domain = inputs.domain;
+    let s = Surface::polyline(domain, points.to_vec(), None).ok()?;
+    if let Trial::Solved(found) = evaluate(s.clone(), inputs, method, tol) {
+        return Some(*found);
+    }
+    let m = segments.max(3);
+    let (xa, xb) = (points[0][0], points[points.len() - 1][0]);
+    let mut params = vec![xa, xb];
+    for i in 1..m {
+        let x = xa + (xb - xa) * i as f64 / m as f64;
+        params.push(domain.ground_y(x)? - s.y(x)?);
+    }
+    match evaluate(by_depths(&params, None, domain)?, inputs, method, tol) {
+        Trial::Solved(found) => Some(*found),
+        _ => None,
+    }
+}
+
+/// Translational trial surfaces: for ends on a grid along the ground and a
+/// depth from the minimum depth to most of the section's height, the
+/// polyline whose interior vertices all lie that depth below the ground (a
+/// slab sliding parallel to the ground, as on an infinite slope, or along a
+/// layer at that depth). Evaluated in parallel; up to `keep` best of distinct
+/// ends (the first in order on a tie) are returned with the number of
+/// surfaces tried. The grid
+/// is fixed, not drawn from the trial count.
+pub fn best_translational(
+    inputs: &SliceInputs<'_>,
+    method: Method,
+    tol: f64,
+    segments: usize,
+    keep: usize,
+) -> (Vec<(Surface, Solution)>, usize) {
+    let domain = inputs.domain;
+    let m = segments.max(3);
+    let (x0, x1) = domain.x_range();
+    let margin = 0.005 * (x1 - x0);
+    let top = domain
+        .ground()
+        .iter()
+        .map(|p| p[1])
+        .fold(f64::NEG_INFINITY, f64::max);
+    let height = top - domain.bottom();
+    const ENDS: usize = 24;
+    const DEPTHS: usize = 12;
+    let xs: Vec<f64> = (0..ENDS)
+        .map(|i| x0 + margin + (x1 - x0 - 2.0 * margin) * i as f64 / (ENDS - 1) as f64)
+        .collect();
+    // Depths from the minimum (or 1 % of the height) to 90 % of the height,
+    // spaced geometrically: shallow slabs are the likelier.
+    let d0 = inputs.min_depth.max(0.01 * height) * 1.001;
+    let d1 = (0.9 * height).max(d0);
+    let depths: Vec<f64> = (0..DEPTHS)
+        .map(|k| d0 * (d1 / d0).powf(k as f64 / (DEPTHS - 1) as f64))
+        .collect();
+    let mut params = Vec::new();
+    for (i, &xa) in xs.iter().enumerate() {
+        for &xb in &xs[i + 1..] {
+            for &d in &depths {
+                let mut p = vec![xa, xb];
+                p.extend(std::iter::repeat_n(d, m - 1));
+                params.push(p);
+            }
+        }
+    }
+    let found: Vec<Option<(Surface, Solution)>> = params
+        .par_iter()
+        .map(|p| {
+            // The passive rule alone: no start to exempt.
+            let s = by_depths(p, None, domain).filter(|s| Passive::rule(s, inputs).allows(s))?;
+            match evaluate(s, inputs, method, tol) {
+                Trial::Solved(found) => Some(*found),
+                _ => None,
+            }
+        })
+        .collect();
+    // Stable sort: ties keep grid order. Starts of distinct places: ends
+    // more than a grid step apart from a better one's.
+    let mut solved: Vec<(Surface, Solution)> = found.into_iter().flatten().collect();
+    solved.sort_by(|a, b| a.1.factor.total_cmp(&b.1.factor));
+    let step = (x1 - x0 - 2.0 * margin) / (ENDS - 1) as f64;
+    let mut best: Vec<(Surface, Solution)> = Vec::new();
+    for s in solved {
+        if best.len() >= keep {
+            break;
+        }
+        let ends = |t: &Surface| (t.points[0][0], t.points[t.points.len() - 1][0]);
+        let (a, b) = ends(&s.0);
+        if best.iter().all(|o| {
+            let (c, d) = ends(&o.0);
+            (a - c).abs() + (b - d).abs() > 1.5 * step
+        }) {
+            best.push(s);
+        }
+    }
+    (best, params.len())
+}
+
+/// The polyline as its ends' x on the ground and each interior vertex's
+/// depth below the ground, the vertices equally spaced in x between the
+/// ends: moving an end stretches the whole surface, and a surface that
+/// follows a layer parallel to the ground keeps its depths (the moves a
+/// translational slide along a weak layer needs). Compass moves on each
+/// end, each depth, and runs of neighbouring depths together.
+fn depth_round(
+    start: &(Surface, Solution),
+    inputs: &SliceInputs<'_>,
+    method: Method,
+    tol: f64,
+    settings: &SearchSettings,
+) -> ((Surface, Solution), Refinement) {
+    let (surface, solution) = start;
+    let domain = inputs.domain;
+    let m = settings.segments.max(3);
+    let n = surface.points.len();
+    let (xa, xb) = (surface.points[0][0], surface.points[n - 1][0]);
+    let mut params = vec![xa, xb];
+    for i in 1..m {
+        let x = xa + (xb - xa) * i as f64 / m as f64;
+        let depth = match (domain.ground_y(x), surface.y(x)) {
+            (Some(g), Some(y)) => g - y,
+            _ => return (start.clone(), unchanged(solution.factor)),
+        };
+        params.push(depth);
+    }
+    let axis = Some(surface.axis);
+    let passive = Passive::new(surface, inputs);
+    let score = |p: &[f64]| -> Option<(Surface, Solution)> {
+        let s = by_depths(p, axis, domain).filter(|s| passive.allows(s))?;
+        match evaluate(s, inputs, method, tol) {
+            Trial::Solved(found) => Some(*found),
+            _ => None,
+        }
+    };
+    let Some(first) = score(&params) else {
+        return (start.clone(), unchanged(solution.factor));
+    };
+    let chord = xb - xa;
+    // Moves: each end, then runs of depths (all, halves, quarters, … one).
+    let mut moves: Vec<(usize, usize)> = vec![(0, 1), (1, 2)];
+    let mut w = m - 1;
+    while w >= 1 {
+        let mut k = 2;
+        while k + w <= m + 1 {
+            moves.push((k, k + w));
+            k += w.div_ceil(2).max(1);
+        }
+        w /= 2;
+    }
+    moves.dedup();
+    let step0 = chord / 25.0;
+    let mut step = step0;
+    let mut best = first;
+    let mut evaluations = 1;
+    while step > chord / 2500.0 && evaluations < settings.max_refinements {
+        let mut improved = false;
+        for &(k0, k1) in &moves {
+            for d in [step, -step] {
+                if evaluations >= settings.max_refinements {
+                    break;
+                }
+                let mut trial = params.clone();
+                for v in &mut trial[k0..k1] {
+                    *v += d;
+                }
+                evaluations += 1;
+                if let Some(found) = score(&trial)
+                    && found.1.factor < best.1.factor * (1.0 - 1e-12)
+                {
+                    best = found;
+                    params = trial;
+                    improved = true;
+                    break;
+                }
+            }
+        }
+        if !improved {
+            step *= 0.5;
+        }
+    }
+    if solution.factor <= best.1.factor {
+        best = start.clone();
+    }
+    let end_factor = best.1.factor;
+    (
+        best,
+        Refinement {
+            evaluations,
+            start_factor: solution.factor,
+            end_factor,
             final_step_ratio: step / step0,
         },
     )
 }
 
-/// Moves the vertices of a polyline made from the surface (a circle, or a
-/// composite surface with the circle's centre as its axis) to lower the
-/// factor.
-pub fn refine_polyline(
+/// A refinement that changed nothing.
+fn unchanged(factor: f64) -> Refinement {
+    Refinement {
+        evaluations: 0,
+        start_factor: factor,
+        end_factor: factor,
+        final_step_ratio: 1.0,
+    }
+}
+
+/// One round of [`refine_polyline`].
+fn polyline_round(
     start: &(Surface, Solution),
     inputs: &SliceInputs<'_>,
     method: Method,
@@ -424,6 +919,7 @@ pub fn refine_polyline(
     let circle = surface.circle;
     let [cx, cy] = surface.axis;
     let domain = inputs.domain;
+    let passive = Passive::new(surface, inputs);
     let m = settings.segments.max(3);
     let (xa, xb) = (
         surface.points[0][0],
@@ -464,7 +960,7 @@ pub fn refine_polyline(
             axis: [cx, cy],
             circle,
         };
-        s.admissible(domain).then_some(s)
+        (s.admissible(domain) && passive.allows(&s)).then_some(s)
     };
     let score = |offsets: &[f64]| -> Option<(Surface, Solution)> {
         let s = build(offsets)?;
