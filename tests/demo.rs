@@ -26,7 +26,7 @@ fn demo_runs_the_whole_chain() {
     );
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
-    // The OGS output nearest the failure time FS(t) measured (#26).
+    // The first OGS output at or past the failure time FS(t) measured (#26, #39).
     assert_eq!(report["fem_nodes"], 793);
     let curve: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("fos_time.json")).unwrap()).unwrap();
@@ -74,6 +74,52 @@ fn demo_runs_the_whole_chain() {
             "{label} FS {factor} printed: {stdout}"
         );
     }
+    // The dry sand layer is an infinite slope: long shallow surfaces approach
+    // tan 33°/tan 32° = 1.039 from above (end effects), whatever the trial
+    // count (#39).
+    let dry: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("fos_zero_pwp/fos.json")).unwrap())
+            .unwrap();
+    let dry = dry["factor"].as_f64().unwrap();
+    let infinite = 33f64.to_radians().tan() / 32f64.to_radians().tan();
+    assert!(
+        (infinite..infinite + 0.01).contains(&dry),
+        "dry factor {dry} vs the infinite slope's {infinite}"
+    );
+    // `map --step failure` with the flags the demo prints writes the same
+    // MAPF as the demo's map step, and its report names the step (#39).
+    let line = stdout
+        .lines()
+        .find(|l| l.contains("--step failure"))
+        .expect("the demo prints the one-step command");
+    let args: Vec<&str> = line[line.find("map --fem").unwrap()..]
+        .split_whitespace()
+        .collect();
+    let failure = tmp.path().join("failure");
+    let o = Command::new(env!("CARGO_BIN_EXE_a3d-init"))
+        .args(&args)
+        .args(["--out", failure.to_str().unwrap()])
+        .output()
+        .unwrap();
+    // 1: the slope cannot stand at the failure time (the folder is written).
+    assert!(matches!(o.status.code(), Some(0 | 1)), "{o:?}");
+    assert_eq!(
+        std::fs::read(failure.join("slope.MAPF")).unwrap(),
+        std::fs::read(out.join("slope.MAPF")).unwrap(),
+        "map --step failure writes the demo's MAPF"
+    );
+    let chosen: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(failure.join("report.json")).unwrap())
+            .unwrap();
+    let chosen = &chosen["failure"];
+    assert_eq!(chosen["method"], "morgenstern-price");
+    assert!(chosen["factor"].as_f64().unwrap() <= 1.0, "{chosen}");
+    assert!(chosen["before"][1].as_f64().unwrap() > 1.0, "{chosen}");
+    let t = chosen["time"].as_f64().unwrap();
+    assert!(
+        stdout.contains(&format!("OGS output t = {:.2} h", t / 3600.0)),
+        "the demo maps the same output: {stdout}"
+    );
     let svg = std::fs::read_to_string(out.join("pwp.svg")).unwrap();
     assert!(
         svg.contains("x (m)") && svg.contains("y (m)") && svg.contains("pwp (kPa)"),

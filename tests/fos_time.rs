@@ -151,3 +151,104 @@ fn fs_over_time_of_the_shipped_ogs_rain_crosses_one_between_two_outputs() {
     assert!(before.1 > 1.0 && after.1 <= 1.0, "{before:?} {after:?}");
     assert!(crossing.time - before.0 > 0.0 && after.0 - crossing.time >= 0.0);
 }
+
+/// The factor at the shipped OGS output of 1.29 h does not depend on the
+/// number of trial circles (#39): the circles are refined in (entry, exit,
+/// half-angle), and the non-circular refinement starts from a fixed grid of
+/// translational surfaces as well as from the circles, so 2,000, 5,000 and
+/// 20,000 circles end within 0.002.
+#[test]
+fn the_factor_at_the_129_h_output_does_not_depend_on_the_trial_count() {
+    let project = a3d_init::pipeline::Project::load(&fixture("slope")).unwrap();
+    let series = fos_time::load_series(&SeriesInput::Pvd {
+        path: fixture("slope/ogs/results/rain.pvd"),
+        vtu: Default::default(),
+    })
+    .unwrap();
+    let fem = &series.iter().find(|s| s.0 == 4644.0).unwrap().1;
+    let factors: Vec<f64> = [2000, 5000, 20000]
+        .iter()
+        .map(|&trials| {
+            let mut le = a3d_init::pipeline::slope::LeOptions::default();
+            le.search.trials = trials;
+            fos_time::factor_of_field(&project, fem, &le)
+                .unwrap()
+                .factor
+        })
+        .collect();
+    let (lo, hi) = factors
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &f| {
+            (a.min(f), b.max(f))
+        });
+    assert!(hi - lo <= 0.002, "{factors:?}");
+    // A slope at its failure time: below the best circle's 1.02.
+    assert!(hi < 1.0, "{factors:?}");
+}
+
+/// `map --step failure` on a series that never fails says so and exits 2,
+/// writing nothing; a single table or a reader given `failure` is refused
+/// with the reason (#39).
+#[test]
+fn step_failure_without_a_failing_output_is_exit_2() {
+    let tmp = tempfile::tempdir().unwrap();
+    // The first three outputs of the shipped rain: FS ≥ 1.3.
+    let results = fixture("slope/ogs/results");
+    let mut pvd = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n",
+    );
+    for t in [0, 180, 360] {
+        let name = format!("rain_t_{t}.vtu");
+        std::fs::copy(results.join(&name), tmp.path().join(&name)).unwrap();
+        pvd.push_str(&format!(
+            "<DataSet timestep=\"{t}\" group=\"\" part=\"0\" file=\"{name}\"/>\n"
+        ));
+    }
+    pvd.push_str("</Collection>\n</VTKFile>\n");
+    let series = tmp.path().join("dry.pvd");
+    std::fs::write(&series, pvd).unwrap();
+    let out = tmp.path().join("out");
+    let model = fixture("slope");
+    let run = |fem: &std::path::Path, extra: &[&str]| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_a3d-init"))
+            .args(["map", "--fem", fem.to_str().unwrap(), "--step", "failure"])
+            .args([
+                "--mpm",
+                model.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ])
+            .args(["--material-map", "mat0=silty_sand"])
+            .args(extra)
+            .output()
+            .unwrap()
+    };
+    let o = run(&series, &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("no saved step fails") && err.contains("dry.pvd"),
+        "{err}"
+    );
+    assert!(!out.exists(), "nothing is written");
+    let o = run(&fixture("slope/sand-nodes.csv"), &[]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("needs one time series"), "{err}");
+    let o = run(&series, &["--failure-method", "srm"]);
+    assert_eq!(o.status.code(), Some(2));
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_a3d-init"))
+        .args([
+            "inspect",
+            "--fem",
+            series.to_str().unwrap(),
+            "--step",
+            "failure",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("`map` finds it against the model"), "{err}");
+    assert!(!out.exists());
+}

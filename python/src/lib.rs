@@ -481,6 +481,7 @@ fn map<'py>(
             ..EquilibriumOptions::default()
         },
         keep_fem_fields: true,
+        ..MapConfig::default()
     };
     let job = MapJob {
         model,

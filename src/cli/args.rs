@@ -59,8 +59,8 @@ pub struct FemArgs {
     /// Analysis of a `.gsz` project: its name or 1-based index (needed when there are several).
     #[arg(long, value_name = "NAME|INDEX")]
     pub analysis: Option<String>,
-    /// Saved step of a `.gsz` analysis: a step number, `last`, or `time=<seconds>`.
-    #[arg(long, default_value = "last", value_name = "k|last|time=T")]
+    /// Saved step of a `.gsz` analysis or `.pvd` series: a step number, `last`, `time=<seconds>`, or (`map`) `failure`: the first saved step whose factor of safety FS(t) is at most 1.
+    #[arg(long, default_value = "last", value_name = "k|last|time=T|failure")]
     pub step: String,
 }
 
@@ -275,10 +275,23 @@ fn numbers<const N: usize>(text: &str, flag: &str) -> anyhow::Result<[f64; N]> {
 }
 
 impl LeArgs {
+    /// The method of slices `method` names with the half-sine interslice
+    /// function (`None` for `srm`).
+    pub fn method_of(method: MethodArg) -> Option<crate::slope::Method> {
+        Self::with_interslice(method, IntersliceArg::HalfSine)
+    }
+
     /// The method of slices `method` names (`None` for `srm`).
     pub fn method(&self, method: MethodArg) -> Option<crate::slope::Method> {
+        Self::with_interslice(method, self.interslice)
+    }
+
+    fn with_interslice(
+        method: MethodArg,
+        interslice: IntersliceArg,
+    ) -> Option<crate::slope::Method> {
         use crate::slope::{Interslice, Method};
-        let interslice = match self.interslice {
+        let interslice = match interslice {
             IntersliceArg::HalfSine => Interslice::HalfSine,
             IntersliceArg::Constant => Interslice::Constant,
         };

@@ -111,14 +111,17 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     let Some(crossing) = &curve.crossing else {
         bail!("FS(t) never falls to 1 on {}", pvd.display());
     };
+    // The first output at or past the failure, as `map --step failure`
+    // chooses it (the same curve: FS(t)'s defaults).
     let (t_map, fem_at) = series
         .iter()
-        .min_by(|a, b| {
-            (a.0 - crossing.time)
-                .abs()
-                .total_cmp(&(b.0 - crossing.time).abs())
+        .find(|(t, _)| {
+            curve
+                .curve
+                .iter()
+                .any(|p| p.kind == "saved" && p.time == *t && p.factor <= 1.0)
         })
-        .expect("a series has two outputs or more");
+        .expect("a curve that crosses 1 has a saved time with FS ≤ 1");
     let fs_at = |t: f64| {
         curve
             .curve
@@ -137,7 +140,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         100.0 * (crossing.time_h / 1.56 - 1.0)
     );
 
-    // 3. Calibrate h on the pore pressures of the output nearest that time.
+    // 3. Calibrate h on the pore pressures of the first output with FS ≤ 1.
     let outcome = calibrate::calibrate_h(
         &fem_at.nodes,
         &[Quantity::Pwp],
@@ -230,6 +233,11 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         pts.len(),
         mapped.report.stress_source,
         mapped.report.mapf_smoothing_length
+    );
+    say!(
+        "             the same MAPF in one step: a3d-init map --fem {} --step failure --mpm {} --h auto --stress equilibrium --material-map mat0=silty_sand",
+        pvd.display(),
+        dir.display()
     );
     if let Some(e) = &mapped.report.equilibrium {
         let o = &e.outcome;

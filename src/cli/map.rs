@@ -5,12 +5,13 @@
 use std::path::PathBuf;
 use std::time::Instant;
 
-use super::args::FemArgs;
+use super::args::{FemArgs, LeArgs, MethodArg};
 use crate::kernel::KernelKind;
 use crate::pipeline::map::{
     EquilibriumOptions, MapConfig, MaterialMap, MixedState, Outside, SmoothingLength, StressSource,
 };
 use crate::pipeline::output::Destination;
+use crate::pipeline::slope::LeOptions;
 use crate::pipeline::{self, mapping::MapJob};
 
 /// A clap mirror of one of the library's plain enums: the same variants, with
@@ -121,6 +122,12 @@ pub struct MapArgs {
     /// Without a CPS beside the model, write a complete default CPS for the model's version (#14).
     #[arg(long)]
     pub generate_cps: bool,
+    /// `--step failure`: the method of slices of FS(t).
+    #[arg(long, value_enum, default_value_t = MethodArg::MorgensternPrice)]
+    pub failure_method: MethodArg,
+    /// `--step failure`: about this many trial circles per saved step.
+    #[arg(long, default_value_t = 2000)]
+    pub failure_trials: usize,
 }
 
 impl MapArgs {
@@ -156,7 +163,28 @@ impl MapArgs {
                 ..EquilibriumOptions::default()
             },
             keep_fem_fields: true,
+            failure: self.failure_options()?,
         })
+    }
+
+    /// FS(t)'s limit-equilibrium options for `--step failure`.
+    fn failure_options(&self) -> anyhow::Result<LeOptions> {
+        if self.failure_method == MethodArg::Srm {
+            anyhow::bail!(
+                "--failure-method srm: FS(t) runs a method of slices on every saved step; strength reduction is `fos --method srm` on the mapped folder"
+            );
+        }
+        if self.failure_trials == 0 || self.failure_trials > crate::slope::MAX_TRIALS {
+            anyhow::bail!(
+                "--failure-trials {}: expected 1 to {}",
+                self.failure_trials,
+                crate::slope::MAX_TRIALS
+            );
+        }
+        let mut le = crate::pipeline::fos_time::FosTimeOptions::default().le;
+        le.method = LeArgs::method_of(self.failure_method).unwrap_or(le.method);
+        le.search.trials = self.failure_trials;
+        Ok(le)
     }
 
     /// The library's job these arguments describe.
@@ -215,6 +243,21 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         r.sigma_yy_range.0,
         r.sigma_yy_range.1
     );
+    if let Some(f) = &r.failure {
+        say_err!(
+            "  failure: {} step {} of {} at t = {} s ({:.4} h), FS = {:.3} by {}, the first saved step with FS ≤ 1{}",
+            f.series,
+            f.step,
+            f.saved_steps,
+            f.time,
+            f.time_h,
+            f.factor,
+            f.method,
+            f.crossing_time
+                .map(|t| format!(" (FS(t) reaches 1 at {:.4} h)", t / 3600.0))
+                .unwrap_or_default()
+        );
+    }
     for n in &r.notes {
         say_err!("  note: {n}");
     }

@@ -251,19 +251,30 @@ pub fn read_project(path: &Path) -> Result<GszProject, FormatError> {
     })
 }
 
-/// Which step to read: a folder number, the last saved step, or a time (s).
+/// Which step to read: a folder number, the last saved step, a time (s), or
+/// the first saved step at which the slope fails.
 #[derive(Clone, Debug, PartialEq)]
 pub enum StepChoice {
     Number(u32),
     Last,
     Time(f64),
+    /// The first saved step whose limit-equilibrium factor of safety is at
+    /// most 1: found by `map` against the model
+    /// ([`crate::pipeline::failure`]); a reader given it refuses it.
+    Failure,
 }
+
+/// What a reader says of [`StepChoice::Failure`], which needs the model.
+pub const FAILURE_NEEDS_MODEL: &str = "step `failure` is the first saved step at which the slope's factor of safety falls to 1: `map` finds it against the model; here give a step number, last or time=<time>";
 
 impl std::str::FromStr for StepChoice {
     type Err = String;
     fn from_str(s: &str) -> Result<StepChoice, String> {
         if s == "last" {
             return Ok(StepChoice::Last);
+        }
+        if s == "failure" {
+            return Ok(StepChoice::Failure);
         }
         if let Some(t) = s.strip_prefix("time=") {
             // NaN, infinities and overflowing numbers (`1e400`) are refused:
@@ -278,9 +289,9 @@ impl std::str::FromStr for StepChoice {
                 )),
             };
         }
-        s.parse()
-            .map(StepChoice::Number)
-            .map_err(|_| format!("`{s}`: expected a step number, last, or time=<time>[s|min|h|d]"))
+        s.parse().map(StepChoice::Number).map_err(|_| {
+            format!("`{s}`: expected a step number, last, time=<time>[s|min|h|d] or failure")
+        })
     }
 }
 
@@ -320,6 +331,9 @@ pub fn read_step(
             path,
             format!("step time {t}: the time must be a finite number of seconds"),
         ));
+    }
+    if *step == StepChoice::Failure {
+        return Err(FormatError::file(path, FAILURE_NEEDS_MODEL));
     }
     let project = read_project(path)?;
     // `1 `name`, 2 `name``: the analyses to choose from, for the errors.
@@ -375,6 +389,7 @@ pub fn read_step(
                     .abs()
                     .total_cmp(&(b.time.unwrap_or(0.0) - t).abs())
             }),
+        StepChoice::Failure => None,
     }
     .ok_or_else(|| {
         FormatError::file(

@@ -86,6 +86,11 @@ pub fn load(options: &FemOptions) -> Result<LoadedFem, PipelineError> {
     if options.paths.is_empty() {
         return Err(PipelineError::Input("no FEM node file given".into()));
     }
+    if options.step == StepChoice::Failure {
+        return Err(PipelineError::Option(
+            crate::formats::gsz::FAILURE_NEEDS_MODEL.into(),
+        ));
+    }
     let mut parts = Vec::new();
     let mut reports = Vec::new();
     let mut notes = Vec::new();

@@ -11,6 +11,7 @@ use super::fem::FemOptions;
 use super::map::{MapConfig, Mapped};
 use super::output::{Destination, OutputDir, ReadLog};
 use super::project::Project;
+use crate::formats::gsz::StepChoice;
 
 /// Everything `map` needs.
 #[derive(Clone, Debug)]
@@ -33,6 +34,9 @@ pub struct MapJob {
 /// Loads the project and the FEM files side by side (they are independent,
 /// and each fills the other's serial stretches) and maps, timing each phase.
 pub fn compute(job: &MapJob) -> Result<Mapped, PipelineError> {
+    if job.fem.step == StepChoice::Failure {
+        return compute_at_failure(job);
+    }
     let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
     let (project, fem) = rayon::join(
         || {
@@ -45,12 +49,47 @@ pub fn compute(job: &MapJob) -> Result<Mapped, PipelineError> {
         },
     );
     let (project, t_model) = project?;
+    check_cps(&project, job)?;
+    let (fem, t_fem) = fem?;
+    map_loaded(job, project, fem, t_model, t_fem)
+}
+
+/// A model without a CPS is refused unless the job writes a default one.
+fn check_cps(project: &Project, job: &MapJob) -> Result<(), PipelineError> {
     if project.files.cps.is_none() && !job.generate_cps {
         return Err(PipelineError::Input(
             crate::formats::project::missing_cps_message(&project.files),
         ));
     }
-    let (fem, t_fem) = fem?;
+    Ok(())
+}
+
+/// `--step failure`: the model first, then FS(t) over the series on it, then
+/// the map of the first saved step with FS ≤ 1 ([`super::failure`]).
+fn compute_at_failure(job: &MapJob) -> Result<Mapped, PipelineError> {
+    let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
+    let t = Instant::now();
+    let project = Project::load(&job.model)?;
+    check_cps(&project, job)?;
+    let t_model = ms(t);
+    let t = Instant::now();
+    let (fem, failure) = super::failure::failure_step(&project, &job.fem, &job.config.failure)?;
+    let t_fem = ms(t);
+    let mut mapped = map_loaded(job, project, fem, t_model, t_fem)?;
+    mapped.report.timings_ms[1].0 = "read the FEM series and FS(t)".into();
+    mapped.report.notes.insert(0, failure.note());
+    mapped.report.failure = Some(failure);
+    Ok(mapped)
+}
+
+/// Maps FEM nodes already read onto a project already loaded.
+fn map_loaded(
+    job: &MapJob,
+    project: Project,
+    fem: super::fem::LoadedFem,
+    t_model: f64,
+    t_fem: f64,
+) -> Result<Mapped, PipelineError> {
     let mut config = job.config.clone();
     config.kernel = config.kernel.for_dim(project.n_dim());
     config.keep_fem_fields = job.fem_vtu || fem.nodes.len() <= super::write::FEM_VTU_AUTO_MAX;

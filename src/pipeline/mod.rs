@@ -10,6 +10,7 @@ pub mod calibrate;
 pub mod check;
 pub mod diff;
 mod direct;
+pub mod failure;
 pub mod fem;
 pub mod fos;
 pub mod fos_time;

@@ -125,6 +125,10 @@ pub struct MapReport {
     /// report.json for every other stress source.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub equilibrium: Option<super::map::equilibrium::EquilibriumReport>,
+    /// `--step failure`: the saved step FS(t) chose, its time, factor and
+    /// method; left out of report.json for every other step.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub failure: Option<super::failure::FailureStep>,
     pub notes: Vec<String>,
     pub warnings: Vec<String>,
     pub timings_ms: Vec<(String, f64)>,

@@ -7,7 +7,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::formats::error::{FormatError, ParseError, Position};
-use crate::formats::gsz::StepChoice;
+use crate::formats::gsz::{self, StepChoice};
 
 /// One output of the series.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -167,6 +167,7 @@ impl Series {
             file: self.outputs[k].file.clone(),
         };
         match *step {
+            StepChoice::Failure => Err(FormatError::file(pvd, gsz::FAILURE_NEEDS_MODEL)),
             StepChoice::Last => Ok(chosen(n - 1)),
             StepChoice::Number(k) => {
                 let k = k as usize;

@@ -142,6 +142,7 @@ pub fn build_report(r: ReportInputs<'_>) -> MapReport {
         sigma_yy_range: range(r.states.iter().map(|s| s.total[1])),
         assumed_defaults: r.assumed_defaults,
         equilibrium: r.equilibrium,
+        failure: None,
         notes: r.notes,
         warnings: r.warnings,
         timings_ms: r.timings_ms,
