@@ -395,10 +395,10 @@ fn circle_of(p: &[f64], inputs: &SliceInputs<'_>) -> Option<Circle> {
 }
 
 /// Compass search from `start` (its surface and solution `best`): each
-/// coordinate moved by ± its step, every move that lowers the factor kept,
-/// all steps halved when none does, until they are `shrink` × their start or
-/// `max_evaluations` are spent. Returns the best, its point, the
-/// evaluations and the final step ratio.
+/// coordinate moved by ± its step ([`run_moves`] with runs of one),
+/// until the steps are `shrink` × their start or `max_evaluations` are
+/// spent. Returns the best, its point, the evaluations and the final step
+/// ratio.
 fn compass(
     start: Vec<f64>,
     steps: &[f64],
@@ -407,32 +407,8 @@ fn compass(
     max_evaluations: usize,
     score: impl Fn(&[f64]) -> Option<(Surface, Solution)>,
 ) -> ((Surface, Solution), Vec<f64>, usize, f64) {
-    let mut best = best;
-    let mut current = start;
-    let mut ratio = 1.0;
-    let mut evaluations = 0;
-    while ratio > shrink && evaluations < max_evaluations {
-        let mut improved = false;
-        for (k, step) in steps.iter().enumerate() {
-            for d in [ratio * step, -ratio * step] {
-                let mut p = current.clone();
-                p[k] += d;
-                evaluations += 1;
-                if let Some(found) = score(&p)
-                    && found.1.factor < best.1.factor * (1.0 - 1e-12)
-                {
-                    best = found;
-                    current = p;
-                    improved = true;
-                    break;
-                }
-            }
-        }
-        if !improved {
-            ratio *= 0.5;
-        }
-    }
-    (best, current, evaluations, ratio)
+    let moves: Vec<(usize, usize)> = (0..steps.len()).map(|k| (k, k + 1)).collect();
+    run_moves(start, &moves, steps, shrink, best, max_evaluations, score)
 }
 
 /// Pattern search on the circle that makes a composite surface, in (entry x,
@@ -841,30 +817,80 @@ fn depth_round(
     let chord = xb - xa;
     // Moves: each end, then runs of depths (all, halves, quarters, … one).
     let mut moves: Vec<(usize, usize)> = vec![(0, 1), (1, 2)];
-    let mut w = m - 1;
+    moves.extend(nested_runs(2, m + 1, m - 1));
+    moves.dedup();
+    polish(start, first, params, &moves, chord, settings, score)
+}
+
+/// The vertex moves of a refinement round from `first` (the round's first
+/// evaluation, at `params`), steps from `chord`/25 to `chord`/2500, and its
+/// outcome against `start`.
+fn polish(
+    start: &(Surface, Solution),
+    first: (Surface, Solution),
+    params: Vec<f64>,
+    moves: &[(usize, usize)],
+    chord: f64,
+    settings: &SearchSettings,
+    score: impl Fn(&[f64]) -> Option<(Surface, Solution)>,
+) -> ((Surface, Solution), Refinement) {
+    let steps = vec![chord / 25.0; params.len()];
+    let (best, _, evaluations, ratio) = run_moves(
+        params,
+        moves,
+        &steps,
+        0.01,
+        first,
+        settings.max_refinements.saturating_sub(1),
+        score,
+    );
+    finish(start, best, evaluations + 1, ratio)
+}
+
+/// Runs `(k, k + w)` of neighbouring parameters within `first..end`, of
+/// widths `widest`, half that, … down to one, each width's runs
+/// overlapping by half.
+fn nested_runs(first: usize, end: usize, widest: usize) -> Vec<(usize, usize)> {
+    let mut runs = Vec::new();
+    let mut w = widest;
     while w >= 1 {
-        let mut k = 2;
-        while k + w <= m + 1 {
-            moves.push((k, k + w));
+        let mut k = first;
+        while k + w <= end {
+            runs.push((k, k + w));
             k += w.div_ceil(2).max(1);
         }
         w /= 2;
     }
-    moves.dedup();
-    let step0 = chord / 25.0;
-    let mut step = step0;
+    runs
+}
+
+/// Pattern moves of runs of parameters: each run shifted by ± its
+/// parameters' steps × the ratio, the first move that lowers the factor
+/// taken, the ratio halved when none does, until it is `shrink` or
+/// `max_evaluations` are spent. Returns the best, its parameters, the
+/// evaluations and the final ratio.
+fn run_moves(
+    mut params: Vec<f64>,
+    moves: &[(usize, usize)],
+    steps: &[f64],
+    shrink: f64,
+    first: (Surface, Solution),
+    max_evaluations: usize,
+    score: impl Fn(&[f64]) -> Option<(Surface, Solution)>,
+) -> ((Surface, Solution), Vec<f64>, usize, f64) {
+    let mut ratio = 1.0;
     let mut best = first;
-    let mut evaluations = 1;
-    while step > chord / 2500.0 && evaluations < settings.max_refinements {
+    let mut evaluations = 0;
+    while ratio > shrink && evaluations < max_evaluations {
         let mut improved = false;
-        for &(k0, k1) in &moves {
-            for d in [step, -step] {
-                if evaluations >= settings.max_refinements {
+        for &(k0, k1) in moves {
+            for sign in [1.0, -1.0] {
+                if evaluations >= max_evaluations {
                     break;
                 }
                 let mut trial = params.clone();
-                for v in &mut trial[k0..k1] {
-                    *v += d;
+                for (v, step) in trial[k0..k1].iter_mut().zip(&steps[k0..k1]) {
+                    *v += sign * ratio * step;
                 }
                 evaluations += 1;
                 if let Some(found) = score(&trial)
@@ -878,20 +904,32 @@ fn depth_round(
             }
         }
         if !improved {
-            step *= 0.5;
+            ratio *= 0.5;
         }
     }
-    if solution.factor <= best.1.factor {
-        best = start.clone();
-    }
+    (best, params, evaluations, ratio)
+}
+
+/// The refinement's outcome: the start when nothing beat it.
+fn finish(
+    start: &(Surface, Solution),
+    best: (Surface, Solution),
+    evaluations: usize,
+    final_step_ratio: f64,
+) -> ((Surface, Solution), Refinement) {
+    let best = if start.1.factor <= best.1.factor {
+        start.clone()
+    } else {
+        best
+    };
     let end_factor = best.1.factor;
     (
         best,
         Refinement {
             evaluations,
-            start_factor: solution.factor,
+            start_factor: start.1.factor,
             end_factor,
-            final_step_ratio: step / step0,
+            final_step_ratio,
         },
     )
 }
@@ -969,8 +1007,8 @@ fn polyline_round(
             _ => None,
         }
     };
-    let mut offsets = vec![0.0; m + 1];
-    let Some(mut best) = score(&offsets) else {
+    let offsets = vec![0.0; m + 1];
+    let Some(best) = score(&offsets) else {
         return (
             start.clone(),
             Refinement {
@@ -983,64 +1021,13 @@ fn polyline_round(
     };
     let last = surface.points[surface.points.len() - 1];
     let chord = ((xb - xa).powi(2) + (last[1] - surface.points[0][1]).powi(2)).sqrt();
-    let step0 = chord / 25.0;
-    let mut step = step0;
-    let mut evaluations = 1;
     // Moves of runs of neighbouring interior vertices together (half the
     // polyline, a quarter, ... down to one vertex; the ends alone), so that a
     // surface can settle onto a weak layer as a whole rather than through
     // kinks that each raise the factor.
-    let mut runs: Vec<(usize, usize)> = Vec::new();
-    let mut w = (m - 1) / 2;
-    while w >= 1 {
-        let mut k = 1;
-        while k + w <= m {
-            runs.push((k, k + w));
-            k += w.div_ceil(2).max(1);
-        }
-        w /= 2;
-    }
+    let mut runs = nested_runs(1, m, (m - 1) / 2);
     runs.push((0, 1));
     runs.push((m, m + 1));
     runs.dedup();
-    while step > chord / 2500.0 && evaluations < settings.max_refinements {
-        let mut improved = false;
-        for &(k0, k1) in &runs {
-            for d in [step, -step] {
-                if evaluations >= settings.max_refinements {
-                    break;
-                }
-                let mut trial = offsets.clone();
-                for o in &mut trial[k0..k1] {
-                    *o += d;
-                }
-                evaluations += 1;
-                if let Some(found) = score(&trial)
-                    && found.1.factor < best.1.factor * (1.0 - 1e-12)
-                {
-                    best = found;
-                    offsets = trial;
-                    improved = true;
-                    break;
-                }
-            }
-        }
-        if !improved {
-            step *= 0.5;
-        }
-    }
-    // A start better than every polyline stays the answer.
-    if solution.factor <= best.1.factor {
-        best = start.clone();
-    }
-    let end_factor = best.1.factor;
-    (
-        best,
-        Refinement {
-            evaluations,
-            start_factor,
-            end_factor,
-            final_step_ratio: step / step0,
-        },
-    )
+    polish(start, best, offsets, &runs, chord, settings, score)
 }
