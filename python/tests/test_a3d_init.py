@@ -82,6 +82,21 @@ def test_map_options_are_the_cli_flags(tmp_path):
         a3d_init.map(SAND, SLOPE, tmp_path / "x", h="-1")
 
 
+def test_map_at_the_failure_step_of_a_series(tmp_path):
+    # #39: FS(t) over the OpenGeoSys series on the model, then the first
+    # output with FS <= 1 (1.26 h on the shipped rain) is mapped.
+    rain = SLOPE / "ogs" / "results" / "rain.pvd"
+    mapped = a3d_init.map(rain, SLOPE, tmp_path / "f", step="failure", material_map="mat0=silty_sand", stress="geostatic")
+    failure = mapped["failure"]
+    assert failure["method"] == "morgenstern-price"
+    assert failure["factor"] <= 1.0 < failure["before"][1]
+    assert failure["time"] == 4536.0
+    assert any("step failure" in n for n in mapped["notes"])
+    # A single table is no series (an option error; #40 plans its ValueError base).
+    with pytest.raises(a3d_init.OptionValueError, match="time series"):
+        a3d_init.map(SAND, SLOPE, tmp_path / "x", step="failure")
+
+
 def test_map_solves_for_equilibrium_and_verify_measures_it(tmp_path):
     out = tmp_path / "eq"
     mapped = a3d_init.map(SAND, SLOPE, out, stress="equilibrium", h=0.046)
