@@ -113,15 +113,10 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     };
     // The first output at or past the failure, as `map --step failure`
     // chooses it (the same curve: FS(t)'s defaults).
-    let (t_map, fem_at) = series
-        .iter()
-        .find(|(t, _)| {
-            curve
-                .curve
-                .iter()
-                .any(|p| p.kind == "saved" && p.time == *t && p.factor <= 1.0)
-        })
+    let k = curve
+        .first_failing_output()
         .expect("a curve that crosses 1 has a saved time with FS ≤ 1");
+    let (t_map, fem_at) = &series[k];
     let fs_at = |t: f64| {
         curve
             .curve

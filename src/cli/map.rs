@@ -243,21 +243,6 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         r.sigma_yy_range.0,
         r.sigma_yy_range.1
     );
-    if let Some(f) = &r.failure {
-        say_err!(
-            "  failure: {} step {} of {} at t = {} s ({:.4} h), FS = {:.3} by {}, the first saved step with FS ≤ 1{}",
-            f.series,
-            f.step,
-            f.saved_steps,
-            f.time,
-            f.time_h,
-            f.factor,
-            f.method,
-            f.crossing_time
-                .map(|t| format!(" (FS(t) reaches 1 at {:.4} h)", t / 3600.0))
-                .unwrap_or_default()
-        );
-    }
     for n in &r.notes {
         say_err!("  note: {n}");
     }

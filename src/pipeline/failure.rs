@@ -87,14 +87,9 @@ pub fn failure_step(
             ..FosTimeOptions::default()
         },
     )?;
-    let saved: Vec<(f64, f64)> = curve
-        .curve
-        .iter()
-        .filter(|p| p.kind == "saved")
-        .map(|p| (p.time, p.factor))
-        .collect();
+    let saved = curve.saved();
     let name = fem.paths[0].display().to_string();
-    let Some(k) = saved.iter().position(|&(_, f)| f <= 1.0) else {
+    let Some(k) = curve.first_failing_output() else {
         let (t, f) = saved
             .iter()
             .copied()

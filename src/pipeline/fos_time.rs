@@ -155,6 +155,24 @@ pub struct FosTimeReport {
     pub notes: Vec<String>,
 }
 
+impl FosTimeReport {
+    /// (time, factor) at each saved time, in time order: one per output of
+    /// the series.
+    pub fn saved(&self) -> Vec<(f64, f64)> {
+        self.curve
+            .iter()
+            .filter(|p| p.kind == "saved")
+            .map(|p| (p.time, p.factor))
+            .collect()
+    }
+
+    /// The index in the series of the first saved time with FS ≤ 1: the
+    /// output `map --step failure` maps.
+    pub fn first_failing_output(&self) -> Option<usize> {
+        self.saved().iter().position(|&(_, f)| f <= 1.0)
+    }
+}
+
 /// The series the input names: (time, FEM nodes), times ascending.
 pub fn load_series(input: &SeriesInput) -> Result<Vec<(f64, LoadedFem)>, PipelineError> {
     let mut series = Vec::new();

@@ -51,7 +51,7 @@ pub fn compute(job: &MapJob) -> Result<Mapped, PipelineError> {
     let (project, t_model) = project?;
     check_cps(&project, job)?;
     let (fem, t_fem) = fem?;
-    map_loaded(job, project, fem, t_model, t_fem)
+    map_loaded(job, project, fem, t_model, ("read FEM", t_fem))
 }
 
 /// A model without a CPS is refused unless the job writes a default one.
@@ -75,20 +75,26 @@ fn compute_at_failure(job: &MapJob) -> Result<Mapped, PipelineError> {
     let t = Instant::now();
     let (fem, failure) = super::failure::failure_step(&project, &job.fem, &job.config.failure)?;
     let t_fem = ms(t);
-    let mut mapped = map_loaded(job, project, fem, t_model, t_fem)?;
-    mapped.report.timings_ms[1].0 = "read the FEM series and FS(t)".into();
+    let mut mapped = map_loaded(
+        job,
+        project,
+        fem,
+        t_model,
+        ("read the FEM series and FS(t)", t_fem),
+    )?;
     mapped.report.notes.insert(0, failure.note());
     mapped.report.failure = Some(failure);
     Ok(mapped)
 }
 
-/// Maps FEM nodes already read onto a project already loaded.
+/// Maps FEM nodes already read onto a project already loaded; the timings
+/// are of reading the model and of the FEM phase `fem_step` names.
 fn map_loaded(
     job: &MapJob,
     project: Project,
     fem: super::fem::LoadedFem,
     t_model: f64,
-    t_fem: f64,
+    (fem_step, t_fem): (&str, f64),
 ) -> Result<Mapped, PipelineError> {
     let mut config = job.config.clone();
     config.kernel = config.kernel.for_dim(project.n_dim());
@@ -98,7 +104,7 @@ fn map_loaded(
         0..0,
         [
             ("read model and place MPs".to_string(), t_model),
-            ("read FEM".to_string(), t_fem),
+            (fem_step.to_string(), t_fem),
         ],
     );
     Ok(mapped)

@@ -375,7 +375,6 @@ pub fn analyse(
                 problem.n_slices,
                 settings.max_refinements,
             )
-            .0
         });
         counts.refined_factor = found.as_ref().map(|c| c.1.factor);
         (found, counts)
@@ -401,8 +400,8 @@ pub fn analyse(
             .chain(&translational)
             .chain(&given)
             .collect();
-        // Every start polished for two rounds (one of each kind); the best
-        // two polished on until they settle.
+        // Every start polished for one round (the depths below the ground);
+        // the best two polished on until they settle.
         let mut first: Vec<((Surface, Solution), search::Refinement)> = starts
             .into_par_iter()
             .map(|c| search::refine_polyline(c, &inputs, method, tol, settings, 1))

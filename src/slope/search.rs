@@ -414,25 +414,25 @@ fn compass(
 /// Pattern search on the circle that makes a composite surface, in (entry x,
 /// exit x, half-angle), each trial clipped as the recipe clips. The start
 /// stays the answer unless a trial beats it.
-pub fn refine_composite<'a>(
+pub fn refine_composite(
     start: (Surface, Solution),
-    recipe: CompositeRecipe<'a>,
+    recipe: CompositeRecipe<'_>,
     inputs: &SliceInputs<'_>,
     method: Method,
     tol: f64,
     n_slices: usize,
     max_evaluations: usize,
-) -> ((Surface, Solution), CompositeRecipe<'a>) {
+) -> (Surface, Solution) {
     let Some(p) = recipe
         .circle
         .trace(inputs.domain, n_slices)
         .ok()
         .and_then(|t| ends_and_angle(&recipe.circle, &t))
     else {
-        return (start, recipe);
+        return start;
     };
     let span = (p[1] - p[0]).abs();
-    let (best, at, _, _) = compass(
+    compass(
         p.to_vec(),
         &[0.05 * span, 0.05 * span, 0.05],
         start,
@@ -445,9 +445,8 @@ pub fn refine_composite<'a>(
                 _ => None,
             }
         },
-    );
-    let circle = circle_of(&at, inputs).unwrap_or(recipe.circle);
-    (best, CompositeRecipe { circle, ..recipe })
+    )
+    .0
 }
 
 /// What a refinement did.
@@ -642,6 +641,20 @@ impl Passive {
     }
 }
 
+/// [`by_depths`]' parameters of `surface` with `m` segments: its ends' x
+/// and its depth below the ground at `m − 1` points equally spaced between
+/// them; `None` where the ground or the surface is undefined.
+fn depth_params(surface: &Surface, m: usize, domain: &super::geometry::Domain) -> Option<Vec<f64>> {
+    let n = surface.points.len();
+    let (xa, xb) = (surface.points[0][0], surface.points[n - 1][0]);
+    let mut params = vec![xa, xb];
+    for i in 1..m {
+        let x = xa + (xb - xa) * i as f64 / m as f64;
+        params.push(domain.ground_y(x)? - surface.y(x)?);
+    }
+    Some(params)
+}
+
 /// The polyline of [`depth_round`]'s parameters `[xa, xb, d₁, …, d_{m−1}]`
 /// (m segments), if admissible; its moment axis `axis`, else the centre of
 /// the circle through its ends and deepest vertex.
@@ -682,13 +695,7 @@ pub fn start_from(
     if let Trial::Solved(found) = evaluate(s.clone(), inputs, method, tol) {
         return Some(*found);
     }
-    let m = segments.max(3);
-    let (xa, xb) = (points[0][0], points[points.len() - 1][0]);
-    let mut params = vec![xa, xb];
-    for i in 1..m {
-        let x = xa + (xb - xa) * i as f64 / m as f64;
-        params.push(domain.ground_y(x)? - s.y(x)?);
-    }
+    let params = depth_params(&s, segments.max(3), domain)?;
     match evaluate(by_depths(&params, None, domain)?, inputs, method, tol) {
         Trial::Solved(found) => Some(*found),
         _ => None,
@@ -791,17 +798,10 @@ fn depth_round(
     let (surface, solution) = start;
     let domain = inputs.domain;
     let m = settings.segments.max(3);
-    let n = surface.points.len();
-    let (xa, xb) = (surface.points[0][0], surface.points[n - 1][0]);
-    let mut params = vec![xa, xb];
-    for i in 1..m {
-        let x = xa + (xb - xa) * i as f64 / m as f64;
-        let depth = match (domain.ground_y(x), surface.y(x)) {
-            (Some(g), Some(y)) => g - y,
-            _ => return (start.clone(), unchanged(solution.factor)),
-        };
-        params.push(depth);
-    }
+    let Some(params) = depth_params(surface, m, domain) else {
+        return (start.clone(), unchanged(solution.factor));
+    };
+    let (xa, xb) = (params[0], params[1]);
     let axis = Some(surface.axis);
     let passive = Passive::new(surface, inputs);
     let score = |p: &[f64]| -> Option<(Surface, Solution)> {
