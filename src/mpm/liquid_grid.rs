@@ -25,6 +25,10 @@ pub(super) struct LiquidContribution<const D: usize> {
     pub(super) momentum: [f64; D],
     /// Pressure force −V p ∇N plus the liquid's weight ρw·V·N·g.
     pub(super) force: [f64; D],
+    /// n·S times `force`: the water's share of the mixture's force, which
+    /// the kernel damps apart from the solid's (`IntLoadWaterPorosity`,
+    /// `GravityLoadWaterPorosity`).
+    pub(super) porous: [f64; D],
     /// m_s·n·ρw·S·N: the mass-weighted nodal n·ρw·S of the advective flux
     /// (unsaturated MPs), before division by the nodal solid mass.
     pub(super) advective: f64,
@@ -37,6 +41,7 @@ impl<const D: usize> LiquidContribution<D> {
         drag: 0.0,
         momentum: [0.0; D],
         force: [0.0; D],
+        porous: [0.0; D],
         advective: 0.0,
     };
 }
@@ -53,6 +58,9 @@ pub(super) struct LiquidGrid<const D: usize, const NC: usize> {
     pub(super) advective: Vec<f64>,
     pub(super) momentum: Vec<[f64; D]>,
     pub(super) force: Vec<[f64; D]>,
+    /// Σ n·S·(the MPs' liquid force): the water's share of the mixture's
+    /// force, without external liquid loads.
+    pub(super) porous: Vec<[f64; D]>,
     pub(super) acceleration: Vec<[f64; D]>,
     pub(super) velocity: Vec<[f64; D]>,
     pub(super) p2g: Vec<[LiquidContribution<D>; NC]>,
@@ -94,9 +102,11 @@ impl<const D: usize, const NC: usize> LiquidGrid<D, NC> {
                         corner_force::<D>(&pressure, g_i, n[i], p.volume, p.inverse_radius);
                     let share = m * n[i];
                     let mut momentum = [0.0; D];
+                    let mut porous = [0.0; D];
                     for d in 0..D {
                         force[d] += share * g[d];
                         momentum[d] = share * p.liquid_velocity[d];
+                        porous[d] = c.porosity * s * force[d];
                     }
                     out[i] = LiquidContribution {
                         mass: share,
@@ -104,6 +114,7 @@ impl<const D: usize, const NC: usize> LiquidGrid<D, NC> {
                         drag: c.drag * s / p.conductivity * p.volume0 * n[i],
                         momentum,
                         force,
+                        porous,
                         advective: advective * n[i],
                     };
                 }
@@ -115,6 +126,7 @@ impl<const D: usize, const NC: usize> LiquidGrid<D, NC> {
         self.advective.fill(0.0);
         self.momentum.fill([0.0; D]);
         self.force.fill([0.0; D]);
+        self.porous.fill([0.0; D]);
         for (p, out) in particles.iter().zip(&self.p2g) {
             if !matches!(p.water, Water::Coupled(_)) || p.lost {
                 continue;
@@ -129,6 +141,7 @@ impl<const D: usize, const NC: usize> LiquidGrid<D, NC> {
                 for d in 0..D {
                     self.momentum[node][d] += out[i].momentum[d];
                     self.force[node][d] += out[i].force[d];
+                    self.porous[node][d] += out[i].porous[d];
                 }
             }
         }

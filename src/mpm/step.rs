@@ -391,6 +391,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             water: vec![0.0; n_nodes],
             drag: vec![0.0; n_nodes],
             advective: vec![0.0; n_nodes],
+            porous: vec![[0.0; D]; n_nodes],
             momentum: vec![[0.0; D]; n_nodes],
             force: vec![[0.0; D]; n_nodes],
             acceleration: vec![[0.0; D]; n_nodes],
@@ -626,7 +627,20 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 };
                 let external = self.node_weight[node] * self.gravity[d] + self.load_now[node][d];
                 let unbalanced = external + self.node_force[node][d];
-                let damped = unbalanced - self.damping * unbalanced.abs() * sign(velocity);
+                let alpha = self.damping;
+                let mut damped = unbalanced - alpha * unbalanced.abs() * sign(velocity);
+                if let Some(l) = liquid.as_deref() {
+                    // The kernel damps the mixture in two parts
+                    // (`LagrangianPhase.FOR`, `ApplyDampingForce` and
+                    // `ApplyDampingForceWater`): the water's porosity-weighted
+                    // share of the force, Σ n·S·F_w, with the liquid's
+                    // velocity's sign, and the rest with the solid's.
+                    let vw = l.momentum[node][d] / l.mass[node];
+                    let fwn = l.porous[node][d];
+                    let solid = unbalanced - fwn;
+                    damped = solid - alpha * solid.abs() * sign(velocity) + fwn
+                        - alpha * fwn.abs() * sign(vw);
+                }
                 let mut acceleration = damped / m;
                 if let Some(l) = liquid.as_deref_mut() {
                     let mw = l.mass[node];
