@@ -12,6 +12,7 @@ use anyhow::Context;
 use super::Verdict as ExitVerdict;
 use super::args::StateInputs;
 use super::print;
+use crate::mpm;
 use crate::pipeline::output::Destination;
 use crate::pipeline::{self, check::VerifyOptions, fos::FosOptions, runout::RunOptions};
 
@@ -22,10 +23,11 @@ pub struct VerifyArgs {
     /// Maximum number of explicit steps.
     #[arg(long, default_value_t = 20_000)]
     pub max_steps: usize,
-    /// Local damping α (default: the CPS `$$HOMOGENEOUS_LOCAL_DAMPING`, else 0.75).
+    /// Local damping α (default: the CPS `$$HOMOGENEOUS_LOCAL_DAMPING`; without
+    /// one, 0.75 for `verify`, 0.05 for `run`).
     #[arg(long)]
     pub damping: Option<f64>,
-    /// Output folder (default `<dir>/verify`).
+    /// Output folder (default `<dir>/verify`; `<dir>/run` for `run`).
     #[arg(long)]
     pub out: Option<PathBuf>,
     #[arg(long)]
@@ -45,11 +47,11 @@ pub struct VerifyArgs {
 pub struct RunArgs {
     #[command(flatten)]
     pub verify: VerifyArgs,
-    /// Simulated time (s).
-    #[arg(long, default_value_t = 2.0)]
+    /// Simulated time (s); the paper's run-out, 3 s.
+    #[arg(long, default_value_t = 3.0)]
     pub time: f64,
-    /// Snapshot times (s), comma separated.
-    #[arg(long, default_value = "0.3,0.8,1.2,2.0")]
+    /// Snapshot times (s), comma separated; the paper's Fig. 11.
+    #[arg(long, default_value = "0.3,0.8,1.2,3.0")]
     pub snapshots: String,
 }
 
@@ -121,7 +123,29 @@ pub fn run_run(args: RunArgs) -> anyhow::Result<()> {
         r.max_displacement,
         r.plastic_points
     );
-    let snapshots = format!("{} snapshots", outcome.snapshots.len());
+    match &r.rest {
+        Some(rest) => say!("rest       at t = {:.2} s: {}", rest.time, rest.criterion),
+        None => say!(
+            "rest       not reached by t = {:.3} s (the kinetic energy is not below {:.0} % of its peak)",
+            r.time,
+            100.0 * mpm::REST_FRACTION
+        ),
+    }
+    for m in &r.monitored {
+        if let Some((_, u)) = m.history.last() {
+            say!(
+                "monitored  MP {} from ({:.3}, {:.3}): displacement ({:+.4}, {:+.4}) m, |u| = {:.4} m",
+                m.id,
+                m.start[0],
+                m.start[1],
+                u[0],
+                u[1],
+                (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt()
+            );
+        }
+    }
+    say!("lost       {} MPs left the mesh", r.lost_points);
+    let snapshots = format!("{} snapshots, .vtu and .svg", outcome.snapshots.len());
     say!(
         "{}",
         print::wrote(

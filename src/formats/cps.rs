@@ -276,6 +276,78 @@ impl CpsDocument {
         }
     }
 
+    /// The MP ids of `$$OUTPUT_NUMBER_OF_MATERIAL_POINTS` n and
+    /// `$$OUTPUT_MATERIAL_POINTS` (the MPs whose history Anura3D writes to
+    /// `<project>.PAR_<id>`): the first n values, each a positive integer;
+    /// none when n is absent or ≤ 0 (the kernel then reads one dummy value).
+    /// A bad count or id, a missing id or one above `n_points` is an error at
+    /// its line and column (#39).
+    pub fn output_material_points(&self, n_points: usize) -> Result<Vec<u32>, FormatError> {
+        const COUNT: &str = "$$OUTPUT_NUMBER_OF_MATERIAL_POINTS";
+        const IDS: &str = "$$OUTPUT_MATERIAL_POINTS";
+        let Some(b) = self.doc.find(COUNT, true) else {
+            return Ok(Vec::new());
+        };
+        let block_line = self.doc.blocks()[b].line;
+        let integer = |tok: &str| tok.parse::<i64>().ok();
+        let n = match self.value_tokens(b).next() {
+            Some((i, o, tok)) => integer(tok).ok_or_else(|| {
+                self.doc
+                    .error_at(i, o, format!("{COUNT}: expected an integer, found `{tok}`"))
+            })?,
+            None => {
+                return Err(self
+                    .doc
+                    .error_at(block_line, 0, format!("{COUNT}: the count is missing"))
+                    .into());
+            }
+        };
+        if n <= 0 {
+            return Ok(Vec::new());
+        }
+        let Some(ids) = self.doc.find(IDS, true) else {
+            return Err(self
+                .doc
+                .error_at(
+                    block_line,
+                    0,
+                    format!("{COUNT} is {n} but there is no {IDS} block"),
+                )
+                .into());
+        };
+        let ids_line = self.doc.blocks()[ids].line;
+        let mut tokens = self.value_tokens(ids);
+        let mut out = Vec::new();
+        for k in 0..n {
+            let Some((i, o, tok)) = tokens.next() else {
+                return Err(self
+                    .doc
+                    .error_at(
+                        ids_line,
+                        0,
+                        format!("{IDS}: {COUNT} is {n} but only {k} ids follow"),
+                    )
+                    .into());
+            };
+            match integer(tok) {
+                Some(id) if id >= 1 && (id as u64) <= n_points as u64 => out.push(id as u32),
+                Some(id) => {
+                    return Err(self
+                        .doc
+                        .error_at(i, o, format!("{IDS}: MP {id} does not exist (the model has {n_points} MPs, ids 1..={n_points})"))
+                        .into());
+                }
+                None => {
+                    return Err(self
+                        .doc
+                        .error_at(i, o, format!("{IDS}: expected an MP id, found `{tok}`"))
+                        .into());
+                }
+            }
+        }
+        Ok(out)
+    }
+
     pub fn document(&self) -> &KeywordDocument {
         &self.doc
     }
@@ -410,6 +482,51 @@ mod tests {
     use super::*;
 
     const TEXT: &str = "### Anura3D_2021 ###\n$$k0_procedure\n1\n$$GRAVITY_ACCELERATION\n9.80665\n$$HOMOGENEOUS_LOCAL_DAMPING\n1 0.75\n$$END\n";
+
+    #[test]
+    fn monitored_mps_are_read_and_bad_ones_refused_at_their_place() {
+        let read = |body: &str| {
+            let text = format!("### Anura3D_2023 ###\n{body}$$END\n");
+            CpsDocument::parse(Path::new("a.CPS_001"), text)
+                .unwrap()
+                .output_material_points(100)
+                .map_err(|e| e.to_string())
+        };
+        let ids = "$$OUTPUT_MATERIAL_POINTS\n7\n100\n";
+        assert_eq!(
+            read(&format!("$$OUTPUT_NUMBER_OF_MATERIAL_POINTS\n2\n{ids}")),
+            Ok(vec![7, 100])
+        );
+        assert_eq!(
+            read(&format!("$$OUTPUT_NUMBER_OF_MATERIAL_POINTS\n1\n{ids}")),
+            Ok(vec![7])
+        );
+        assert_eq!(
+            read("$$OUTPUT_NUMBER_OF_MATERIAL_POINTS\n0\n$$OUTPUT_MATERIAL_POINTS\n-1\n"),
+            Ok(vec![])
+        );
+        assert_eq!(read(""), Ok(vec![]));
+        for (body, expected) in [
+            (
+                format!("$$OUTPUT_NUMBER_OF_MATERIAL_POINTS\n3\n{ids}"),
+                "a.CPS_001:4:1: $$OUTPUT_MATERIAL_POINTS: $$OUTPUT_NUMBER_OF_MATERIAL_POINTS is 3 but only 2 ids follow",
+            ),
+            (
+                "$$OUTPUT_NUMBER_OF_MATERIAL_POINTS\n1\n$$OUTPUT_MATERIAL_POINTS\n101\n".into(),
+                "a.CPS_001:5:1: $$OUTPUT_MATERIAL_POINTS: MP 101 does not exist (the model has 100 MPs, ids 1..=100)",
+            ),
+            (
+                "$$OUTPUT_NUMBER_OF_MATERIAL_POINTS\ntwo\n".into(),
+                "a.CPS_001:3:1: $$OUTPUT_NUMBER_OF_MATERIAL_POINTS: expected an integer, found `two`",
+            ),
+            (
+                "$$OUTPUT_NUMBER_OF_MATERIAL_POINTS\n1\n".into(),
+                "a.CPS_001:2:1: $$OUTPUT_NUMBER_OF_MATERIAL_POINTS is 1 but there is no $$OUTPUT_MATERIAL_POINTS block",
+            ),
+        ] {
+            assert_eq!(read(&body), Err(expected.to_string()), "{body}");
+        }
+    }
 
     #[test]
     fn non_finite_values_are_refused_at_their_place() {

@@ -46,8 +46,8 @@ pub use liquid::Formulation;
 pub use material::{Elasticity, SolidModel};
 pub use mohr_coulomb::{MohrCoulomb, ReturnKind, ReturnMap};
 pub use run::{
-    ElementScore, MAX_RUN_STEPS, Reason, RunOutput, RunReport, Snapshot, StepRecord, StopReason,
-    Verdict, run, run_streaming, verify,
+    ElementScore, MAX_RUN_STEPS, MonitoredPoint, REST_FRACTION, Reason, Rest, RunOutput, RunReport,
+    Snapshot, StepRecord, StopReason, Verdict, run, run_streaming, verify,
 };
 pub use simulation::Simulation;
 
@@ -195,6 +195,9 @@ pub struct RunSettings {
     /// The GOM's distributed loads with the CPS's multipliers ([`loads`]);
     /// none by default (gravity only).
     pub loads: crate::model::loads::ProjectLoads,
+    /// MPs whose displacement [`run()`] records at every recorded step
+    /// (0-based indices; CPS `$$OUTPUT_MATERIAL_POINTS`), none by default.
+    pub monitored: Vec<u32>,
 }
 
 impl RunSettings {
@@ -218,6 +221,7 @@ impl RunSettings {
             element_smoothing: false,
             hydraulic: seepage::HydraulicBoundaries::default(),
             loads: crate::model::loads::ProjectLoads::default(),
+            monitored: Vec::new(),
         }
     }
 

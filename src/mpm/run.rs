@@ -151,6 +151,66 @@ pub struct Snapshot {
     pub liquid_velocities: Vec<[f64; 3]>,
 }
 
+/// A monitored MP's displacement over time (CPS `$$OUTPUT_MATERIAL_POINTS`,
+/// the MPs whose history Anura3D writes to `<project>.PAR_<id>`).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct MonitoredPoint {
+    /// 1-based MP id.
+    pub id: u32,
+    /// Position at the start (m).
+    pub start: [f64; 3],
+    /// (time in s, displacement in m) at every recorded step.
+    pub history: Vec<(f64, [f64; 3])>,
+}
+
+/// Fraction of its peak below which the kinetic energy must stay for a
+/// run to be at rest ([`Rest`]).
+pub const REST_FRACTION: f64 = 0.01;
+
+/// When a run came to rest: the first recorded time after the kinetic
+/// energy's peak from which the kinetic energy stays below
+/// [`REST_FRACTION`] of that peak to the end of the run.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct Rest {
+    /// Time to rest (s).
+    pub time: f64,
+    /// Time (s) and value (kJ; kJ/m in plane strain) of the peak.
+    pub peak_time: f64,
+    pub peak_kinetic_energy: f64,
+    pub criterion: String,
+}
+
+impl Rest {
+    /// The rest of a history, `None` when it never moved (a zero peak) or
+    /// had not come to rest by its last record.
+    pub fn find(records: &[StepRecord]) -> Option<Rest> {
+        let (peak_at, peak) = records
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.kinetic_energy.total_cmp(&b.1.kinetic_energy))?;
+        if peak.kinetic_energy.is_nan() || peak.kinetic_energy <= 0.0 {
+            return None;
+        }
+        let limit = REST_FRACTION * peak.kinetic_energy;
+        let calm_from = records
+            .iter()
+            .rposition(|r| r.kinetic_energy.is_nan() || r.kinetic_energy >= limit)
+            .map_or(0, |k| k + 1);
+        let rest = records.get(calm_from.max(peak_at + 1))?;
+        Some(Rest {
+            time: rest.time,
+            peak_time: peak.time,
+            peak_kinetic_energy: peak.kinetic_energy,
+            criterion: format!(
+                "the kinetic energy stays below {:.0} % of its peak ({:.3e} kJ at {:.3} s) from this time to the end of the run",
+                100.0 * REST_FRACTION,
+                peak.kinetic_energy,
+                peak.time
+            ),
+        })
+    }
+}
+
 /// Everything a run measured, with the verdict.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct RunReport {
@@ -194,6 +254,10 @@ pub struct RunReport {
     /// Final pore pressures (kPa, Anura3D's sign), in MP order: the initial
     /// ones where they are frozen.
     pub final_pore_pressures: Vec<f64>,
+    /// The monitored MPs' displacements over time ([`RunSettings::monitored`]).
+    pub monitored: Vec<MonitoredPoint>,
+    /// When the run came to rest ([`Rest::find`]), if it did.
+    pub rest: Option<Rest>,
     /// How each material with MPs ran ([`super::liquid`]): (1-based
     /// material index, formulation).
     pub formulations: Vec<(u32, super::Formulation)>,
@@ -290,6 +354,36 @@ fn drive(
     let mut next_snapshot = 0;
 
     let mut records = Vec::new();
+    let starts = simulation.positions();
+    if let Some(&bad) = settings
+        .monitored
+        .iter()
+        .find(|&&i| i as usize >= starts.len())
+    {
+        return Err(MpmError::InvalidSettings(format!(
+            "monitored MP {} does not exist: the model has {} MPs",
+            bad as u64 + 1,
+            starts.len()
+        )));
+    }
+    let mut monitored: Vec<MonitoredPoint> = settings
+        .monitored
+        .iter()
+        .map(|&i| MonitoredPoint {
+            id: i + 1,
+            start: starts[i as usize],
+            history: Vec::new(),
+        })
+        .collect();
+    let mut record_monitored = |simulation: &Simulation| {
+        if monitored.is_empty() {
+            return;
+        }
+        let u = simulation.displacements();
+        for m in &mut monitored {
+            m.history.push((simulation.time(), u[m.id as usize - 1]));
+        }
+    };
     let mut calm_steps = 0usize;
     let mut initial_residual = 0.0;
     let mut worst_residual_elements = Vec::new();
@@ -321,6 +415,7 @@ fn drive(
         let record = make_record(simulation, &outcome);
         if step == 1 || step.is_multiple_of(settings.record_every) {
             records.push(record);
+            record_monitored(simulation);
         }
         last = Some(record);
         while next_snapshot < snapshot_times.len()
@@ -338,6 +433,7 @@ fn drive(
         && records.last().is_none_or(|r| r.step != record.step)
     {
         records.push(record);
+        record_monitored(simulation);
     }
     let final_residual = last.map_or(0.0, |r| r.residual_ratio);
     let (max_displacement, _) = simulation.displacement_stats();
@@ -397,6 +493,7 @@ fn drive(
         Verdict::NotInEquilibrium { reasons }
     };
 
+    let rest = Rest::find(&records);
     let report = RunReport {
         dimension: model.mesh.dimension,
         n_points,
@@ -426,6 +523,8 @@ fn drive(
         final_stresses: simulation.effective_stresses(),
         final_plastic: simulation.plastic_flags(),
         final_pore_pressures: simulation.pore_pressures(),
+        monitored,
+        rest,
         formulations: simulation
             .formulations()
             .into_iter()
@@ -539,4 +638,45 @@ fn plastic_elements(simulation: &Simulation, model: &AnuraModel) -> Vec<ElementS
         }
     });
     top_ten(model, &scores)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn history(energies: &[f64]) -> Vec<StepRecord> {
+        energies
+            .iter()
+            .enumerate()
+            .map(|(i, &kinetic_energy)| StepRecord {
+                step: i,
+                time: 0.1 * i as f64,
+                kinetic_energy,
+                residual_ratio: 0.0,
+                max_displacement: 0.0,
+                mean_displacement: 0.0,
+                plastic_now: 0,
+                plastic_total: 0,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn rest_is_the_first_time_after_the_peak_from_which_the_energy_stays_low() {
+        // Peak 10 at 0.2 s; below 0.1 from 0.6 s on (a dip to 0.05 at 0.4 s
+        // that rises again does not count).
+        let rest = Rest::find(&history(&[0.0, 5.0, 10.0, 3.0, 0.05, 0.5, 0.09, 0.01])).unwrap();
+        assert_eq!(rest.peak_time, 0.2);
+        assert_eq!(rest.peak_kinetic_energy, 10.0);
+        assert!((rest.time - 0.6).abs() < 1e-12, "{rest:?}");
+        assert!(rest.criterion.contains("1 %"), "{}", rest.criterion);
+    }
+
+    #[test]
+    fn no_rest_without_motion_or_while_still_moving() {
+        assert_eq!(Rest::find(&history(&[0.0, 0.0, 0.0])), None);
+        assert_eq!(Rest::find(&history(&[0.0, 1.0, 2.0, 3.0])), None);
+        assert_eq!(Rest::find(&history(&[0.0, 3.0, 2.0, 1.0])), None);
+        assert_eq!(Rest::find(&[]), None);
+    }
 }

@@ -3,7 +3,7 @@
 //! demonstration of run-out, not a replacement for Anura3D). Writes
 //! `run.json`, `run_history.svg` and one `mps_t<time>.vtu` per snapshot.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::PipelineError;
 use super::output::{Destination, OutputDir};
@@ -83,7 +83,8 @@ impl RunOptions {
 /// What `run` wrote.
 pub struct RunOutcome {
     pub report: mpm::RunReport,
-    /// Snapshot files written, in time order.
+    /// Snapshot files written, in time order (each `.vtu` with an `.svg` of
+    /// the deformed body beside it).
     pub snapshots: Vec<String>,
     pub folder: PathBuf,
 }
@@ -97,10 +98,11 @@ pub fn run(
     to: Destination<'_>,
 ) -> Result<RunOutcome, PipelineError> {
     let (reads, start, target) = runner::begin(source, to, "run")?;
-    let (settings, notes) = runner::with_project(
+    let (mut settings, notes) = runner::with_project(
         options.settings(start.project.cps.as_ref())?,
         &start.project,
     )?;
+    settings.monitored = monitored(&start.project, &start.points)?;
     let dir = OutputDir::create(&target, to.replace, &reads, "run")?;
     // Each snapshot is written as it is taken, under the name of the time
     // asked for: memory does not grow with their number.
@@ -117,6 +119,8 @@ pub fn run(
                 .find(|(t, _)| *t == asked)
                 .map_or_else(|| format!("mps_t{asked}.vtu"), |(_, n)| n.clone());
             write_snapshot(&dir, &name, &s).map_err(|e| e.to_string())?;
+            let svg = name.replace(".vtu", ".svg");
+            deformed_plot(&dir.path(&svg), asked, &s).map_err(|e| e.to_string())?;
             snapshots.push(name);
             Ok(())
         },
@@ -145,6 +149,49 @@ pub fn run(
         snapshots,
         folder: dir.commit()?,
     })
+}
+
+/// The 0-based MP indices of the CPS's monitored MPs
+/// (`$$OUTPUT_MATERIAL_POINTS`, by MP id), none without a CPS.
+fn monitored(
+    project: &super::Project,
+    points: &[crate::model::MaterialPoint],
+) -> Result<Vec<u32>, PipelineError> {
+    let Some(cps) = project.cps.as_ref() else {
+        return Ok(Vec::new());
+    };
+    let ids = cps.output_material_points(points.len())?;
+    ids.iter()
+        .map(|&id| {
+            points
+                .iter()
+                .position(|p| p.id == id)
+                .map(|i| i as u32)
+                .ok_or_else(|| {
+                    PipelineError::Option(format!(
+                        "{}: $$OUTPUT_MATERIAL_POINTS names MP {id}, which the model does not place",
+                        project.files.cps.as_ref().map_or_else(String::new, |p| p.display().to_string())
+                    ))
+                })
+        })
+        .collect()
+}
+
+/// The deformed body at a snapshot: every MP at its position, coloured by
+/// its displacement's magnitude.
+fn deformed_plot(path: &Path, time: f64, s: &mpm::Snapshot) -> Result<(), PipelineError> {
+    let dots: Vec<(f64, f64, f64)> = s
+        .positions
+        .iter()
+        .zip(&s.displacements)
+        .map(|(x, u)| (x[0], x[1], (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt()))
+        .collect();
+    super::plot::field_map(
+        path,
+        &format!("MPs at t = {time} s, coloured by displacement"),
+        "|u| (m)",
+        &dots,
+    )
 }
 
 /// Most snapshot times one run takes.
