@@ -533,9 +533,11 @@ fn auto_keeps_geostatic_on_flat_ground() {
     );
 }
 
-/// A slope too steep to stand: map exits 1, still writes the folder with the
-/// verdict (NO EQUILIBRIUM, the gravity multiplier held, the elements that
-/// keep yielding) in report.json.
+/// A slope too steep to stand: `map --stress equilibrium` exits 1, still
+/// writes the folder with the verdict (NO EQUILIBRIUM, the gravity multiplier
+/// held, the elements that keep yielding) in report.json; `--stress auto`
+/// exits 0 with the same folder; the state written is no further out of
+/// balance than the geostatic one.
 #[test]
 fn map_exits_1_when_no_equilibrium_exists() {
     let tmp = tempfile::tempdir().unwrap();
@@ -553,6 +555,48 @@ fn map_exits_1_when_no_equilibrium_exists() {
     assert!(e["load_factor"].as_f64().unwrap() < 1.0);
     assert!(!e["yielding_elements"].as_array().unwrap().is_empty());
     assert!(out.join("slope.MAPF").is_file());
+
+    // #39: under `--stress auto` (which chooses the solve on this slope) a
+    // slope that cannot stand is a finding: exit 0, the same warning, the
+    // same folder, so that a script goes on to `verify`.
+    let auto = tmp.path().join("auto");
+    let (code, text) = run_map(&folder, &fem, &auto, &["--stress", "auto"]);
+    assert_eq!(code, 0, "{text}");
+    assert_contains(
+        &text,
+        &["NO EQUILIBRIUM (a finding, exit 0 under --stress auto)"],
+    );
+    assert_eq!(report(&auto)["equilibrium"]["equilibrium"], false);
+    assert_eq!(
+        std::fs::read(auto.join("slope.MAPF")).unwrap(),
+        std::fs::read(out.join("slope.MAPF")).unwrap()
+    );
+
+    // #39: the state written is never further out of balance than the
+    // geostatic start, as verify measures both at its first step.
+    let geostatic = tmp.path().join("geostatic");
+    let (code, text) = run_map(&folder, &fem, &geostatic, &["--stress", "geostatic"]);
+    assert_eq!(code, 0, "{text}");
+    let first_ratio = |dir: &Path| -> f64 {
+        let v = tmp.path().join(format!(
+            "verify-{}",
+            dir.file_name().unwrap().to_str().unwrap()
+        ));
+        let (_, text, _) = run_split(&[
+            "verify",
+            dir.to_str().unwrap(),
+            "--max-steps",
+            "1",
+            "--out",
+            v.to_str().unwrap(),
+        ]);
+        let r: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(v.join("verify.json")).unwrap())
+                .unwrap_or_else(|e| panic!("{e}: {text}"));
+        r["run"]["initial_residual_ratio"].as_f64().unwrap()
+    };
+    let (solved, start) = (first_ratio(&out), first_ratio(&geostatic));
+    assert!(solved <= start, "written {solved} > geostatic {start}");
 }
 
 // ---- the real Anura3D kernel --------------------------------------------

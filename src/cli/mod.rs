@@ -135,7 +135,8 @@ impl Verdict {
 
 /// Entry point of the binary. Exit codes: 0 success, 1 a negative verdict
 /// (`diff` found differences, `verify` found no equilibrium, `map --stress
-/// equilibrium` found no state at rest), 2 bad input or any other error.
+/// equilibrium` found no state at rest; under `--stress auto` that is a
+/// finding, exit 0 with a warning), 2 bad input or any other error.
 /// Never panics on bad input.
 pub fn main() -> ExitCode {
     let cli = match Cli::try_parse() {

@@ -223,6 +223,51 @@ pub fn equilibrium_stress(
     })
 }
 
+/// The runner's out-of-balance force ratio of `states` at its first step
+/// (what `verify` judges first), under the CPS's gravity.
+fn first_step_ratio(project: &Project, states: &[MpState]) -> Result<f64, PipelineError> {
+    let settings = crate::pipeline::runner::with_cps(
+        crate::mpm::RunSettings::verify(),
+        project.cps.as_ref(),
+        None,
+    );
+    let mut simulation =
+        crate::mpm::Simulation::new(&project.model, &project.points, states, &settings)
+            .map_err(crate::pipeline::runner::runner_error)?;
+    Ok(simulation.step().residual_ratio)
+}
+
+/// Where the solve found no state at rest: its best state must not be
+/// further out of balance than the geostatic start (#39). Both are measured
+/// as `verify` measures them, by the runner's first step; when the
+/// geostatic state (σv from the overburden, σh = K0·σ'v + S·p, the same pore
+/// state) is closer to balance, `states` takes it. Returns a note, or a
+/// warning when the geostatic state was taken.
+pub fn no_worse_than_geostatic(
+    project: &Project,
+    positions: &[[f64; 3]],
+    cloud: &super::interpolate::FemCloud<'_>,
+    states: &mut [MpState],
+    report: &EquilibriumReport,
+) -> Result<Option<Result<String, String>>, PipelineError> {
+    if report.outcome.equilibrium {
+        return Ok(None);
+    }
+    let mut geostatic = states.to_vec();
+    super::stress::geostatic_stress(project, positions, cloud, &mut geostatic)?;
+    let solved = first_step_ratio(project, states)?;
+    let start = first_step_ratio(project, &geostatic)?;
+    if solved <= start {
+        return Ok(Some(Ok(format!(
+            "the failed solve's best state is closer to balance than the geostatic start (out-of-balance force ratio {solved:.3e} against {start:.3e} at the runner's first step): the MAPF holds the solve's"
+        ))));
+    }
+    states.copy_from_slice(&geostatic);
+    Ok(Some(Err(format!(
+        "the failed solve's best state is further out of balance than the geostatic start (out-of-balance force ratio {solved:.3e} against {start:.3e} at the runner's first step): the MAPF holds the geostatic state (σh = K0·σ'v + S·p) instead"
+    ))))
+}
+
 /// MPs inside their yield surface whose σ'zz := τxy (Anura3D's 2D MAPF
 /// reader) puts them outside.
 fn sigma_zz_defect_outside(
@@ -300,7 +345,7 @@ pub fn warnings(report: &EquilibriumReport) -> Vec<String> {
             .map(|e| e.id.to_string())
             .collect();
         warnings.push(format!(
-            "NO EQUILIBRIUM under gravity with these pore pressures: the state holds only up to {:.3} × gravity; at full gravity the best state found leaves an out-of-balance force ratio of {:.2e}; {} MPs keep yielding (elements {}; MPs {:?}); the MAPF holds that best state",
+            "NO EQUILIBRIUM under gravity with these pore pressures: the state holds only up to {:.3} × gravity; at full gravity the best state found leaves an out-of-balance force ratio of {:.2e}; {} MPs keep yielding (elements {}; MPs {:?}); the MAPF holds that best state or, where it is closer to balance, the geostatic start",
             o.load_factor,
             o.residual_ratio,
             o.yielding_points,

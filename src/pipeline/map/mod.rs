@@ -120,20 +120,26 @@ pub fn map(
     let t = Instant::now();
     // The geostatic stress maps the cloud a second time: it keeps its values;
     // otherwise the mapper takes them and frees them once its grid has a copy.
-    let (mut result, sampler) = if source == StressSource::Geostatic {
-        let result = interpolate::interpolate(&cloud, &placement, &fem.paths)?;
-        (result, Some(cloud))
-    } else {
-        let result = interpolate::interpolate_taking(cloud, &placement, &fem.paths)?;
-        (result, None)
-    };
+    // `--stress equilibrium` keeps it too: where no state at rest exists,
+    // the geostatic state is its floor (`equilibrium::no_worse_than_geostatic`).
+    let (mut result, sampler) =
+        if matches!(source, StressSource::Geostatic | StressSource::Equilibrium) {
+            let result = interpolate::interpolate(&cloud, &placement, &fem.paths)?;
+            (result, Some(cloud))
+        } else {
+            let result = interpolate::interpolate_taking(cloud, &placement, &fem.paths)?;
+            (result, None)
+        };
     timings.push(("kernel mapping".to_string(), ms(t)));
 
     let values = std::mem::take(&mut result.values);
     let stress = stress::derive_stress(&project, source, &quantities, values);
     let mut states = stress.states;
     notes.extend(stress.notes);
-    if let Some(cloud) = &sampler {
+    if let Some(cloud) = sampler
+        .as_ref()
+        .filter(|_| source == StressSource::Geostatic)
+    {
         let t = Instant::now();
         notes.extend(stress::geostatic_stress(
             &project,
@@ -143,8 +149,6 @@ pub fn map(
         )?);
         timings.push(("geostatic stress".to_string(), ms(t)));
     }
-    // The FEM values' row-major copy is no longer needed.
-    drop(sampler);
     let mut assumed = stress::assumed_defaults(&project, source, &quantities);
     notes.extend(assumed.iter().map(stress::default_note));
     warnings.extend(stress.warnings);
@@ -163,6 +167,21 @@ pub fn map(
             resolved.because,
         )?;
         timings.push(("equilibrium stress".to_string(), ms(t)));
+        if let Some(cloud) = &sampler {
+            let t = Instant::now();
+            match equilibrium::no_worse_than_geostatic(
+                &project,
+                &placement.positions,
+                cloud,
+                &mut states,
+                &report,
+            )? {
+                Some(Ok(note)) => notes.push(note),
+                Some(Err(warning)) => warnings.push(warning),
+                None => {}
+            }
+            timings.push(("geostatic floor".to_string(), ms(t)));
+        }
         notes.extend(equilibrium::notes(&report));
         assumed.extend(equilibrium::assumed_defaults(&report));
         warnings.extend(equilibrium::warnings(&report));
@@ -170,6 +189,8 @@ pub fn map(
     } else {
         None
     };
+    // The FEM values' row-major copy is no longer needed.
+    drop(sampler);
     let diagnostics = interpolate::diagnostics(&result);
     drop(result);
     if source != StressSource::Zero {
