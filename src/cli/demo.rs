@@ -359,6 +359,33 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         fos_folders.push((zero_dir, fos::file_names(&zero)));
         fos_folders.push((mapped_dir, fos::file_names(&with_pwp)));
     }
+    // 7. The run-out: the same output mapped onto the paper's MPM model
+    // (fixtures/flume: empty elements above the ground and in front of the
+    // toe), ready for `run`.
+    let flume_job = MapJob {
+        model: dir.with_file_name("flume"),
+        ..job.clone()
+    };
+    let flume = target.join("flume");
+    let (flume_mapped, flume_written) =
+        mapping::map(&flume_job, Destination::new(Some(&flume), true))?;
+    say!(
+        "7 run-out    the same output mapped onto the paper's MPM model (fixtures/flume: {} MPs, {} elements of which {} empty) in {}",
+        flume_mapped.project.points.len(),
+        flume_mapped.project.model.mesh.n_elements(),
+        flume_mapped
+            .project
+            .model
+            .element_material
+            .iter()
+            .filter(|&&m| m == 0)
+            .count(),
+        flume_written.folder.display()
+    );
+    say!(
+        "             run it: a3d-init run {} --time 3 --snapshots 0.3,0.8,1.2,3.0   (docs/slope.md: at rest after 0.67 s, monitored MPs A–E beside the kernel's)",
+        flume_written.folder.display()
+    );
     say!("\nfiles ({:.1} s):", started.elapsed().as_secs_f64());
     let names: Vec<&str> = written.iter().map(String::as_str).collect();
     say!("  {}", wrote(&target, &names));
@@ -376,10 +403,8 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
     for (folder, files) in &fos_folders {
         say!("  {}", wrote(folder, files));
     }
-    say!(
-        "  run-out: a3d-init run {} --time 2 --damping 0 --snapshots 0.3,0.8,1.2,2.0   (undamped, as Anura3D's dynamics; the CPS's α = 0.75 stops it)",
-        target.display()
-    );
+    let flume_files: Vec<&str> = flume_written.files.iter().map(String::as_str).collect();
+    say!("  {}", wrote(&flume_written.folder, &flume_files));
     say!(
         "failure time: {:.3} h measured (OpenGeoSys rain, {} FS(t)) against the paper's 1.56 h ({:+.0} %; docs/slope.md)",
         crossing.time_h,
