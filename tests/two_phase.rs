@@ -164,9 +164,10 @@ fn terzaghi_consolidation_within_two_percent() {
 /// The volume-weighted mean pore pressure of `model` under a top pressure
 /// `q`, undamped: `q` ramped up over 0.2 s, then held and the mean pressure
 /// averaged over 0.2 s (the small oscillation the ramp leaves averages
-/// out). Local damping would not do: as the kernel applies it to a coupled
-/// mixture, in two parts that oppose at the loaded face, it holds the
-/// column short of equilibrium (2.5 % here at α = 0.75), as friction would.
+/// out), so that the test holds whichever way the mixture is damped: as
+/// the kernel damps it (`run`), in two parts that oppose at the loaded face,
+/// local damping holds the column short of equilibrium (2.5 % here at
+/// α = 0.75), as friction would.
 fn settled_mean_pressure(model: &AnuraModel, q: f64) -> f64 {
     let points = place_points(model);
     let mut sim = Simulation::new(model, &points, &zero_states(&points), &settings(0.0)).unwrap();

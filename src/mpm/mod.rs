@@ -195,6 +195,13 @@ pub struct RunSettings {
     /// The GOM's distributed loads with the CPS's multipliers ([`loads`]);
     /// none by default (gravity only).
     pub loads: crate::model::loads::ProjectLoads,
+    /// Damp a coupled mixture as the kernel does, in two parts: the water's
+    /// porosity-weighted share Σ n·S·F_w with the liquid's velocity's sign,
+    /// the rest with the solid's (`run`, to follow the kernel's dynamics).
+    /// Off (the mixture's force damped as one) for the quasi-static checks:
+    /// where the two parts oppose, the split holds a settling model short
+    /// of rest as friction would and its residual never falls (#39).
+    pub split_mixture_damping: bool,
     /// MPs whose displacement [`run()`] records at every recorded step
     /// (0-based indices; CPS `$$OUTPUT_MATERIAL_POINTS`), none by default.
     pub monitored: Vec<u32>,
@@ -222,6 +229,7 @@ impl RunSettings {
             hydraulic: seepage::HydraulicBoundaries::default(),
             loads: crate::model::loads::ProjectLoads::default(),
             monitored: Vec::new(),
+            split_mixture_damping: false,
         }
     }
 

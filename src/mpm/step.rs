@@ -171,6 +171,9 @@ pub(crate) struct Solver<const D: usize, const NC: usize> {
     /// and the GOM's loads they scale ([`RunSettings::loads`]).
     loads: crate::model::loads::ProjectLoads,
     damping: f64,
+    /// Damp a coupled mixture in the kernel's two parts
+    /// ([`super::RunSettings::split_mixture_damping`]).
+    split_damping: bool,
     pub dt: f64,
     pub time: f64,
     pub steps: usize,
@@ -452,6 +455,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             g: settings.gravity,
             loads: settings.loads.clone(),
             damping: settings.damping,
+            split_damping: settings.split_mixture_damping,
             dt,
             time: 0.0,
             steps: 0,
@@ -629,7 +633,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 let unbalanced = external + self.node_force[node][d];
                 let alpha = self.damping;
                 let mut damped = unbalanced - alpha * unbalanced.abs() * sign(velocity);
-                if let Some(l) = liquid.as_deref() {
+                if let Some(l) = liquid.as_deref().filter(|_| self.split_damping) {
                     // The kernel damps the mixture in two parts
                     // (`LagrangianPhase.FOR`, `ApplyDampingForce` and
                     // `ApplyDampingForceWater`): the water's porosity-weighted

@@ -76,6 +76,8 @@ impl RunOptions {
         s.stop_at_equilibrium = false;
         s.max_steps = usize::MAX;
         s.snapshot_times = self.snapshots.clone();
+        // The run-out follows the kernel's dynamics, its damping included.
+        s.split_mixture_damping = true;
         Ok(s)
     }
 }
