@@ -43,6 +43,12 @@ fn demo_runs_the_whole_chain() {
     assert!((0.7..=1.0).contains(&h_over_l), "h/l = {h_over_l}");
     let mapf = a3d_init::formats::mapf::read(&out.join("slope.MAPF")).unwrap();
     assert_eq!(mapf.rows.len(), 5040);
+    // Step 7 (#39): the same output mapped onto the paper's MPM model, and
+    // the one command that runs it out.
+    let flume = a3d_init::formats::mapf::read(&out.join("flume/flume.MAPF")).unwrap();
+    assert_eq!(flume.rows.len(), 3600);
+    let run_line = format!("run it: a3d-init run {}", out.join("flume").display());
+    assert!(stdout.contains(&run_line), "{stdout}");
     for f in [
         "pwp.svg",
         "effective_stress_yy.svg",

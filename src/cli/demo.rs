@@ -383,7 +383,7 @@ pub fn run(args: DemoArgs) -> anyhow::Result<()> {
         flume_written.folder.display()
     );
     say!(
-        "             run it: a3d-init run {} --time 3 --snapshots 0.3,0.8,1.2,3.0   (docs/slope.md: at rest after 0.67 s, monitored MPs A–E beside the kernel's)",
+        "             run it: a3d-init run {} --time 3 --snapshots 0.3,0.8,1.2,3.0   (the monitored MPs A–E, the time to rest, snapshots; docs/slope.md compares them with the kernel and the paper)",
         flume_written.folder.display()
     );
     say!("\nfiles ({:.1} s):", started.elapsed().as_secs_f64());
