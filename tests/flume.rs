@@ -103,6 +103,38 @@ fn the_flume_has_room_and_its_slide_comes_to_rest_inside_the_mesh() {
         assert!((0.02..0.15).contains(u), "MP {id}: |u| = {u}");
     }
     assert!(m[4].1 < 0.01, "E: |u| = {}", m[4].1);
+    // The figures docs/slope.md quotes for this run (*Run-out in the flume*):
+    // A–E at rest and the time to rest. A drift fails here.
+    let docs =
+        std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/slope.md")).unwrap();
+    let row = docs
+        .lines()
+        .find(|l| l.starts_with("| \\|u\\| of A–E at 3.0 s (mm) |"))
+        .expect("docs/slope.md quotes A–E at 3.0 s");
+    let quoted: Vec<f64> = row
+        .split('|')
+        .nth(4)
+        .unwrap()
+        .split(',')
+        .map(|v| v.trim().parse().unwrap())
+        .collect();
+    for ((id, u), q) in m.iter().zip(&quoted) {
+        assert!(
+            (1e3 * u - q).abs() <= 0.15,
+            "MP {id}: {:.2} mm, docs/slope.md quotes {q}",
+            1e3 * u
+        );
+    }
+    let quoted_rest: f64 = docs
+        .split("| time to rest | **")
+        .nth(1)
+        .and_then(|t| t.split(" s**").next())
+        .and_then(|t| t.parse().ok())
+        .expect("docs/slope.md quotes the time to rest");
+    assert!(
+        (rest - quoted_rest).abs() <= 0.005,
+        "at rest at {rest} s, docs/slope.md quotes {quoted_rest}"
+    );
     for name in ["mps_t0.30.vtu", "mps_t0.30.svg", "mps_t0.80.svg"] {
         assert!(run.join(name).is_file(), "{name}");
     }
