@@ -40,6 +40,23 @@ fn map_flume(out: &Path) {
     assert!(out.join("flume.MAPF").is_file(), "{o:?}");
 }
 
+/// `a3d-init run MAPPED --time T --snapshots S --out RUN`, which must
+/// succeed; its standard output.
+fn run_flume(mapped: &Path, run: &Path, time: &str, snapshots: &str) -> String {
+    let o = a3d(&[
+        "run",
+        mapped.to_str().unwrap(),
+        "--time",
+        time,
+        "--snapshots",
+        snapshots,
+        "--out",
+        run.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{o:?}");
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
 fn run_json(dir: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(dir.join("run.json")).unwrap()).unwrap()
 }
@@ -74,18 +91,7 @@ fn the_flume_has_room_and_its_slide_comes_to_rest_inside_the_mesh() {
     assert!(gom.contains("mualem"), "the FEM's conductivity curve");
 
     let run = tmp.path().join("run");
-    let o = a3d(&[
-        "run",
-        out.to_str().unwrap(),
-        "--time",
-        "1.0",
-        "--snapshots",
-        "0.3,0.8",
-        "--out",
-        run.to_str().unwrap(),
-    ]);
-    assert_eq!(o.status.code(), Some(0), "{o:?}");
-    let text = String::from_utf8_lossy(&o.stdout);
+    let text = run_flume(&out, &run, "1.0", "0.3,0.8");
     assert!(text.contains("lost       0 MPs left the mesh"), "{text}");
     let r = run_json(&run);
     assert_eq!(r["lost_points"], 0);
@@ -191,17 +197,7 @@ fn the_first_02_s_agree_with_the_kernel_on_the_monitored_points() {
         .status()
         .unwrap();
     let run = tmp.path().join("run");
-    let o = a3d(&[
-        "run",
-        out.to_str().unwrap(),
-        "--time",
-        "0.2",
-        "--snapshots",
-        "0.1",
-        "--out",
-        run.to_str().unwrap(),
-    ]);
-    assert_eq!(o.status.code(), Some(0), "{o:?}");
+    run_flume(&out, &run, "0.2", "0.1");
     let ours = monitored(&run_json(&run));
     for (id, u) in ours {
         let par = dir.join(format!("flume.PAR_{id}"));
