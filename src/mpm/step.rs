@@ -632,19 +632,21 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 let external = self.node_weight[node] * self.gravity[d] + self.load_now[node][d];
                 let unbalanced = external + self.node_force[node][d];
                 let alpha = self.damping;
-                let mut damped = unbalanced - alpha * unbalanced.abs() * sign(velocity);
-                if let Some(l) = liquid.as_deref().filter(|_| self.split_damping) {
+                // Local damping: a force less α·|force| along its velocity.
+                let damp = |force: f64, v: f64| force - alpha * force.abs() * sign(v);
+                let damped = match liquid.as_deref().filter(|_| self.split_damping) {
                     // The kernel damps the mixture in two parts
                     // (`LagrangianPhase.FOR`, `ApplyDampingForce` and
                     // `ApplyDampingForceWater`): the water's porosity-weighted
                     // share of the force, Σ n·S·F_w, with the liquid's
                     // velocity's sign, and the rest with the solid's.
-                    let vw = l.momentum[node][d] / l.mass[node];
-                    let fwn = l.porous[node][d];
-                    let solid = unbalanced - fwn;
-                    damped = solid - alpha * solid.abs() * sign(velocity) + fwn
-                        - alpha * fwn.abs() * sign(vw);
-                }
+                    Some(l) => {
+                        let vw = l.momentum[node][d] / l.mass[node];
+                        let fwn = l.porous[node][d];
+                        damp(unbalanced - fwn, velocity) + fwn - alpha * fwn.abs() * sign(vw)
+                    }
+                    None => damp(unbalanced, velocity),
+                };
                 let mut acceleration = damped / m;
                 if let Some(l) = liquid.as_deref_mut() {
                     let mw = l.mass[node];
@@ -653,8 +655,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                     // Local damping on the liquid's force as the kernel
                     // applies it: before the drag, with the liquid's
                     // velocity's sign; the drag itself is never damped.
-                    let fw = l.force[node][d];
-                    let fw = fw - self.damping * fw.abs() * sign(vw);
+                    let fw = damp(l.force[node][d], vw);
                     let aw = if l.fixed[node][d] {
                         0.0
                     } else if solid_fixed {

@@ -104,7 +104,7 @@ pub fn run(
         options.settings(start.project.cps.as_ref())?,
         &start.project,
     )?;
-    settings.monitored = monitored(&start.project, &start.points)?;
+    settings.monitored = monitored(&start.project)?;
     let dir = OutputDir::create(&target, to.replace, &reads, "run")?;
     // Each snapshot is written as it is taken, under the name of the time
     // asked for: memory does not grow with their number.
@@ -154,29 +154,15 @@ pub fn run(
 }
 
 /// The 0-based MP indices of the CPS's monitored MPs
-/// (`$$OUTPUT_MATERIAL_POINTS`, by MP id), none without a CPS.
-fn monitored(
-    project: &super::Project,
-    points: &[crate::model::MaterialPoint],
-) -> Result<Vec<u32>, PipelineError> {
+/// (`$$OUTPUT_MATERIAL_POINTS`, by MP id, checked against the MP count),
+/// none without a CPS. An MP's id is Anura3D's running counter, its index
+/// plus one (`place`), as `mpm::run` numbers them back.
+fn monitored(project: &super::Project) -> Result<Vec<u32>, PipelineError> {
     let Some(cps) = project.cps.as_ref() else {
         return Ok(Vec::new());
     };
-    let ids = cps.output_material_points(points.len())?;
-    ids.iter()
-        .map(|&id| {
-            points
-                .iter()
-                .position(|p| p.id == id)
-                .map(|i| i as u32)
-                .ok_or_else(|| {
-                    PipelineError::Option(format!(
-                        "{}: $$OUTPUT_MATERIAL_POINTS names MP {id}, which the model does not place",
-                        project.files.cps.as_ref().map_or_else(String::new, |p| p.display().to_string())
-                    ))
-                })
-        })
-        .collect()
+    let ids = cps.output_material_points(project.points.len())?;
+    Ok(ids.into_iter().map(|id| id - 1).collect())
 }
 
 /// The deformed body at a snapshot: every MP at its position, coloured by
