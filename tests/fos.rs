@@ -292,3 +292,52 @@ fn one_percent_more_pore_pressure_moves_the_factor_by_about_one_percent() {
         show(&wet)
     );
 }
+
+/// Density scaling (#39): the slope's layer on a base twenty times stiffer.
+/// Unscaled, the base sets the time step; scaled, every MP moves at the
+/// layer's wave speed (the base's inertia raised, its weight kept), so the
+/// step is several times longer, and the factor, a property of the state at
+/// rest, is the same within the bracket's tolerance.
+#[test]
+fn density_scaling_keeps_the_factor_with_a_longer_step() {
+    use a3d_init::testkit::elastic_material;
+    let (mut model, mut points, states, settings) = layer(false);
+    let mut base = elastic_material(4e5, 0.3, 2650.0, 0.4);
+    base.index = 2;
+    base.name = "stiff_base".into();
+    model.materials.push(base);
+    let tan = BETA.to_radians().tan();
+    let lowest = points
+        .iter()
+        .map(|p| p.position[1] + p.position[0] * tan)
+        .fold(f64::INFINITY, f64::min);
+    for p in &mut points {
+        if p.position[1] + p.position[0] * tan < lowest + 0.05 {
+            p.material = 2;
+        }
+    }
+    let run = |scaled: bool| {
+        let mut s = settings.clone();
+        s.run.mass_scaling = scaled;
+        strength_reduction(&model, &points, &states, &s).unwrap()
+    };
+    let (plain, scaled) = (run(false), run(true));
+    assert!(
+        scaled.time_step > 3.0 * plain.time_step,
+        "time step {} scaled against {}",
+        scaled.time_step,
+        plain.time_step
+    );
+    assert_eq!(
+        scaled.window, plain.window,
+        "the window is the physical one"
+    );
+    assert!(
+        (scaled.factor - plain.factor).abs() <= 2.0 * settings.tolerance,
+        "scaled {} against {}",
+        show(&scaled),
+        show(&plain)
+    );
+    let reference = PHI.to_radians().tan() / tan;
+    assert_bracketed_near(&scaled, reference, 0.05, "tan φ′/tan β on a stiff base");
+}

@@ -347,14 +347,17 @@ def fos(
     zero_pwp: bool = False,
     out: Optional[PathLike] = None,
     force: bool = False,
-    drained: bool = False,
+    drained: bool = True,
 ) -> Dict[str, Any]:
     """``a3d-init fos``: the factor of safety on the state Anura3D will hold,
     by strength reduction (``method="srm"``, the default here) or by a method
     of slices (``"morgenstern-price"``, ``"spencer"``, ``"bishop"``,
     ``"janbu"``, ``"ordinary"``; the command line's default is
     Morgenstern–Price). Returns fos.json as a dict (``factor``, ``method``,
-    ``trials`` or ``critical_surface``, …) with ``folder`` added."""
+    ``trials`` or ``critical_surface``, …) with ``folder`` added. Strength
+    reduction holds every pore pressure, as limit equilibrium does;
+    ``drained=False`` lets two-phase coupled materials run with their water
+    (the command line's ``--coupled``)."""
     report, written = _native.fos(
         _path(folder),
         _path(model),

@@ -582,7 +582,7 @@ fn fos_method(name: &str) -> PyResult<FosMethod> {
 /// `method="srm"`, on the state Anura3D will hold): (fos.json as JSON, folder
 /// written).
 #[pyfunction]
-#[pyo3(signature = (folder=None, model=None, state=None, method="srm", damping=None, tolerance=0.01, window=None, zero_pwp=false, out=None, force=false, drained=false))]
+#[pyo3(signature = (folder=None, model=None, state=None, method="srm", damping=None, tolerance=0.01, window=None, zero_pwp=false, out=None, force=false, drained=true))]
 #[allow(clippy::too_many_arguments)]
 fn fos(
     py: Python<'_>,

@@ -40,11 +40,16 @@ pub struct FosArgs {
     /// Set every pore pressure to zero (σ′ = σ) before the analysis.
     #[arg(long)]
     pub zero_pwp: bool,
-    /// Strength reduction: hold every pore pressure (drained). Without it,
-    /// two-phase coupled and undrained-effective materials run with their
-    /// water ([`crate::mpm::liquid`]).
-    #[arg(long)]
+    /// Strength reduction: hold every pore pressure, as limit equilibrium
+    /// does (the default; the flag is kept for scripts).
+    #[arg(long, conflicts_with = "coupled")]
     pub drained: bool,
+    /// Strength reduction: let two-phase coupled and undrained-effective
+    /// materials run with their water ([`crate::mpm::liquid`]) instead of
+    /// holding the pore pressures (not with `--zero-pwp`: a dry slope has
+    /// no water to run).
+    #[arg(long)]
+    pub coupled: bool,
     /// Output folder (default `<dir>/fos`).
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -66,7 +71,7 @@ pub fn run(args: FosArgs) -> anyhow::Result<()> {
         tolerance: args.tolerance,
         window: args.window,
         zero_pwp: args.zero_pwp,
-        drained: args.drained,
+        drained: !args.coupled,
     };
     let to = Destination::new(args.out.as_deref(), args.force);
     let (analysis, target) = pipeline::fos::fos(&args.inputs.source()?, &options, to)?;

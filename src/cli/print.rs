@@ -250,6 +250,23 @@ pub fn fos_report(analysis: &FosAnalysis, target: &Path, elapsed: f64) {
             c.limit_equilibrium_davis
                 .map_or("(not computed)".to_string(), |f| format!("{f:.3}"))
         );
+        match (&c.equilibrium_solve, &c.equilibrium_solve_skipped) {
+            (Some(e), _) => say!(
+                "equilibrium the implicit solve finds rest up to F = {} and none from F = {} ({} solves, {:.1} s)",
+                e.holds
+                    .map_or("(none, even the smallest)".to_string(), |f| format!(
+                        "{f:.3}"
+                    )),
+                e.fails
+                    .map_or("(none, even the largest)".to_string(), |f| format!(
+                        "{f:.3}"
+                    )),
+                e.solves,
+                e.seconds
+            ),
+            (None, Some(why)) => say!("equilibrium the implicit solve not run: {why}"),
+            (None, None) => {}
+        }
     }
     say!("{} in {elapsed:.1} s", wrote(target, &file_names(analysis)));
 }
@@ -335,7 +352,12 @@ pub fn srm_report(report: &FosReport) {
         crate::pipeline::fos::srm_factor_line(report)
     );
     say!(
-        "method     strength reduction: tan φ′/F, c′/F, ψ ≤ φ′_F; pwp frozen; {} MPs, window {:.2} s per trial, dt = {:.3e} s, damping α = {}",
+        "method     strength reduction: tan φ′/F, c′/F, ψ ≤ φ′_F; {}; {} MPs, window {:.2} s per trial, dt = {:.3e} s, damping α = {}",
+        if report.settings.run.frozen_pore_pressure {
+            "pwp held"
+        } else {
+            "coupled materials run with their water"
+        },
         report.n_points,
         report.window,
         report.time_step,

@@ -66,9 +66,9 @@ pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
     let source = args.inputs.source()?;
     if args.fos {
         let started = Instant::now();
+        // Pore pressures held, as `fos` holds them (#39).
         let options = FosOptions {
             damping: args.damping,
-            drained: args.drained,
             ..FosOptions::srm()
         };
         let (report, target) = pipeline::fos::fos(&source, &options, args.destination())?;

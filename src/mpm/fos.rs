@@ -115,6 +115,7 @@ impl Default for FosSettings {
             run: RunSettings {
                 max_steps: 200_000,
                 stop_at_equilibrium: false,
+                mass_scaling: true,
                 ..RunSettings::verify()
             },
             tolerance: 0.01,
@@ -323,12 +324,15 @@ pub fn strength_reduction(
         return Err(FosError::NothingToReduce);
     }
     let height = model_height(model);
-    // A first simulation at F = 1 gives the time step and wave speed (they do
-    // not depend on the strength).
-    let probe = Simulation::new(model, points, states, &settings.run)?;
-    let period = 4.0 * height / probe.wave_speed();
-    let time_step = probe.time_step();
-    drop(probe);
+    // A first simulation at F = 1 gives the wave speed and the time step
+    // (they do not depend on the strength): the window comes from the
+    // physical wave speed, the step from the scaled one.
+    let unscaled = RunSettings {
+        mass_scaling: false,
+        ..settings.run.clone()
+    };
+    let period = 4.0 * height / Simulation::new(model, points, states, &unscaled)?.wave_speed();
+    let time_step = Simulation::new(model, points, states, &settings.run)?.time_step();
     let window = settings.window.unwrap_or_else(|| {
         let gravity = settings.run.gravity.max(f64::MIN_POSITIVE);
         (20.0 * period).max(4.0 * (height / gravity).sqrt())

@@ -205,7 +205,20 @@ pub struct RunSettings {
     /// MPs whose displacement [`run()`] records at every recorded step
     /// (0-based indices; CPS `$$OUTPUT_MATERIAL_POINTS`), none by default.
     pub monitored: Vec<u32>,
+    /// Density scaling for quasi-static analyses (strength reduction): the
+    /// inertia (not the weight) of every MP whose P-wave speed exceeds the
+    /// slowest MP's is raised until its speed equals it, at most by
+    /// [`MAX_MASS_SCALING`], so the time step is set by the slowest material
+    /// instead of the stiffest (FLAC's density scaling). The state at rest
+    /// is the same; the way there is not, so dynamic runs keep it off (the
+    /// default). Ignored when any MP runs two-phase coupled (its water has a
+    /// mass of its own).
+    pub mass_scaling: bool,
 }
+
+/// The largest factor [`RunSettings::mass_scaling`] raises an MP's mass by
+/// (its wave speed by at most 10).
+pub const MAX_MASS_SCALING: f64 = 100.0;
 
 impl RunSettings {
     /// Settings for the equilibrium check: α = 0.75, Courant 0.9, g = 9.81,
@@ -230,6 +243,7 @@ impl RunSettings {
             loads: crate::model::loads::ProjectLoads::default(),
             monitored: Vec::new(),
             split_mixture_damping: false,
+            mass_scaling: false,
         }
     }
 

@@ -248,6 +248,8 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         let mut particles = Vec::with_capacity(points.len());
         let mut inadmissible = Vec::with_capacity(points.len());
         let mut wave_speed = 0.0_f64;
+        // Each MP's P-wave speed, for the density scaling.
+        let mut speeds = Vec::with_capacity(points.len());
         for (point, state) in points.iter().zip(states) {
             let bad = |reason: String| MpmError::InvalidPoint {
                 id: point.id,
@@ -318,8 +320,10 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             }
             inadmissible.push(!solid.is_admissible(&stress, D == 2));
             // The undrained wave: the liquid stiffens the mixture by K_w/n.
-            wave_speed = wave_speed
-                .max(((solid.elasticity.p_wave_modulus() + water.bulk_over_n()) / density).sqrt());
+            let speed =
+                ((solid.elasticity.p_wave_modulus() + water.bulk_over_n()) / density).sqrt();
+            wave_speed = wave_speed.max(speed);
+            speeds.push(speed);
             // A coupled MP's solid carries the mixture less its water.
             let mass = match water {
                 Water::Coupled(c) => density - c.porosity * state.saturation * c.density,
@@ -357,6 +361,22 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 },
             });
         }
+        let coupled = particles
+            .iter()
+            .any(|p| matches!(p.water, Water::Coupled(_)));
+        if settings.mass_scaling && !coupled {
+            let slowest = speeds.iter().copied().fold(f64::INFINITY, f64::min);
+            let floor = wave_speed / super::MAX_MASS_SCALING.sqrt();
+            let target = slowest.max(floor);
+            if target.is_finite() && target > 0.0 {
+                for (p, &c) in particles.iter_mut().zip(&speeds) {
+                    if c > target {
+                        p.mass *= (c / target) * (c / target);
+                    }
+                }
+                wave_speed = target;
+            }
+        }
         let min_altitude = grid.min_altitude();
         let dt = settings.courant * min_altitude / wave_speed;
         if !(dt > 0.0 && dt.is_finite()) {
@@ -370,9 +390,6 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         let n_points = particles.len();
         let mut gravity = [0.0; D];
         gravity[1] = -settings.gravity;
-        let coupled = particles
-            .iter()
-            .any(|p| matches!(p.water, Water::Coupled(_)));
         let liquid = coupled.then(|| LiquidGrid {
             fixed: (0..n_nodes)
                 .map(|node| {

@@ -69,8 +69,10 @@ pub struct FosOptions {
     pub window: Option<f64>,
     /// Every pore pressure set to zero (σ′ = σ) before the analysis.
     pub zero_pwp: bool,
-    /// Strength reduction: hold every pore pressure (two-phase and
-    /// undrained materials otherwise run coupled).
+    /// Strength reduction: hold every pore pressure, as limit equilibrium
+    /// does (the default, #39). Off, two-phase coupled and undrained
+    /// materials run with their water; with `zero_pwp` they are held anyway
+    /// (a dry slope has no water to run).
     pub drained: bool,
 }
 
@@ -84,7 +86,7 @@ impl Default for FosOptions {
             tolerance: 0.01,
             window: None,
             zero_pwp: false,
-            drained: false,
+            drained: true,
         }
     }
 }
@@ -104,7 +106,8 @@ impl FosOptions {
     pub fn settings(&self, cps: Option<&CpsDocument>) -> FosSettings {
         let mut s = FosSettings::default();
         s.run = runner::with_cps(s.run, cps, self.damping);
-        s.run.frozen_pore_pressure = self.drained;
+        // Zero pore pressure is a dry slope: no water to run.
+        s.run.frozen_pore_pressure = self.drained || self.zero_pwp;
         s.tolerance = self.tolerance;
         s.window = self.window;
         s
@@ -133,6 +136,12 @@ pub struct Comparison {
     /// critical surface): what a continuum with the materials' dilatancy
     /// should give; `None` when it could not be computed.
     pub limit_equilibrium_davis: Option<f64>,
+    /// The largest strength factor at which the implicit equilibrium solve
+    /// still finds rest with the same pore pressures held (#39); `None`
+    /// where the solve does not take the model.
+    pub equilibrium_solve: Option<super::map::equilibrium::StrengthFactor>,
+    /// Why there is no `equilibrium_solve`.
+    pub equilibrium_solve_skipped: Option<String>,
     pub note: String,
 }
 
@@ -456,12 +465,27 @@ fn compare(
         le.analysis.critical.axis,
     )
     .ok();
+    let project = &start.project;
+    let (equilibrium_solve, equilibrium_solve_skipped) =
+        match super::map::equilibrium::unsupported(project) {
+            Some(why) => (None, Some(why)),
+            None => match super::map::equilibrium::strength_factor(
+                project,
+                states,
+                super::map::equilibrium::STRENGTH_FACTOR_TOLERANCE,
+            ) {
+                Ok(f) => (Some(f), None),
+                Err(e) => (None, Some(e.to_string())),
+            },
+        };
     Comparison {
         limit_equilibrium_method: le.method,
         limit_equilibrium: le.factor,
         strength_reduction: srm.factor,
         ratio: srm.factor / le.factor,
         limit_equilibrium_davis: davis,
+        equilibrium_solve,
+        equilibrium_solve_skipped,
         note: "Strength reduction divides tan φ′ and c′ by F and keeps ψ_F = min(ψ, φ′_F); \
                with ψ < φ′ the continuum fails before limit equilibrium says (Davis 1968): \
                limit equilibrium on the strengths c* = β·c′_F, tan φ* = β·tan φ′_F, \

@@ -80,6 +80,12 @@ pub struct EquilibriumReport {
     /// 2D: MPs that Anura3D's MAPF reader (σ'zz := τxy) puts outside their
     /// yield surface although the solved state is inside it.
     pub sigma_zz_defect_outside_yield: Option<usize>,
+    /// When no equilibrium exists: the largest factor the strengths can be
+    /// divided by with a state at rest ([`strength_factor`]; below 1, the
+    /// strengths they would need to be raised by 1/F). With the pore
+    /// pressures held, the gravity multiplier `load_factor` says little (the
+    /// water pushes whatever gravity does), this does (#39).
+    pub strength_factor: Option<StrengthFactor>,
     #[serde(flatten)]
     pub outcome: EquilibriumOutcome,
 }
@@ -213,12 +219,18 @@ pub fn equilibrium_stress(
     }
     let defect = (project.n_dim() == 2)
         .then(|| sigma_zz_defect_outside(&project.points, &laws, &outcome.effective));
+    let strength_factor = if outcome.equilibrium {
+        None
+    } else {
+        Some(strength_factor(project, &pore, STRENGTH_FACTOR_TOLERANCE)?)
+    };
     Ok(EquilibriumReport {
         chosen_because,
         k0_consistent: options.k0_consistent,
         tolerance: options.tolerance,
         materials,
         sigma_zz_defect_outside_yield: defect,
+        strength_factor,
         outcome,
     })
 }
@@ -344,9 +356,18 @@ pub fn warnings(report: &EquilibriumReport) -> Vec<String> {
             .iter()
             .map(|e| e.id.to_string())
             .collect();
+        let strength = match report.strength_factor.as_ref().map(|f| (f.holds, f.fails)) {
+            Some((Some(holds), _)) => format!(
+                "a state at rest exists with the strengths divided by up to F = {holds:.3} (the equilibrium solve's factor of safety)"
+            ),
+            Some((None, _)) => format!(
+                "no state at rest even with the strengths multiplied by {}",
+                1.0 / F_MIN
+            ),
+            None => format!("the state holds only up to {:.3} × gravity", o.load_factor),
+        };
         warnings.push(format!(
-            "NO EQUILIBRIUM under gravity with these pore pressures: the state holds only up to {:.3} × gravity; at full gravity the best state found leaves an out-of-balance force ratio of {:.2e}; {} MPs keep yielding (elements {}; MPs {:?}); the MAPF holds that best state or, where it is closer to balance, the geostatic start",
-            o.load_factor,
+            "NO EQUILIBRIUM under gravity with these pore pressures: {strength}; at full gravity the best state found leaves an out-of-balance force ratio of {:.2e}; {} MPs keep yielding (elements {}; MPs {:?}); the MAPF holds that best state or, where it is closer to balance, the geostatic start",
             o.residual_ratio,
             o.yielding_points,
             elements.join(", "),
@@ -359,4 +380,110 @@ pub fn warnings(report: &EquilibriumReport) -> Vec<String> {
         ));
     }
     warnings
+}
+
+/// The largest strength factor at which the equilibrium solve still finds
+/// rest ([`strength_factor`]).
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct StrengthFactor {
+    /// The largest F (every `mohr_coulomb` strength divided by it, as
+    /// strength reduction divides them) with a state at rest; `None` when
+    /// even [`F_MIN`] has none.
+    pub holds: Option<f64>,
+    /// The smallest F without one; `None` when even [`F_MAX`] has one.
+    pub fails: Option<f64>,
+    /// Solves run.
+    pub solves: usize,
+    /// Wall-clock seconds of all the solves.
+    pub seconds: f64,
+}
+
+/// Relative width [`equilibrium_stress`] bisects the strength factor to.
+pub const STRENGTH_FACTOR_TOLERANCE: f64 = 0.005;
+
+/// Bounds of the search of [`strength_factor`].
+pub const F_MIN: f64 = 1.0 / 16.0;
+pub const F_MAX: f64 = 16.0;
+
+/// The largest factor F by which the strengths (tan φ′, c′, σt; ψ ≤ φ′_F, as
+/// [`crate::mpm::fos::reduce_material`]) can be divided with the
+/// equilibrium solve still finding rest under full gravity, the pore state of
+/// `states` held (the runner's start: pwp and saturation; the total stress
+/// is not read). Bracketed from F = 1 by ×/÷ 1.25, then bisected to a
+/// relative width of `tolerance`. The elasticity is the map's
+/// (ν from K0). This is the fourth measure of #39 beside limit equilibrium,
+/// its Davis variant and strength reduction: the implicit solve has no
+/// inertia and no damping, so where it and the explicit trials differ the
+/// difference is the trials' criterion or their dynamics.
+pub fn strength_factor(
+    project: &Project,
+    states: &[MpState],
+    tolerance: f64,
+) -> Result<StrengthFactor, PipelineError> {
+    let started = std::time::Instant::now();
+    let (laws, _) = laws(project, true)?;
+    let settings = EquilibriumSettings {
+        gravity: super::stress::gravity(project),
+        mixed: project.method == ComputationMethod::MpmMixed,
+        submerged_calculation: project
+            .cps
+            .as_ref()
+            .is_some_and(|c| c.submerged_calculation()),
+        ..EquilibriumSettings::default()
+    };
+    let mut solves = 0;
+    let mut rests = |factor: f64| -> Result<bool, PipelineError> {
+        let mut reduced = laws.clone();
+        for (law, material) in reduced.iter_mut().zip(&project.model.materials) {
+            let (Some(law), Some(weaker)) =
+                (law, crate::mpm::fos::reduce_material(material, factor))
+            else {
+                continue;
+            };
+            let criterion = SolidModel::from_material(&weaker)
+                .map_err(|e| PipelineError::Model(e.to_string()))?
+                .plasticity
+                .map(|map| map.criterion);
+            law.plasticity = criterion.map(|c| ReturnMap::new(c, law.elasticity));
+        }
+        solves += 1;
+        let outcome =
+            equilibrium::solve(&project.model, &project.points, states, &reduced, &settings)
+                .map_err(crate::pipeline::runner::runner_error)?;
+        Ok(outcome.equilibrium)
+    };
+    let (mut holds, mut fails) = (None, None);
+    let mut factor: f64 = 1.0;
+    loop {
+        if rests(factor)? {
+            holds = Some(factor);
+            if fails.is_some() || factor >= F_MAX {
+                break;
+            }
+            factor = (factor * 1.25).min(F_MAX);
+        } else {
+            fails = Some(factor);
+            if holds.is_some() || factor <= F_MIN {
+                break;
+            }
+            factor = (factor / 1.25).max(F_MIN);
+        }
+    }
+    if let (Some(mut lo), Some(mut hi)) = (holds, fails) {
+        while hi / lo - 1.0 > tolerance {
+            let mid = 0.5 * (lo + hi);
+            if rests(mid)? {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        (holds, fails) = (Some(lo), Some(hi));
+    }
+    Ok(StrengthFactor {
+        holds,
+        fails,
+        solves,
+        seconds: started.elapsed().as_secs_f64(),
+    })
 }
