@@ -3,6 +3,8 @@
 //! factors of safety printed as measured, and a folder that `inspect` reads
 //! back without warnings.
 
+mod common;
+
 use std::process::Command;
 
 #[test]
@@ -138,6 +140,29 @@ fn demo_runs_the_whole_chain() {
     let text = String::from_utf8_lossy(&o.stdout).into_owned();
     assert_eq!(o.status.code(), Some(0));
     assert!(text.contains("warnings   none"), "{text}");
+    // Strength reduction on the dry slope, as docs/slope-stability.md runs
+    // it: seconds again (not minutes, #39), within 2 % of limit equilibrium,
+    // and the four measures the table quotes.
+    let srm = tmp.path().join("srm_dry");
+    let args = [
+        "fos",
+        out.to_str().unwrap(),
+        "--method",
+        "srm",
+        "--zero-pwp",
+        "--out",
+        srm.to_str().unwrap(),
+    ];
+    let text = common::run_ok(&args);
+    let fos: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(srm.join("fos.json")).unwrap()).unwrap();
+    let factor = fos["factor"].as_f64().unwrap();
+    assert!(
+        (factor / dry - 1.0).abs() < 0.02,
+        "SRM {factor} against LE {dry}: {text}"
+    );
+    assert!(fos["iterations"].as_u64().unwrap() <= 8, "{text}");
+    common::assert_four_measures_quoted("shipped slope, dry", &srm.join("fos.json"));
 }
 
 /// The demo's figures the README quotes (h, h/l, MP count, the σ'zz defect's

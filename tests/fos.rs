@@ -3,6 +3,8 @@
 //! base) and the critical height of a vertical cut in a cohesive soil; and the
 //! same factor on one and two threads.
 
+mod common;
+
 use a3d_init::model::{AnuraModel, MaterialPoint, MpState};
 use a3d_init::mpm::{FosOutcome, FosReport, FosSettings, strength_reduction};
 use a3d_init::testkit::{
@@ -340,4 +342,45 @@ fn density_scaling_keeps_the_factor_with_a_longer_step() {
     );
     let reference = PHI.to_radians().tan() / tan;
     assert_bracketed_near(&scaled, reference, 0.05, "tan φ′/tan β on a stiff base");
+}
+
+/// ACADS 1(a) (`fixtures/acads-1a/`, c′ = 3 kPa, φ′ = 19.6°, referee 1.00),
+/// mapped dry and run by `fos --method srm` as docs/slope-stability.md gives
+/// the commands: the four measures agree within 1 % (limit equilibrium,
+/// strength reduction, the equilibrium solve), the Davis variant lies below,
+/// and the table quotes what the run gives (#39).
+#[test]
+fn four_measures_on_acads_1a_agree_and_are_the_docs_table() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mapped = tmp.path().join("acads-1a");
+    let fixture = common::fixture("acads-1a");
+    let (code, out) = common::run_map(&fixture, &fixture.join("nodes.csv"), &mapped, &[]);
+    assert_eq!(code, 0, "{out}");
+    let srm = tmp.path().join("fos");
+    let args = [
+        "fos",
+        mapped.to_str().unwrap(),
+        "--method",
+        "srm",
+        "--out",
+        srm.to_str().unwrap(),
+    ];
+    let text = common::run_ok(&args);
+    let fos: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(srm.join("fos.json")).unwrap()).unwrap();
+    let c = &fos["comparison"];
+    let le = c["limit_equilibrium"].as_f64().unwrap();
+    let solve = c["equilibrium_solve"]["holds"].as_f64().unwrap();
+    let factor = fos["factor"].as_f64().unwrap();
+    for (name, f) in [("strength reduction", factor), ("equilibrium solve", solve)] {
+        assert!(
+            (f / le - 1.0).abs() < 0.01,
+            "{name} {f} against limit equilibrium {le}: {text}"
+        );
+    }
+    assert!(
+        c["limit_equilibrium_davis"].as_f64().unwrap() < factor,
+        "{text}"
+    );
+    common::assert_four_measures_quoted("ACADS 1(a)", &srm.join("fos.json"));
 }

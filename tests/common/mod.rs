@@ -260,3 +260,47 @@ pub fn anura3d_kernel_or_skip(name: &str) -> Option<PathBuf> {
     }
     kernel
 }
+
+/// The row of docs/slope-stability.md's *Four measures of one slope* table
+/// that starts with `| <slope>`, checked against `fos.json` of a
+/// `fos --method srm` run: limit equilibrium, its Davis variant, strength
+/// reduction and the equilibrium solve's factor, as the table prints them
+/// (3 decimals). A figure that drifts fails the caller (#39).
+pub fn assert_four_measures_quoted(slope: &str, fos_json: &Path) {
+    let docs = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/slope-stability.md"),
+    )
+    .unwrap();
+    let row = docs
+        .lines()
+        .find(|l| l.starts_with(&format!("| {slope}")))
+        .unwrap_or_else(|| panic!("docs/slope-stability.md has no row `| {slope}`"));
+    let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+    let fos: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(fos_json).unwrap()).unwrap();
+    let c = &fos["comparison"];
+    let measured = [
+        c["limit_equilibrium"].as_f64(),
+        c["limit_equilibrium_davis"].as_f64(),
+        fos["factor"].as_f64(),
+        c["equilibrium_solve"]["holds"].as_f64(),
+    ];
+    for (k, (value, name)) in measured
+        .iter()
+        .zip([
+            "limit equilibrium",
+            "LE, Davis",
+            "strength reduction",
+            "equilibrium solve",
+        ])
+        .enumerate()
+    {
+        let value = value.unwrap_or_else(|| panic!("{name} missing from {}", fos_json.display()));
+        assert_eq!(
+            cells[k + 2],
+            format!("{value:.3}"),
+            "docs/slope-stability.md quotes {name} on `{slope}` as {}, the run gives {value}",
+            cells[k + 2]
+        );
+    }
+}
