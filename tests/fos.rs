@@ -384,3 +384,91 @@ fn four_measures_on_acads_1a_agree_and_are_the_docs_table() {
     );
     common::assert_four_measures_quoted("ACADS 1(a)", &srm.join("fos.json"));
 }
+
+/// `fixtures/slope/ogs/fos_vs_time.csv` is what docs/slope.md's table and
+/// the OGS README quote, and its 1.2 h row is what `map` then
+/// `fos --method srm` give now, as `fos_vs_time.sh` runs them (#39).
+#[test]
+fn fos_vs_time_table_is_the_csv_and_its_row_reruns() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let csv = std::fs::read_to_string(root.join("fixtures/slope/ogs/fos_vs_time.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let cell = |v: &str| match v.parse::<f64>() {
+        Ok(x) => format!("{x:.3}"),
+        Err(_) => "—".to_string(),
+    };
+    let docs = std::fs::read_to_string(root.join("docs/slope.md")).unwrap();
+    for row in &rows {
+        let quoted = format!(
+            "| {} | {} | {} / {} | {} | {} | {} | {} |",
+            row[col("t_h")],
+            cell(row[col("fs")]),
+            cell(row[col("fs_lower")]),
+            cell(row[col("fs_upper")]),
+            cell(row[col("le")]),
+            cell(row[col("le_davis")]),
+            cell(row[col("equilibrium_solve")]),
+            row[col("equilibrium")].to_lowercase()
+        );
+        assert!(
+            docs.contains(&quoted),
+            "docs/slope.md should quote `{quoted}`"
+        );
+    }
+    let at = |t: &str| rows.iter().find(|r| r[0] == t).unwrap();
+    let readme = std::fs::read_to_string(root.join("fixtures/slope/ogs/README.md")).unwrap();
+    let fs = |t: &str| cell(at(t)[col("fs")]);
+    let quoted = format!(
+        "reduction {} at 0.5 h, {} at 1.2 h, first below 1 at 1.27 h ({}; {} at 1.26 h),\n{} at 1.4 h",
+        fs("0.5"),
+        fs("1.2"),
+        fs("1.27"),
+        fs("1.26"),
+        fs("1.4")
+    );
+    assert!(
+        readme.contains(&quoted),
+        "the OGS README should quote `{quoted}`"
+    );
+
+    let tmp = tempfile::tempdir().unwrap();
+    let mapped = tmp.path().join("t1.2");
+    let ogs = common::fixture("slope/ogs/results/rain.pvd");
+    let extra = ["--step", "time=1.2h", "--material-map", "mat0=silty_sand"];
+    let (code, out) = common::run_map(&common::fixture("slope"), &ogs, &mapped, &extra);
+    assert_eq!(code, 0, "{out}");
+    let srm = tmp.path().join("fos");
+    common::run_ok(&[
+        "fos",
+        mapped.to_str().unwrap(),
+        "--method",
+        "srm",
+        "--out",
+        srm.to_str().unwrap(),
+    ]);
+    let fos: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(srm.join("fos.json")).unwrap()).unwrap();
+    let c = &fos["comparison"];
+    let row = at("1.2");
+    for (name, value) in [
+        ("fs", fos["factor"].as_f64()),
+        ("le", c["limit_equilibrium"].as_f64()),
+        ("le_davis", c["limit_equilibrium_davis"].as_f64()),
+        (
+            "equilibrium_solve",
+            c["equilibrium_solve"]["holds"].as_f64(),
+        ),
+    ] {
+        assert_eq!(
+            format!("{:.4}", value.unwrap()),
+            row[col(name)],
+            "fos_vs_time.csv's 1.2 h {name} drifted from the run"
+        );
+    }
+}
