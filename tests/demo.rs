@@ -82,6 +82,50 @@ fn demo_runs_the_whole_chain() {
             "{label} FS {factor} printed: {stdout}"
         );
     }
+    // docs/slope.md's opening paragraph quotes this run (#39); line breaks
+    // there are only layout.
+    let slope_md = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/slope.md"),
+    )
+    .unwrap()
+    .split_whitespace()
+    .collect::<Vec<_>>()
+    .join(" ");
+    let points = curve["curve"].as_array().unwrap();
+    let count = |kind: &str| points.iter().filter(|p| p["kind"] == kind).count();
+    let solve = &report["equilibrium"];
+    let factor_of = |name: &str| -> f64 {
+        let fos: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(out.join(name).join("fos.json")).unwrap(),
+        )
+        .unwrap();
+        fos["factor"].as_f64().unwrap()
+    };
+    for quoted in [
+        format!("FS = {:.3} at t = 0", points[0]["factor"].as_f64().unwrap()),
+        format!(
+            "over {} outputs and {} bisections",
+            count("saved"),
+            count("bisected")
+        ),
+        format!(
+            "LOO R² = {:.3}",
+            report["calibration"]["stats"]["r2"].as_f64().unwrap()
+        ),
+        format!(
+            "(out-of-balance ratio {:.1e} after {} plastic iterations, {} MPs on their yield surface)",
+            solve["residual_ratio"].as_f64().unwrap(),
+            solve["plastic_iterations"],
+            solve["yielding_points"]
+        ),
+        format!("Morgenstern–Price factor {:.3}", factor_of("fos_mapped")),
+        format!("{:.3} with zero pwp", factor_of("fos_zero_pwp")),
+    ] {
+        assert!(
+            slope_md.contains(&quoted),
+            "docs/slope.md should quote the measured `{quoted}`"
+        );
+    }
     // The dry sand layer is an infinite slope: long shallow surfaces approach
     // tan 33°/tan 32° = 1.039 from above (end effects), whatever the trial
     // count (#39).
@@ -163,6 +207,39 @@ fn demo_runs_the_whole_chain() {
     );
     assert!(fos["iterations"].as_u64().unwrap() <= 8, "{text}");
     common::assert_four_measures_quoted("shipped slope, dry", &srm.join("fos.json"));
+    // docs/slope.md's table of both states, the mapped one run here too.
+    let mapped = tmp.path().join("srm_mapped");
+    common::run_ok(&[
+        "fos",
+        out.to_str().unwrap(),
+        "--method",
+        "srm",
+        "--out",
+        mapped.to_str().unwrap(),
+    ]);
+    let slope_md = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/slope.md"),
+    )
+    .unwrap();
+    for (label, dir) in [
+        ("zero pore pressure (σ′ = σ)", &srm),
+        ("mapped pore pressures (1.26 h), held", &mapped),
+    ] {
+        let fos: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("fos.json")).unwrap()).unwrap();
+        let c = &fos["comparison"];
+        let quoted = format!(
+            "| {label} | {:.3} | {:.3} | {:.3} | {:.3} |",
+            fos["factor"].as_f64().unwrap(),
+            c["limit_equilibrium"].as_f64().unwrap(),
+            c["limit_equilibrium_davis"].as_f64().unwrap(),
+            c["equilibrium_solve"]["holds"].as_f64().unwrap()
+        );
+        assert!(
+            slope_md.contains(&quoted),
+            "docs/slope.md should quote `{quoted}`"
+        );
+    }
 }
 
 /// The demo's figures the README quotes (h, h/l, MP count, the σ'zz defect's
@@ -208,6 +285,41 @@ fn readme_figures_are_the_demos_measurements() {
     let crossing = json("fos_time.json")["crossing"]["time_h"]
         .as_f64()
         .unwrap();
+    // docs/slope.md's *What the chain gives* (#39).
+    let slope_md = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/slope.md"),
+    )
+    .unwrap();
+    let signed = |v: f64| {
+        if v < 0.0 {
+            format!("−{:.2}", -v)
+        } else {
+            format!("+{v:.2}")
+        }
+    };
+    let pwp = &report["pwp_range"];
+    let holds = solve["strength_factor"]["holds"].as_f64().unwrap();
+    assert!(holds < 1.0, "no rest at F = 1: {holds}");
+    let elements = verify["run"]["n_elements"].as_u64().unwrap();
+    for quoted in [
+        format!("| FEM nodes | {} (OGS output at", report["fem_nodes"]),
+        format!("| h = {h:.4} m, h/l = {h_over_l:.2} |"),
+        format!("| {elements} TRI3, {mps} MPs"),
+        format!(
+            "| {} … {} kPa (Anura3D sign) |",
+            signed(pwp[0].as_f64().unwrap()),
+            signed(pwp[1].as_f64().unwrap())
+        ),
+        format!("| initial out-of-balance force ratio {geostatic:.2} |"),
+        format!(
+            "| no state at rest: ratio {equilibrium:.3} left; rest only with the strengths divided by up to F = {holds:.3} |"
+        ),
+    ] {
+        assert!(
+            slope_md.contains(&quoted),
+            "docs/slope.md should quote the measured `{quoted}`"
+        );
+    }
     for quoted in [
         format!("h = {h:.3} m, h/l = {h_over_l:.2}"),
         format!("onto the {mps} material"),
