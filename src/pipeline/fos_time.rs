@@ -35,7 +35,7 @@ use crate::formats::fem_csv::CsvOptions;
 use crate::formats::fem_vtu::{VtuOptions, pvd};
 use crate::formats::gsz::{self, StepChoice};
 use crate::model::Quantity;
-use crate::mpm::fos::{FosSettings, strength_reduction};
+use crate::mpm::fos::strength_reduction;
 use crate::slope::series::first_crossing;
 
 /// Where the time series comes from.
@@ -540,12 +540,13 @@ fn srm_at(
         ..MapConfig::default()
     };
     let mapped = super::map::map(again, fem, &config)?;
-    let mut settings = FosSettings::default();
-    settings.run = runner::with_project(
-        runner::with_cps(settings.run, project.cps.as_ref(), options.srm_damping),
-        &mapped.project,
-    )?
-    .0;
+    // As `fos --method srm` runs it: the pore pressures held (#39).
+    let mut settings = super::fos::FosOptions {
+        damping: options.srm_damping,
+        ..super::fos::FosOptions::srm()
+    }
+    .settings(project.cps.as_ref());
+    settings.run = runner::with_project(settings.run, &mapped.project)?.0;
     // A factor of safety is of the slope under its full weight.
     settings.run.loads.gravity = crate::model::loads::Multiplier::FULL;
     let report = strength_reduction(
