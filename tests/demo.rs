@@ -188,18 +188,7 @@ fn demo_runs_the_whole_chain() {
     // it: seconds again (not minutes, #39), within 2 % of limit equilibrium,
     // and the four measures the table quotes.
     let srm = tmp.path().join("srm_dry");
-    let args = [
-        "fos",
-        out.to_str().unwrap(),
-        "--method",
-        "srm",
-        "--zero-pwp",
-        "--out",
-        srm.to_str().unwrap(),
-    ];
-    let text = common::run_ok(&args);
-    let fos: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(srm.join("fos.json")).unwrap()).unwrap();
+    let (text, fos) = common::fos_srm(&out, &srm, &["--zero-pwp"]);
     let factor = fos["factor"].as_f64().unwrap();
     assert!(
         (factor / dry - 1.0).abs() < 0.02,
@@ -209,14 +198,7 @@ fn demo_runs_the_whole_chain() {
     common::assert_four_measures_quoted("shipped slope, dry", &srm.join("fos.json"));
     // docs/slope.md's table of both states, the mapped one run here too.
     let mapped = tmp.path().join("srm_mapped");
-    common::run_ok(&[
-        "fos",
-        out.to_str().unwrap(),
-        "--method",
-        "srm",
-        "--out",
-        mapped.to_str().unwrap(),
-    ]);
+    common::fos_srm(&out, &mapped, &[]);
     let slope_md = std::fs::read_to_string(
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/slope.md"),
     )

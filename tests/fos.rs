@@ -357,17 +357,7 @@ fn four_measures_on_acads_1a_agree_and_are_the_docs_table() {
     let (code, out) = common::run_map(&fixture, &fixture.join("nodes.csv"), &mapped, &[]);
     assert_eq!(code, 0, "{out}");
     let srm = tmp.path().join("fos");
-    let args = [
-        "fos",
-        mapped.to_str().unwrap(),
-        "--method",
-        "srm",
-        "--out",
-        srm.to_str().unwrap(),
-    ];
-    let text = common::run_ok(&args);
-    let fos: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(srm.join("fos.json")).unwrap()).unwrap();
+    let (text, fos) = common::fos_srm(&mapped, &srm, &[]);
     let c = &fos["comparison"];
     let le = c["limit_equilibrium"].as_f64().unwrap();
     let solve = c["equilibrium_solve"]["holds"].as_f64().unwrap();
@@ -443,17 +433,7 @@ fn fos_vs_time_table_is_the_csv_and_its_row_reruns() {
     let extra = ["--step", "time=1.2h", "--material-map", "mat0=silty_sand"];
     let (code, out) = common::run_map(&common::fixture("slope"), &ogs, &mapped, &extra);
     assert_eq!(code, 0, "{out}");
-    let srm = tmp.path().join("fos");
-    common::run_ok(&[
-        "fos",
-        mapped.to_str().unwrap(),
-        "--method",
-        "srm",
-        "--out",
-        srm.to_str().unwrap(),
-    ]);
-    let fos: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(srm.join("fos.json")).unwrap()).unwrap();
+    let (_, fos) = common::fos_srm(&mapped, &tmp.path().join("fos"), &[]);
     let c = &fos["comparison"];
     let row = at("1.2");
     for (name, value) in [

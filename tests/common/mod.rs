@@ -304,3 +304,21 @@ pub fn assert_four_measures_quoted(slope: &str, fos_json: &Path) {
         );
     }
 }
+
+/// Runs `fos DIR --method srm --out OUT` with `extra` flags (it must exit 0):
+/// (what it printed, its `fos.json`).
+pub fn fos_srm(dir: &Path, out: &Path, extra: &[&str]) -> (String, serde_json::Value) {
+    let mut args = vec![
+        "fos",
+        dir.to_str().unwrap(),
+        "--method",
+        "srm",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend_from_slice(extra);
+    let text = run_ok(&args);
+    let fos =
+        serde_json::from_str(&std::fs::read_to_string(out.join("fos.json")).unwrap()).unwrap();
+    (text, fos)
+}
