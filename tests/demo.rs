@@ -126,6 +126,34 @@ fn demo_runs_the_whole_chain() {
             "docs/slope.md should quote the measured `{quoted}`"
         );
     }
+    // The minimum-depth rule on the dry slope, as docs/slope.md quotes it.
+    let depths: Vec<String> = ["0.05", "0.145", "0.3", "0.6"]
+        .iter()
+        .map(|d| {
+            let dir = tmp.path().join(format!("depth{d}"));
+            common::run_ok(&[
+                "fos",
+                out.to_str().unwrap(),
+                "--zero-pwp",
+                "--min-depth",
+                d,
+                "--out",
+                dir.to_str().unwrap(),
+            ]);
+            let fos: serde_json::Value =
+                serde_json::from_str(&std::fs::read_to_string(dir.join("fos.json")).unwrap())
+                    .unwrap();
+            format!("{:.3}", fos["factor"].as_f64().unwrap())
+        })
+        .collect();
+    let quoted = format!(
+        "D = 0.05 m gives {}, 0.145 m (the default) {}, 0.3 m {}, 0.6 m (the sand layer) {}",
+        depths[0], depths[1], depths[2], depths[3]
+    );
+    assert!(
+        slope_md.contains(&quoted),
+        "docs/slope.md should quote `{quoted}`"
+    );
     // The dry sand layer is an infinite slope: long shallow surfaces approach
     // tan 33°/tan 32° = 1.039 from above (end effects), whatever the trial
     // count (#39).

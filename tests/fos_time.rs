@@ -166,14 +166,30 @@ fn the_factor_at_the_129_h_output_does_not_depend_on_the_trial_count() {
     })
     .unwrap();
     let fem = &series.iter().find(|s| s.0 == 4644.0).unwrap().1;
-    let factors: Vec<f64> = [2000, 5000, 20000]
+    let docs = std::fs::read_to_string(
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/slope.md"),
+    )
+    .unwrap();
+    let factors: Vec<f64> = [(2000, "2,000"), (5000, "5,000"), (20000, "20,000")]
         .iter()
-        .map(|&trials| {
+        .map(|&(trials, label)| {
             let mut le = a3d_init::pipeline::slope::LeOptions::default();
             le.search.trials = trials;
-            fos_time::factor_of_field(&project, fem, &le)
-                .unwrap()
-                .factor
+            let report = fos_time::factor_of_field(&project, fem, &le).unwrap();
+            // docs/slope.md's table quotes the factor and the best circle.
+            let quoted = format!(
+                "| {:.4} ({:.4}) |",
+                report.factor, report.analysis.circular.factor
+            );
+            let row = docs
+                .lines()
+                .find(|l| l.starts_with(&format!("| {label} |")))
+                .unwrap_or_default();
+            assert!(
+                row.ends_with(&quoted),
+                "docs/slope.md's {label} row should end `{quoted}`: {row}"
+            );
+            report.factor
         })
         .collect();
     let (lo, hi) = factors
@@ -184,6 +200,31 @@ fn the_factor_at_the_129_h_output_does_not_depend_on_the_trial_count() {
     assert!(hi - lo <= 0.002, "{factors:?}");
     // A slope at its failure time: below the best circle's 1.02.
     assert!(hi < 1.0, "{factors:?}");
+    // Where the search has not converged yet (t = 0, no slab along the
+    // clay), docs/slope.md quotes the spread as measured.
+    let first = &series[0].1;
+    let (mut at_zero, mut circles) = (Vec::new(), Vec::new());
+    for trials in [2000, 5000, 20000] {
+        let mut le = a3d_init::pipeline::slope::LeOptions::default();
+        le.search.trials = trials;
+        let report = fos_time::factor_of_field(&project, first, &le).unwrap();
+        at_zero.push(format!("{:.4}", report.factor));
+        circles.push(format!("{:.3}", report.analysis.circular.factor));
+    }
+    let flat = docs.split_whitespace().collect::<Vec<_>>().join(" ");
+    let quoted = format!(
+        "is {}, {} and {} for 2,000, 5,000 and 20,000 circles",
+        at_zero[0], at_zero[1], at_zero[2]
+    );
+    assert!(
+        flat.contains(&quoted),
+        "docs/slope.md should say `{quoted}`"
+    );
+    let quoted = format!("differ ({})", circles.join(", "));
+    assert!(
+        flat.contains(&quoted),
+        "docs/slope.md should say `{quoted}`"
+    );
 }
 
 /// `map --step failure` on a series that never fails says so and exits 2,
