@@ -126,6 +126,52 @@ fn demo_runs_the_whole_chain() {
             "docs/slope.md should quote the measured `{quoted}`"
         );
     }
+    // FS(t) as docs/slope.md's *FS(t) by limit equilibrium* quotes it.
+    let at = |hours: f64| {
+        let point = points
+            .iter()
+            .find(|p| {
+                p["kind"] == "saved" && (p["time"].as_f64().unwrap() - hours * 3600.0).abs() < 1.0
+            })
+            .unwrap_or_else(|| panic!("no saved output at {hours} h"));
+        format!("{:.3}", point["factor"].as_f64().unwrap())
+    };
+    let quoted = format!(
+        "FS = {} at 0 h, {} at 0.5 h, {} at 1.0 h, {} at 1.15 h, {} at 1.2 h, {} at 1.25 h, {} at 1.26 h, {} at 1.29 h, {} at 1.30 h, {} at 1.35 h",
+        at(0.0),
+        at(0.5),
+        at(1.0),
+        at(1.15),
+        at(1.2),
+        at(1.25),
+        at(1.26),
+        at(1.29),
+        at(1.30),
+        at(1.35)
+    );
+    assert!(
+        slope_md.contains(&quoted),
+        "docs/slope.md should quote `{quoted}`"
+    );
+    let quoted = format!(
+        "1.26 h (FS = {}; the output before, 1.25 h, {})",
+        at(1.26),
+        at(1.25)
+    );
+    assert!(
+        slope_md.contains(&quoted),
+        "docs/slope.md should quote `{quoted}`"
+    );
+    let late: Vec<String> = points
+        .iter()
+        .filter(|p| p["kind"] == "saved" && p["time"].as_f64().unwrap() >= 1.6 * 3600.0 - 1.0)
+        .map(|p| format!("{:.3}", p["factor"].as_f64().unwrap()))
+        .collect();
+    assert!(
+        late.iter()
+            .all(|f| slope_md.contains(&format!("{f} from 1.6 h on"))),
+        "docs/slope.md says one factor from 1.6 h on: {late:?}"
+    );
     // The minimum-depth rule on the dry slope, as docs/slope.md quotes it.
     let depths: Vec<String> = ["0.05", "0.145", "0.3", "0.6"]
         .iter()
