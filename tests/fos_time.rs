@@ -293,3 +293,60 @@ fn step_failure_without_a_failing_output_is_exit_2() {
     assert!(err.contains("`map` finds it against the model"), "{err}");
     assert!(!out.exists());
 }
+
+/// The OGS README's *What OGS computes* table quotes the pressure range of
+/// the shipped results at seven times (OGS's sign, kPa): the files say so
+/// (#39).
+#[test]
+fn the_ogs_readme_quotes_the_shipped_pressure_ranges() {
+    use a3d_init::model::Quantity;
+    let series = fos_time::load_series(&SeriesInput::Pvd {
+        path: fixture("slope/ogs/results/rain.pvd"),
+        vtu: Default::default(),
+    })
+    .unwrap();
+    let readme = std::fs::read_to_string(fixture("slope/ogs/README.md")).unwrap();
+    let kpa = |v: f64| {
+        let s = format!("{:.2}", v.abs());
+        if v < 0.0 && s != "0.00" {
+            format!("−{s}")
+        } else {
+            s
+        }
+    };
+    for (hours, label) in [
+        (0.0, "0"),
+        (0.5, "0.5"),
+        (1.0, "1.0"),
+        (1.2, "1.2"),
+        (1.3, "1.3"),
+        (1.5, "1.5"),
+        (2.0, "2.0"),
+    ] {
+        let fem = &series
+            .iter()
+            .find(|s| (s.0 - hours * 3600.0).abs() < 1.0)
+            .unwrap_or_else(|| panic!("no output at {hours} h"))
+            .1;
+        // Loaded in Anura3D's sign (compression negative): OGS's p is −that.
+        let p = fem.nodes.field(Quantity::Pwp).unwrap();
+        let (lo, hi) = p
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(-v), b.max(-v))
+            });
+        let range = if kpa(lo) == kpa(hi) {
+            format!("| {} everywhere |", kpa(lo))
+        } else {
+            format!("| {} .. {} |", kpa(lo), kpa(hi))
+        };
+        let row = readme
+            .lines()
+            .find(|l| l.starts_with(&format!("| {label} |")))
+            .unwrap_or_default();
+        assert!(
+            row.contains(&range),
+            "the OGS README's {label} h row should hold `{range}`: {row}"
+        );
+    }
+}
