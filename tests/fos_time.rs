@@ -294,9 +294,9 @@ fn step_failure_without_a_failing_output_is_exit_2() {
     assert!(!out.exists());
 }
 
-/// The OGS README's *What OGS computes* table quotes the pressure range of
-/// the shipped results at seven times (OGS's sign, kPa): the files say so
-/// (#39).
+/// The OGS README's *What OGS computes* table quotes the mean saturation
+/// and the pressure range of the shipped results at seven times (OGS's sign,
+/// kPa): the files say so (#39).
 #[test]
 fn the_ogs_readme_quotes_the_shipped_pressure_ranges() {
     use a3d_init::model::Quantity;
@@ -335,6 +335,18 @@ fn the_ogs_readme_quotes_the_shipped_pressure_ranges() {
             .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
                 (a.min(-v), b.max(-v))
             });
+        // Mean S over the nodes, S from p by the README's retention curve
+        // (van Genuchten, p_b = 1/α = 1/0.51 kPa, n = 2.73, S 0.1 .. 1).
+        let n = 2.73;
+        let m = 1.0 - 1.0 / n;
+        let saturation = |p_ogs: f64| {
+            if p_ogs >= 0.0 {
+                1.0
+            } else {
+                0.1 + 0.9 * (1.0 + (-p_ogs * 0.51).powf(n)).powf(-m)
+            }
+        };
+        let mean_s = p.iter().map(|&v| saturation(-v)).sum::<f64>() / p.len() as f64;
         let range = if kpa(lo) == kpa(hi) {
             format!("| {} everywhere |", kpa(lo))
         } else {
@@ -344,6 +356,11 @@ fn the_ogs_readme_quotes_the_shipped_pressure_ranges() {
             .lines()
             .find(|l| l.starts_with(&format!("| {label} |")))
             .unwrap_or_default();
+        let mean = format!("| {label} | {mean_s:.2} |");
+        assert!(
+            row.starts_with(&mean),
+            "the OGS README's {label} h row should start `{mean}`: {row}"
+        );
         assert!(
             row.contains(&range),
             "the OGS README's {label} h row should hold `{range}`: {row}"
