@@ -48,7 +48,7 @@ pub struct FosArgs {
     /// materials run with their water ([`crate::mpm::liquid`]) instead of
     /// holding the pore pressures (not with `--zero-pwp`: a dry slope has
     /// no water to run).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "zero_pwp")]
     pub coupled: bool,
     /// Output folder (default `<dir>/fos`).
     #[arg(long)]
