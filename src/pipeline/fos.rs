@@ -472,7 +472,7 @@ fn compare(
             None => match super::map::equilibrium::strength_factor(
                 project,
                 states,
-                super::map::equilibrium::STRENGTH_FACTOR_TOLERANCE,
+                &super::map::equilibrium::EquilibriumOptions::default(),
             ) {
                 Ok(f) => (Some(f), None),
                 Err(e) => (None, Some(e.to_string())),

@@ -199,16 +199,7 @@ pub fn equilibrium_stress(
     if mixed == MixedState::Mean {
         states.copy_from_slice(&pore);
     }
-    let settings = EquilibriumSettings {
-        gravity: super::stress::gravity(project),
-        tolerance: options.tolerance,
-        max_iterations: options.max_iterations,
-        mixed: project.method == ComputationMethod::MpmMixed,
-        submerged_calculation: project
-            .cps
-            .as_ref()
-            .is_some_and(|c| c.submerged_calculation()),
-    };
+    let settings = solve_settings(project, options);
     let outcome = equilibrium::solve(&project.model, &project.points, &pore, &laws, &settings)
         .map_err(crate::pipeline::runner::runner_error)?;
     for (s, effective) in states.iter_mut().zip(&outcome.effective) {
@@ -222,7 +213,7 @@ pub fn equilibrium_stress(
     let strength_factor = if outcome.equilibrium {
         None
     } else {
-        Some(strength_factor(project, &pore, STRENGTH_FACTOR_TOLERANCE)?)
+        Some(strength_factor(project, &pore, options)?)
     };
     Ok(EquilibriumReport {
         chosen_because,
@@ -233,6 +224,21 @@ pub fn equilibrium_stress(
         strength_factor,
         outcome,
     })
+}
+
+/// The solve's settings for `project` (gravity, MPM-MIXED, submerged
+/// weights from its CPS) with the tolerance and iterations of `options`.
+fn solve_settings(project: &Project, options: &EquilibriumOptions) -> EquilibriumSettings {
+    EquilibriumSettings {
+        gravity: super::stress::gravity(project),
+        tolerance: options.tolerance,
+        max_iterations: options.max_iterations,
+        mixed: project.method == ComputationMethod::MpmMixed,
+        submerged_calculation: project
+            .cps
+            .as_ref()
+            .is_some_and(|c| c.submerged_calculation()),
+    }
 }
 
 /// The runner's out-of-balance force ratio of `states` at its first step
@@ -398,7 +404,7 @@ pub struct StrengthFactor {
     pub seconds: f64,
 }
 
-/// Relative width [`equilibrium_stress`] bisects the strength factor to.
+/// Relative width [`strength_factor`] bisects the factor to.
 pub const STRENGTH_FACTOR_TOLERANCE: f64 = 0.005;
 
 /// Bounds of the search of [`strength_factor`].
@@ -410,27 +416,20 @@ pub const F_MAX: f64 = 16.0;
 /// equilibrium solve still finding rest under full gravity, the pore state of
 /// `states` held (the runner's start: pwp and saturation; the total stress
 /// is not read). Bracketed from F = 1 by ×/÷ 1.25, then bisected to a
-/// relative width of `tolerance`. The elasticity is the map's
-/// (ν from K0). This is the fourth measure of #39 beside limit equilibrium,
+/// relative width of [`STRENGTH_FACTOR_TOLERANCE`]. The elasticity and the
+/// solve's tolerance are those of `options`, as in [`equilibrium_stress`]
+/// (whose failure the factor qualifies). This is the fourth measure of #39 beside limit equilibrium,
 /// its Davis variant and strength reduction: the implicit solve has no
 /// inertia and no damping, so where it and the explicit trials differ the
 /// difference is the trials' criterion or their dynamics.
 pub fn strength_factor(
     project: &Project,
     states: &[MpState],
-    tolerance: f64,
+    options: &EquilibriumOptions,
 ) -> Result<StrengthFactor, PipelineError> {
     let started = std::time::Instant::now();
-    let (laws, _) = laws(project, true)?;
-    let settings = EquilibriumSettings {
-        gravity: super::stress::gravity(project),
-        mixed: project.method == ComputationMethod::MpmMixed,
-        submerged_calculation: project
-            .cps
-            .as_ref()
-            .is_some_and(|c| c.submerged_calculation()),
-        ..EquilibriumSettings::default()
-    };
+    let (laws, _) = laws(project, options.k0_consistent)?;
+    let settings = solve_settings(project, options);
     let mut solves = 0;
     let mut rests = |factor: f64| -> Result<bool, PipelineError> {
         let mut reduced = laws.clone();
@@ -470,7 +469,7 @@ pub fn strength_factor(
         }
     }
     if let (Some(mut lo), Some(mut hi)) = (holds, fails) {
-        while hi / lo - 1.0 > tolerance {
+        while hi / lo - 1.0 > STRENGTH_FACTOR_TOLERANCE {
             let mid = 0.5 * (lo + hi);
             if rests(mid)? {
                 lo = mid;
