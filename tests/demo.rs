@@ -177,18 +177,7 @@ fn demo_runs_the_whole_chain() {
         .iter()
         .map(|d| {
             let dir = tmp.path().join(format!("depth{d}"));
-            common::run_ok(&[
-                "fos",
-                out.to_str().unwrap(),
-                "--zero-pwp",
-                "--min-depth",
-                d,
-                "--out",
-                dir.to_str().unwrap(),
-            ]);
-            let fos: serde_json::Value =
-                serde_json::from_str(&std::fs::read_to_string(dir.join("fos.json")).unwrap())
-                    .unwrap();
+            let (_, fos) = common::fos(&out, &dir, &["--zero-pwp", "--min-depth", d]);
             format!("{:.3}", fos["factor"].as_f64().unwrap())
         })
         .collect();
@@ -262,7 +251,7 @@ fn demo_runs_the_whole_chain() {
     // it: seconds again (not minutes, #39), within 2 % of limit equilibrium,
     // and the four measures the table quotes.
     let srm = tmp.path().join("srm_dry");
-    let (text, fos) = common::fos_srm(&out, &srm, &["--zero-pwp"]);
+    let (text, fos) = common::fos(&out, &srm, &["--method", "srm", "--zero-pwp"]);
     let factor = fos["factor"].as_f64().unwrap();
     assert!(
         (factor / dry - 1.0).abs() < 0.02,
@@ -272,7 +261,7 @@ fn demo_runs_the_whole_chain() {
     common::assert_four_measures_quoted("shipped slope, dry", &srm.join("fos.json"));
     // docs/slope.md's table of both states, the mapped one run here too.
     let mapped = tmp.path().join("srm_mapped");
-    common::fos_srm(&out, &mapped, &[]);
+    common::fos(&out, &mapped, &["--method", "srm"]);
     let slope_md = std::fs::read_to_string(
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/slope.md"),
     )

@@ -357,7 +357,7 @@ fn four_measures_on_acads_1a_agree_and_are_the_docs_table() {
     let (code, out) = common::run_map(&fixture, &fixture.join("nodes.csv"), &mapped, &[]);
     assert_eq!(code, 0, "{out}");
     let srm = tmp.path().join("fos");
-    let (text, fos) = common::fos_srm(&mapped, &srm, &[]);
+    let (text, fos) = common::fos(&mapped, &srm, &["--method", "srm"]);
     let c = &fos["comparison"];
     let le = c["limit_equilibrium"].as_f64().unwrap();
     let solve = c["equilibrium_solve"]["holds"].as_f64().unwrap();
@@ -433,7 +433,7 @@ fn fos_vs_time_table_is_the_csv_and_its_row_reruns() {
     let extra = ["--step", "time=1.2h", "--material-map", "mat0=silty_sand"];
     let (code, out) = common::run_map(&common::fixture("slope"), &ogs, &mapped, &extra);
     assert_eq!(code, 0, "{out}");
-    let (_, fos) = common::fos_srm(&mapped, &tmp.path().join("fos"), &[]);
+    let (_, fos) = common::fos(&mapped, &tmp.path().join("fos"), &["--method", "srm"]);
     let c = &fos["comparison"];
     let row = at("1.2");
     for (name, value) in [

@@ -305,17 +305,10 @@ pub fn assert_four_measures_quoted(slope: &str, fos_json: &Path) {
     }
 }
 
-/// Runs `fos DIR --method srm --out OUT` with `extra` flags (it must exit 0):
-/// (what it printed, its `fos.json`).
-pub fn fos_srm(dir: &Path, out: &Path, extra: &[&str]) -> (String, serde_json::Value) {
-    let mut args = vec![
-        "fos",
-        dir.to_str().unwrap(),
-        "--method",
-        "srm",
-        "--out",
-        out.to_str().unwrap(),
-    ];
+/// Runs `fos DIR --out OUT` with `extra` flags (it must exit 0): (what it
+/// printed, its `fos.json`).
+pub fn fos(dir: &Path, out: &Path, extra: &[&str]) -> (String, serde_json::Value) {
+    let mut args = vec!["fos", dir.to_str().unwrap(), "--out", out.to_str().unwrap()];
     args.extend_from_slice(extra);
     let text = run_ok(&args);
     let fos =
