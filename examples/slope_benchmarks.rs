@@ -2,7 +2,7 @@
 //! (#31): prints the table of factors against the published ones and draws
 //! each critical surface into `docs/slope-stability/`. Deterministic; run
 //! `cargo run --release --example slope_benchmarks`. The same problems are
-//! asserted in `tests/slope_stability.rs`.
+//! asserted in `tests/it/slope_stability.rs`.
 #![allow(clippy::print_stdout)]
 
 use std::path::Path;

@@ -9,7 +9,7 @@
 //! never reached the disk. After the rename, the parent folder is synced so the
 //! new name itself survives. An error from any sync is an error of the run,
 //! naming the path; the old output then stays in place. The order is recorded
-//! for tests ([`trace`], feature `testkit`), and `tests/durability.rs` also
+//! for tests ([`trace`], feature `testkit`), and `tests/it/durability.rs` also
 //! checks it with `strace` where the machine has it.
 //!
 //! **Atomic.** Output folders are built in a hidden staging folder beside the

@@ -1,5 +1,5 @@
 //! The published slope-stability verification problems (#31), one table for
-//! the tests (`tests/slope_stability.rs`) and the example that draws them
+//! the tests (`tests/it/slope_stability.rs`) and the example that draws them
 //! (`examples/slope_benchmarks.rs`). Every number's source is in
 //! `docs/slope-stability.md` §8.
 //!

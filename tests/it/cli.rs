@@ -1,7 +1,7 @@
 //! The real binary, run in temporary folders: exit codes, positioned errors on
 //! stderr, and output files that are complete or absent.
 
-mod common;
+use crate::common;
 use common::*;
 
 #[test]

@@ -5,7 +5,7 @@
 //! effective → total conversions. Then a column result mapped onto an Anura3D
 //! column and a time series read step by step (#26).
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::path::PathBuf;

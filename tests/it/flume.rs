@@ -3,7 +3,7 @@
 //! state mapped onto it runs out inside the mesh and comes to rest; the first
 //! 0.2 s agree with the real Anura3D kernel on the monitored MPs.
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::path::Path;

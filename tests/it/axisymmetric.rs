@@ -9,7 +9,7 @@
 //! MPs come from the real placement (`place`), so their volumes and masses are
 //! per radian (weight × det J × radius), as in Anura3D.
 
-mod common;
+use crate::common;
 use common::column::*;
 use common::{assert_contains, fixture, run as cli};
 
@@ -71,7 +71,7 @@ fn layer_averages(
 /// column: σyy = −γ·depth at mid-layer, σrr = σθθ = K0·σyy with K0 = ν/(1−ν)
 /// (u_r = 0 everywhere, so ε_θθ = 0 and the hoop stress is the lateral one),
 /// all within 1 %, and equal to the plane-strain column within 1 %. The top
-/// 20 % is left out, as in `tests/mpm.rs`: MPs that moved by u inside the
+/// 20 % is left out, as in `tests/it/mpm.rs`: MPs that moved by u inside the
 /// fixed mesh shift lumped weight between nodes, an error of about γ·u that
 /// is large only relative to the small stresses near the free surface.
 #[test]

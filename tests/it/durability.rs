@@ -4,9 +4,9 @@
 //! with the library's recorded trace and, where the machine lets it run, with
 //! `strace` on the real binary; an injected sync failure that leaves the old
 //! output in place; and a closed pipe. (The `fos --state` data loss is pinned
-//! in `tests/hardening.rs`, beside the other inputs-as-outputs cases.)
+//! in `tests/it/hardening.rs`, beside the other inputs-as-outputs cases.)
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

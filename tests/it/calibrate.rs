@@ -2,7 +2,7 @@
 //! determinism for a seed, the leave-one-out objective against its O(n²) oracle,
 //! the no-neighbour penalty, and bad inputs.
 
-mod common;
+use crate::common;
 use common::random::*;
 
 use a3d_init::calibrate::{AnnealSettings, calibrate};

@@ -2,7 +2,7 @@
 //! Anura3D sample (MAPF parsed back row by row, CPS changed in two keywords only,
 //! GOM byte-identical), and bad inputs that exit 2 and leave nothing behind.
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::path::{Path, PathBuf};

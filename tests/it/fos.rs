@@ -3,7 +3,7 @@
 //! base) and the critical height of a vertical cut in a cohesive soil; and the
 //! same factor on one and two threads.
 
-mod common;
+use crate::common;
 
 use a3d_init::model::{AnuraModel, MaterialPoint, MpState};
 use a3d_init::mpm::{FosOutcome, FosReport, FosSettings, strength_reduction};

@@ -3,7 +3,7 @@
 //! the dry clay base without FEM nodes takes pwp = 0, the calibrated h/l lies in
 //! the paper's 0.7–1.0 range for the cubic kernel, and no MP is a null point.
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::process::Command;

@@ -1,7 +1,7 @@
 //! GeoStudio `.gsz` projects read directly: the shipped sample end to end, a
 //! hand-made archive in imperial units, and corrupted archives (exit code 2).
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::io::Write;

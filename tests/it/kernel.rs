@@ -2,7 +2,7 @@
 //! normalisation, partition of unity, constant and linear fields, brute-force
 //! neighbour search, and the serial mapper (bit for bit, any thread count).
 
-mod common;
+use crate::common;
 use common::random::*;
 
 use a3d_init::kernel::grid::Grid;

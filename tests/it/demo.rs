@@ -3,7 +3,7 @@
 //! factors of safety printed as measured, and a folder that `inspect` reads
 //! back without warnings.
 
-mod common;
+use crate::common;
 
 use std::process::Command;
 

@@ -4,7 +4,7 @@
 //! and undrained compression (Δp = K_w/n·Δε_v, the load shared between the
 //! skeleton and the water in the ratio of their stiffnesses).
 
-mod common;
+use crate::common;
 use common::kernel_run::{run_kernel, vtk_scalars, vtk_vectors};
 use common::{anura3d_kernel_or_skip, run_map, run_ok, soil_spec};
 

@@ -1,7 +1,7 @@
 //! `a3d-init diff`: identical inputs, numbers below and above tolerance, a
 //! reordered GOM block (equal), a changed keyword, MAPF rows swapped, folders.
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::path::Path;

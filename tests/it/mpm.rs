@@ -7,7 +7,7 @@
 //! Every oracle is analytic or a second code path; tolerances are stated where
 //! they are used.
 
-mod common;
+use crate::common;
 use common::column::*;
 
 use a3d_init::model::{AnuraModel, MaterialPoint, MpState};

@@ -2,7 +2,7 @@
 //! `fixtures/anura3d/`: byte-identical round trips, typed views, edits that touch
 //! one block only, and malformed inputs that must give `path:line:col` errors.
 
-mod common;
+use crate::common;
 use common::{malformed, soil_spec};
 
 use std::path::{Path, PathBuf};

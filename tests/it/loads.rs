@@ -2,7 +2,7 @@
 //! material points, scaled by the CPS multipliers, against closed forms and
 //! against the real Anura3D kernel run on the same project.
 
-mod common;
+use crate::common;
 use common::anura3d_kernel_or_skip;
 use common::kernel_run::{run_in_place, vtk_scalars, vtk_vectors};
 

@@ -3,7 +3,7 @@
 //! shipped Anura3D run, and property tests over random elements for every
 //! supported count (inside the element, volumes sum to its measure).
 
-mod common;
+use crate::common;
 use common::*;
 
 use a3d_init::element::{LocalPoint, mesh_element};

@@ -5,7 +5,7 @@
 //! pressures, and the small CLI fixes (`inspect --fem` extent, unreadable `.gsz`,
 //! `diff` with a missing path).
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::io::Write;

@@ -8,7 +8,7 @@
 //! (`--stress equilibrium`, `auto`, exit 1, report.json, verify) and the real
 //! Anura3D kernel (several hundred undamped steps, where built) are at the end.
 
-mod common;
+use crate::common;
 use common::kernel_run::kernel_displacement;
 use common::*;
 

@@ -3,7 +3,7 @@
 //! alone, without the CLI, and their results equal to what the binary writes
 //! for the same inputs.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

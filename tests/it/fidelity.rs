@@ -5,7 +5,7 @@
 //! kernel would refuse them. The real kernel, where built, is the oracle
 //! (`anura3d_kernel_holds_what_verify_says`).
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::path::{Path, PathBuf};

@@ -8,12 +8,12 @@
 //!
 //! CI runs `A3D_FUZZ_CASES` cases per reader (default 400, about 10 s
 //! in the debug test profile on two cores). For a release run raise it, e.g.
-//! `A3D_FUZZ_CASES=20000 A3D_FUZZ_SEED=7 cargo test --release --test fuzz`.
+//! `A3D_FUZZ_CASES=20000 A3D_FUZZ_SEED=7 cargo test --release --test it fuzz::`.
 //! A failing case is written to `target/fuzz-failures/` and its reader, seed and
 //! case number are printed; every crash found becomes a named test in
-//! `tests/hardening.rs`.
+//! `tests/it/hardening.rs`.
 
-mod common;
+use crate::common;
 use common::{Watchdog, fixture, mini_regions_csv, run_watched};
 
 use std::io::Write;

@@ -3,7 +3,7 @@
 //! out of balance with the places named (exit 1); a state from another model is
 //! refused (exit 2).
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::path::{Path, PathBuf};

@@ -13,7 +13,7 @@
 //! expect: ok | error <text the message holds>
 //! ```
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

@@ -6,7 +6,7 @@
 //! Every run is killed after 30 s, so a hang fails instead of blocking CI.
 //! At the foot, the input defects of #24 and #30, one test per bug.
 
-mod common;
+use crate::common;
 use common::{Watchdog, assert_contains, fixture, mini_regions_csv, run_map, run_watched};
 
 use std::io::Write;

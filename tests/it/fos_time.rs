@@ -4,7 +4,7 @@
 //! factor of safety that falls monotonically (within 0.01), crosses 1, and is
 //! bisected in time to the tolerance asked; the files are written.
 
-mod common;
+use crate::common;
 use common::*;
 
 use std::path::{Path, PathBuf};
