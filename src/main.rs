@@ -1,4 +1,4 @@
-//! The `a3d-init` binary: a thin shell around [`a3d_init::cli::run`].
+//! The `a3d-init` binary: a thin shell around [`a3d_init::cli::main`].
 
 fn main() -> std::process::ExitCode {
     a3d_init::cli::main()

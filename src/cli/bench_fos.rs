@@ -1,4 +1,4 @@
-//! `a3d-init bench fos`: the speed figures of #31 on the shipped slope
+//! `a3d-init bench fos`: the speed figures of limit equilibrium on the shipped slope
 //! (`fixtures/slope`, run from the repository root, or `--dir` naming the
 //! model folder): its Morgenstern–Price factor with the default search (about
 //! 5,000 trial circles, then the non-circular refinement) on the stand-in

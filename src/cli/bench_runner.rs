@@ -1,4 +1,4 @@
-//! `a3d-init bench runner`: the explicit runner's throughput (#27) on a
+//! `a3d-init bench runner`: the explicit runner's throughput on a
 //! generated saturated column of about `--points` MPs (TRI3, 3 MPs per
 //! element, a hydrostatic, geostatic state), drained (pore pressure frozen)
 //! and two-phase coupled (`saturated_material_coupled`, κ = 1e-12 m²,

@@ -104,7 +104,7 @@ fn print_summary(out: &mut impl Write, s: &ProjectSummary) -> std::io::Result<()
             .map(|v| format!(", CPS {v}"))
             .unwrap_or_default()
     )?;
-    // #14: the names the ready-to-run project uses, and why.
+    // The names the ready-to-run project uses, and why.
     let names = &s.output_names;
     writeln!(
         out,
@@ -220,7 +220,7 @@ fn print_fem(out: &mut impl Write, s: &FemSummary) -> std::io::Result<()> {
     for n in &s.notes {
         writeln!(out, "note       {n}")?;
     }
-    // #14: the coordinate range of the table.
+    // The coordinate range of the table.
     if let Some(extent) = &s.extent {
         writeln!(out, "extent     {extent}")?;
     }

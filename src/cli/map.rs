@@ -119,7 +119,7 @@ pub struct MapArgs {
     /// smaller FEMs always get one.
     #[arg(long)]
     pub fem_vtu: bool,
-    /// Without a CPS beside the model, write a complete default CPS for the model's version (#14).
+    /// Without a CPS beside the model, write a complete default CPS for the model's version.
     #[arg(long)]
     pub generate_cps: bool,
     /// `--step failure`: the method of slices of FS(t).

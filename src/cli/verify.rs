@@ -66,7 +66,7 @@ pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
     let source = args.inputs.source()?;
     if args.fos {
         let started = Instant::now();
-        // Pore pressures held, as `fos` holds them (#39).
+        // Pore pressures held, as `fos` holds them.
         let options = FosOptions {
             damping: args.damping,
             ..FosOptions::srm()

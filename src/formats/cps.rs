@@ -236,7 +236,7 @@ impl CpsDocument {
     /// [−1, 1] and a length above 1.01, so `0 -9.81` is not a vector it reads,
     /// and `0 -0.5` would halve the body forces while the unit weights keep
     /// g); a3d-init's geostatic stress and runner take gravity as −g·ŷ. Every
-    /// other vector is an error at its value's line and column (#24).
+    /// other vector is an error at its value's line and column.
     pub fn check_gravity_vector(&self, n_dim: usize) -> Result<(), FormatError> {
         const KEYWORD: &str = "$$GRAVITY_VECTOR";
         let Some(b) = self.doc.find(KEYWORD, true) else {
@@ -281,7 +281,7 @@ impl CpsDocument {
     /// `<project>.PAR_<id>`): the first n values, each a positive integer;
     /// none when n is absent or ≤ 0 (the kernel then reads one dummy value).
     /// A bad count or id, a missing id or one above `n_points` is an error at
-    /// its line and column (#39).
+    /// its line and column.
     pub fn output_material_points(&self, n_points: usize) -> Result<Vec<u32>, FormatError> {
         const COUNT: &str = "$$OUTPUT_NUMBER_OF_MATERIAL_POINTS";
         const IDS: &str = "$$OUTPUT_MATERIAL_POINTS";
@@ -575,7 +575,7 @@ mod tests {
             "### Anura3D_2021 ###\n$$k0_procedure\n0\n$$GRAVITY_ACCELERATION\n9.80665\n$$HOMOGENEOUS_LOCAL_DAMPING\n1 0.75\n$$MP_STRESS_INITIALIZATION_FROMFILE\n1\n$$END\n"
         );
     }
-    /// #24: a `$$GRAVITY_VECTOR` not along −y was accepted (map computed −y
+    /// A `$$GRAVITY_VECTOR` not along −y was accepted (map computed −y
     /// geostatic stress, verify ran with −y gravity): refused at its value.
     #[test]
     fn gravity_vector_not_along_minus_y_is_refused_at_its_value() {

@@ -1,7 +1,7 @@
 //! Checks on a set of node coordinates that the readers apply: a node far
-//! outside the others, whose extent cannot be meant ([`far_outlier`], #30:
+//! outside the others, whose extent cannot be meant ([`far_outlier`]:
 //! FEM tables, the mesh nodes a `node.csv` is joined to, GOM nodes), and
-//! coincident nodes ([`first_coincident`], #24: FEM tables and joined mesh
+//! coincident nodes ([`first_coincident`]: FEM tables and joined mesh
 //! nodes). Both take any finite coordinates (no overflow) and cost at most
 //! O(n log n).
 
@@ -103,7 +103,7 @@ impl std::fmt::Display for FarNode {
 /// nodes are, unlike an interquartile range of four), or `None`. Such an extent cannot be meant (one
 /// node at 1e308 beside a slope of 50 m): it would also make every other pair
 /// of nodes coincident within 1e-9 of the diagonal, and a grid or bins sized
-/// by the extent useless, so the readers refuse it first (#30). The medians
+/// by the extent useless, so the readers refuse it first. The medians
 /// come from at most about 4096 evenly strided nodes: O(n) with a small
 /// constant, and deterministic.
 pub fn far_outlier(positions: &[[f64; 3]]) -> Option<FarNode> {

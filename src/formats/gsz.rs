@@ -278,7 +278,7 @@ impl std::str::FromStr for StepChoice {
         }
         if let Some(t) = s.strip_prefix("time=") {
             // NaN, infinities and overflowing numbers (`1e400`) are refused:
-            // no saved step is at such a time (#24).
+            // no saved step is at such a time.
             return match parse_time(t) {
                 Some(v) if v.is_finite() => Ok(StepChoice::Time(v)),
                 Some(_) => Err(format!(
@@ -296,7 +296,7 @@ impl std::str::FromStr for StepChoice {
 }
 
 /// A time with an optional unit (`5616`, `5616s`, `93.6min`, `1.56h`, `0.065d`)
-/// in seconds (#26).
+/// in seconds.
 pub fn parse_time(text: &str) -> Option<f64> {
     let t = text.trim();
     if let Ok(seconds) = t.parse::<f64>() {
@@ -571,7 +571,7 @@ pub fn join_mesh(
     for (i, &k) in nodes.ids.iter().enumerate() {
         nodes.positions[i] = mesh[k as usize - 1];
     }
-    // A listed node far outside the others cannot be meant (#30).
+    // A listed node far outside the others cannot be meant.
     if let Some(far) = super::extent::far_outlier(&nodes.positions) {
         return Err(ParseError::at(
             csv_path,
@@ -582,7 +582,7 @@ pub fn join_mesh(
         .into());
     }
     // Two rows at one mesh point would give it two values: refused as the
-    // same rows with X and Y columns are (#24).
+    // same rows with X and Y columns are.
     if let Some((first, second)) = super::extent::first_coincident(&nodes.positions) {
         let p = nodes.positions[first];
         return Err(ParseError::at(

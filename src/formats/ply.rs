@@ -386,7 +386,7 @@ fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, 
     // Every element after `node` is walked, read or skipped, and the data
     // must end with the last one: a count that does not match the data (a
     // `node` count one too large reads a node from the element block) is an
-    // error whatever is asked for (#24).
+    // error whatever is asked for.
     let mut offset = offset + need;
     let mut cells = Vec::new();
     let mut cells_read = false;

@@ -109,7 +109,7 @@ impl Grid {
         let extent = [0, 1, 2].map(|k| (hi[k] - lo[k]).min(f64::MAX));
         // Keep the cell count near the point count (a tiny radius in a wide
         // cloud, one point far from the rest): memory proportional to the
-        // points whatever the coordinates and the radius (#30).
+        // points whatever the coordinates and the radius.
         let max_cells = (4 * n + 64) as f64;
         loop {
             let count: f64 = (0..dim).map(|k| (extent[k] / cell).floor() + 1.0).product();
@@ -265,7 +265,7 @@ impl Grid {
         // No row or run reaches past the grid from a query cell, which
         // [`Grid::cell`] clamps to two cells outside: the reach is bounded by
         // the grid's size, so the stencil's rows are at most about nine per
-        // cell, whatever the radius, slack and cell (#30).
+        // cell, whatever the radius, slack and cell.
         let span = self.dims[0].max(self.dims[1]).max(self.dims[2]) + 2;
         let reach = |room: f64| 1 + ((room + s2) / c).min(span as f64) as i64;
         let most = reach(r);

@@ -153,7 +153,7 @@ fn build_indices(nodes: &NodeCloud<'_>, search: Search, radius: f64) -> Vec<Inde
         }
         // A coarse grid (a radius tiny against the cloud, a node far from the
         // rest) would test most nodes for every point: its group is searched
-        // with the k-d tree, which gives the same lists (#30).
+        // with the k-d tree, which gives the same lists.
         let tree = (search == Search::KdTree || grid.is_coarse()).then(|| {
             let mut rank = vec![0u32; positions.len()];
             for (pos, &local) in grid.order().iter().enumerate() {
@@ -505,7 +505,7 @@ pub fn nearest_other_distances(positions: &[[f64; 3]], dim: usize) -> Vec<f64> {
     let volume: f64 = (0..dim).map(|k| (hi[k] - lo[k]).max(1e-300)).product();
     let cell = (2.0 * volume / positions.len() as f64).powf(1.0 / dim as f64);
     // A grid whose cells hold most points (one point far from the rest)
-    // would compare them all pairwise: the k-d tree answers then (#30).
+    // would compare them all pairwise: the k-d tree answers then.
     let n = positions.len() as u64;
     let grid = (cell.is_finite() && cell > 0.0).then(|| Grid::new(positions, dim, cell));
     let mut found = match grid {

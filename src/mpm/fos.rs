@@ -14,7 +14,7 @@
 //! Every other material model (linear elasticity, strain-softening
 //! Mohr–Coulomb) is left as it is and named in the report.
 //!
-//! **Start (#31).** A mapped state is seldom in equilibrium on the runner's
+//! **Start.** A mapped state is seldom in equilibrium on the runner's
 //! mesh (a geostatic stress under a slope is not), and a trial that starts out
 //! of balance moves for reasons that have nothing to do with F. So the state
 //! first settles for one window with every strength divided by
@@ -22,7 +22,7 @@
 //! still settles); its effective stresses, on the original MP positions, with
 //! the frozen pore pressures, are the start of every trial.
 //!
-//! **Measure (#31).** A trial runs the fixed window W = max(20 T₀, 4 √(H/g))
+//! **Measure.** A trial runs the fixed window W = max(20 T₀, 4 √(H/g))
 //! (T₀ = 4H/c the fundamental-period estimate, H the height of the active
 //! elements) from that start; its measure δ(F) is the
 //! [`FosSettings::quantile`] (0.98) quantile of the MPs' displacement

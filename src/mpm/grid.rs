@@ -384,7 +384,7 @@ impl<const D: usize> SpatialHash<D> {
         };
         // No more entries than a budget proportional to the elements (elements
         // that span many cells: one node far from the rest): memory O(elements)
-        // whatever the coordinates (#30). An ordinary mesh stays well below.
+        // whatever the coordinates. An ordinary mesh stays well below.
         let budget = 32 * elements.len() as u64 + 1024;
         let mut cells = sized(cell_size);
         loop {
@@ -584,7 +584,7 @@ mod tests {
         ));
     }
 
-    /// #30: a fan of triangles sharing one apex far from the rest spans every
+    /// A fan of triangles sharing one apex far from the rest spans every
     /// cell of the spatial hash along x; its entries (were elements × 8·
     /// elements, 32 million here) stay within a budget proportional to the
     /// elements, and location still agrees with the brute force.

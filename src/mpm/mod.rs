@@ -7,8 +7,12 @@
 //! nodal masses, gravity along −y,
 //! nodal fixities from the GOM, local (Cundall) damping as Anura3D applies it,
 //! and a MUSL update ([`step`] documents the scheme). Material points carry the
-//! effective stress σ′; the pore pressure p and the saturation S are frozen
-//! (drained analysis). What of p enters the internal force, and which weight
+//! effective stress σ′ and the pore pressure p: the water of two-phase,
+//! undrained and unsaturated two-phase materials runs ([`liquid`]: its own
+//! velocity, Darcy's drag, p from both phases' volumetric strains, seepage
+//! faces in [`seepage`]); drained materials, and every material under
+//! [`RunSettings::frozen_pore_pressure`], hold p and S at their initial values.
+//! What of p enters the internal force, and which weight
 //! gravity pulls on, is the kernel's choice for the model's kind of analysis
 //! ([`loading`]: σ′ with the dry or buoyant weight in a one-phase analysis,
 //! Bishop's σ′ + S·p with the mixture's weight in a multiphase one).
@@ -200,7 +204,7 @@ pub struct RunSettings {
     /// the rest with the solid's (`run`, to follow the kernel's dynamics).
     /// Off (the mixture's force damped as one) for the quasi-static checks:
     /// where the two parts oppose, the split holds a settling model short
-    /// of rest as friction would and its residual never falls (#39).
+    /// of rest as friction would and its residual never falls.
     pub split_mixture_damping: bool,
     /// MPs whose displacement [`run()`] records at every recorded step
     /// (0-based indices; CPS `$$OUTPUT_MATERIAL_POINTS`), none by default.

@@ -31,7 +31,10 @@
 //! Determinism: every per-MP computation runs in parallel (rayon) into per-MP
 //! buffers, and all sums over MPs (scatter to nodes, energies, counts) run
 //! serially in MP order, so results are bit-identical for any thread count.
-//! The pore pressure and saturation are frozen (drained analysis).
+//! The water of two-phase materials enters between these phases (the liquid's
+//! nodal momentum beside the solid's, its drag taken implicitly, p updated
+//! from both phases' strains: [`super::liquid`], `liquid_grid`, `seepage`);
+//! drained materials hold their pore pressure and saturation.
 
 // Numerical kernels index several small arrays with one loop counter.
 #![allow(clippy::needless_range_loop)]

@@ -126,7 +126,7 @@ pub fn load(options: &FemOptions) -> Result<LoadedFem, PipelineError> {
                 let (mut nodes, mut report) = fem_csv::read_csv(path, &options.csv)?;
                 if !report.has_coordinates {
                     match &mesh {
-                        // Rows join mesh nodes by `Node` id: a subset of the mesh is fine (#14).
+                        // Rows join mesh nodes by `Node` id: a subset of the mesh is fine.
                         Some(mesh) => notes.extend(crate::formats::gsz::attach_mesh_by_id(
                             &mut nodes,
                             &mut report,

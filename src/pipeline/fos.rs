@@ -70,7 +70,7 @@ pub struct FosOptions {
     /// Every pore pressure set to zero (σ′ = σ) before the analysis.
     pub zero_pwp: bool,
     /// Strength reduction: hold every pore pressure, as limit equilibrium
-    /// does (the default, #39). Off, two-phase coupled and undrained
+    /// does (the default). Off, two-phase coupled and undrained
     /// materials run with their water; with `zero_pwp` they are held anyway
     /// (a dry slope has no water to run).
     pub drained: bool,
@@ -137,7 +137,7 @@ pub struct Comparison {
     /// should give; `None` when it could not be computed.
     pub limit_equilibrium_davis: Option<f64>,
     /// The largest strength factor at which the implicit equilibrium solve
-    /// still finds rest with the same pore pressures held (#39); `None`
+    /// still finds rest with the same pore pressures held; `None`
     /// where the solve does not take the model.
     pub equilibrium_solve: Option<super::map::equilibrium::StrengthFactor>,
     /// Why there is no `equilibrium_solve`.

@@ -1,4 +1,4 @@
-//! `fos-time` as a library call (#31): the factor of safety over a time series
+//! `fos-time` as a library call: the factor of safety over a time series
 //! of FEM pore-pressure fields on one Anura3D model, by limit equilibrium
 //! (seconds for the whole curve), and the first time it falls to 1.
 //!
@@ -540,7 +540,7 @@ fn srm_at(
         ..MapConfig::default()
     };
     let mapped = super::map::map(again, fem, &config)?;
-    // As `fos --method srm` runs it: the pore pressures held (#39).
+    // As `fos --method srm` runs it: the pore pressures held.
     let mut settings = super::fos::FosOptions {
         damping: options.srm_damping,
         ..super::fos::FosOptions::srm()

@@ -47,11 +47,11 @@ impl Project {
         let gom = GomDocument::read(&files.gom)?;
         let cps = files.cps.as_deref().map(CpsDocument::read).transpose()?;
         let (model, mut info) = gom.model()?;
-        // Gravity must point along −y for the geostatic stress and the runner (#24).
+        // Gravity must point along −y for the geostatic stress and the runner.
         if let Some(cps) = &cps {
             cps.check_gravity_vector(model.mesh.dimension.n_dim())?;
         }
-        // File-naming problems (#14) come first among the warnings.
+        // File-naming problems come first among the warnings.
         info.warnings.splice(0..0, files.warnings.iter().cloned());
         let method = match &cps {
             Some(cps) => {

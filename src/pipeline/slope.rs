@@ -1,4 +1,4 @@
-//! Limit equilibrium on an Anura3D model (#31): the section from the GOM mesh
+//! Limit equilibrium on an Anura3D model: the section from the GOM mesh
 //! (its elements with their materials; the ground is the mesh's upper
 //! boundary), unit weights as Anura3D forms them from each material's
 //! densities, porosity and the degree of saturation, the pore pressure at the

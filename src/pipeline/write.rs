@@ -62,7 +62,7 @@ pub fn write_project(
     let mut written = Vec::new();
     // File names as Anura3D will look for them; the model's own CPS with two
     // switches changed, or a generated one (--generate-cps); a default OPD for a
-    // 2025 CPS without one (#14).
+    // 2025 CPS without one.
     let names = project.files.output_names(&project.gom_version);
     out.copy(&project.files.gom, &names.gom)?;
     written.push(names.gom.clone());

@@ -79,7 +79,7 @@ impl<'m> VerticalIndex<'m> {
         // Never more than 4 bins per element along an axis (a stretched box,
         // one node far from the rest), and no more bin entries than a budget
         // proportional to the elements: memory O(elements) whatever the
-        // coordinates (#30). Neither binds on an ordinary mesh.
+        // coordinates. Neither binds on an ordinary mesh.
         cell = cell.max(span[0].max(span[1]) / (4.0 * n_el as f64));
         let boxes: Vec<Option<([f64; 2], [f64; 2])>> = (0..mesh.n_elements())
             .map(|e| {
@@ -673,7 +673,7 @@ mod tests {
         );
     }
 
-    /// #30: one node of a 3D mesh at z = 1e308 made the vertical index ask
+    /// One node of a 3D mesh at z = 1e308 made the vertical index ask
     /// for 10^155 bins ("capacity overflow"); its bins and entries stay
     /// proportional to the elements. (The GOM reader refuses such a node
     /// first; the index must not depend on that.)

@@ -1,4 +1,4 @@
-//! The published slope-stability verification problems (#31), one table for
+//! The published slope-stability verification problems, one table for
 //! the tests (`tests/it/slope_stability.rs`) and the example that draws them
 //! (`examples/slope_benchmarks.rs`). Every number's source is in
 //! `docs/slope-stability.md` §8.

@@ -54,7 +54,7 @@ pub struct CsvOptions {
 }
 
 /// Parses `x=X (m),y=Y,pwp=PWP` into a column mapping. A field given twice, or a
-/// header given to two fields, is an error (#15).
+/// header given to two fields, is an error.
 pub fn parse_columns_option(s: &str) -> Result<Vec<(Field, String)>, String> {
     let columns = s
         .split(',')

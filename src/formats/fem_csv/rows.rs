@@ -269,7 +269,7 @@ pub(super) fn slow_row(schema: &Schema<'_>, line: &str, line_no: usize, rows: &m
             },
             None => {
                 match fields.get(c) {
-                    // Present but empty: an error when other rows have ids (#24).
+                    // Present but empty: an error when other rows have ids.
                     Some((col, _)) => {
                         if rows.first_empty_id.is_none() {
                             rows.first_empty_id = Some((line_no, *col));

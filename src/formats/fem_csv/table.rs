@@ -294,7 +294,7 @@ pub(super) fn parse_csv_chunked(
         .into());
     }
     // A row without a field that other rows fill (fewer fields than the header)
-    // is an error at its end; a cell present but empty is not (#15).
+    // is an error at its end; a cell present but empty is not.
     for (t, c) in schema.tracked().into_iter().enumerate() {
         if let (Some(c), Some((line, col, n))) = (c, first_short[t])
             && has_value[t]
@@ -316,7 +316,7 @@ pub(super) fn parse_csv_chunked(
     // partly present columns are an error at the first row without a value.
     let mut warnings = Vec::new();
     // The id column likewise: a row without an id would silently take its row
-    // number, and with --fem-mesh another node's coordinates (#24).
+    // number, and with --fem-mesh another node's coordinates.
     let ids_given = has_value[value_cols.len()];
     if let Some(c) = cnode {
         match first_empty_id {

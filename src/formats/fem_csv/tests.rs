@@ -176,7 +176,7 @@ fn error_list_is_cut_as_a_serial_pass_would() {
 
 #[test]
 fn row_missing_its_last_field_is_a_positioned_error() {
-    // #15: fewer fields than the header while other rows fill the column.
+    // Fewer fields than the header while other rows fill the column.
     for (table, expected) in [
         (
             "X,Y,PWP\n0,0,1\n1,0\n0,1,3\n",
@@ -224,7 +224,7 @@ fn duplicate_column_assignments_are_errors() {
     );
 }
 
-/// #24: an empty or blank `Node` cell silently took the row number as its id
+/// An empty or blank `Node` cell silently took the row number as its id
 /// (with `--fem-mesh`, another node's coordinates). A partly empty id column
 /// is an error at the empty cell, from the fast and the field-by-field row
 /// paths alike and for any chunking; a wholly empty one numbers rows, with a
@@ -301,9 +301,9 @@ fn empty_node_id_is_a_positioned_error_not_the_row_number() {
     );
 }
 
-/// #24 (coincident mesh nodes): the duplicate check shared by tables and
+/// Coincident mesh nodes: the duplicate check shared by tables and
 /// meshes finds a pair within 1e-9 of the diagonal on every axis and never a
-/// false pair on a structured grid (whose columns share an x); #30: a node
+/// false pair on a structured grid (whose columns share an x); a node
 /// 10^6 spreads away from the others is found by `far_outlier`.
 #[test]
 fn first_coincident_finds_pairs_and_only_pairs() {

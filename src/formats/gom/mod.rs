@@ -490,7 +490,7 @@ impl GomDocument {
                 })?;
                 Ok(xyz)
             })?;
-        // A node far outside the others cannot be meant (#30): refused at
+        // A node far outside the others cannot be meant: refused at
         // its coordinate.
         if let Some(far) = super::extent::far_outlier(&nodes) {
             let i = rows[far.index];

@@ -84,7 +84,7 @@ pub struct EquilibriumReport {
     /// divided by with a state at rest ([`strength_factor`]; below 1, the
     /// strengths they would need to be raised by 1/F). With the pore
     /// pressures held, the gravity multiplier `load_factor` says little (the
-    /// water pushes whatever gravity does), this does (#39).
+    /// water pushes whatever gravity does), this does.
     pub strength_factor: Option<StrengthFactor>,
     #[serde(flatten)]
     pub outcome: EquilibriumOutcome,
@@ -256,7 +256,7 @@ fn first_step_ratio(project: &Project, states: &[MpState]) -> Result<f64, Pipeli
 }
 
 /// Where the solve found no state at rest: its best state must not be
-/// further out of balance than the geostatic start (#39). Both are measured
+/// further out of balance than the geostatic start. Both are measured
 /// as `verify` measures them, by the runner's first step; when the
 /// geostatic state (σv from the overburden, σh = K0·σ'v + S·p, the same pore
 /// state) is closer to balance, `states` takes it. Returns a note, or a
@@ -418,7 +418,7 @@ pub const F_MAX: f64 = 16.0;
 /// is not read). Bracketed from F = 1 by ×/÷ 1.25, then bisected to a
 /// relative width of [`STRENGTH_FACTOR_TOLERANCE`]. The elasticity and the
 /// solve's tolerance are those of `options`, as in [`equilibrium_stress`]
-/// (whose failure the factor qualifies). This is the fourth measure of #39 beside limit equilibrium,
+/// (whose failure the factor qualifies). This is the fourth measure of stability beside limit equilibrium,
 /// its Davis variant and strength reduction: the implicit solve has no
 /// inertia and no damping, so where it and the explicit trials differ the
 /// difference is the trials' criterion or their dynamics.

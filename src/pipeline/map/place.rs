@@ -85,7 +85,7 @@ pub fn place(
         }
     }
     // A FEM that does not reach the model: name the file, both extents and a
-    // unit or offset hint (#14).
+    // unit or offset hint.
     let reach = {
         // The MPs the kernel maps; a copy only when some are left out.
         let reached: Cow<'_, [[f64; 3]]> = match &point_groups {

@@ -1,5 +1,5 @@
 //! Stage 7 of [`super::map`]: is the mapped state believable? The pwp field
-//! checked against hydrostatics (warnings, never errors, #14; the checks are
+//! checked against hydrostatics (warnings, never errors; the checks are
 //! in [`crate::state::plausibility`]), and every value finite (an error: nothing
 //! is written).
 

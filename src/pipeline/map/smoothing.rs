@@ -91,7 +91,7 @@ pub fn choose_h(
                     kernel.support() * h
                 )));
             }
-            // A support far below the node spacing reaches no node (#24).
+            // A support far below the node spacing reaches no node.
             if spacing > 0.0 && kernel.support() * h < 1e-3 * spacing {
                 return Err(PipelineError::Option(format!(
                     "smoothing length h = {h:?} m: the kernel support {:e} m is below a thousandth of the node spacing l = {spacing:.4} m, so no MP would have a FEM node in reach; give an h near l, or calibrate h",
