@@ -11,7 +11,7 @@
 use super::b_matrix::corner_force;
 use super::grid::{Grid, GridElement};
 use super::liquid::Water;
-use super::step::{Particle, per_live_mp, scatter, velocities};
+use super::particle::{Particle, per_live_mp, scatter, velocities};
 
 /// Per-corner P2G contribution of the liquid of one coupled MP.
 #[derive(Clone, Copy, Debug)]
@@ -68,6 +68,47 @@ pub(super) struct LiquidGrid<const D: usize, const NC: usize> {
 }
 
 impl<const D: usize, const NC: usize> LiquidGrid<D, NC> {
+    /// The liquid's nodal arrays on `grid` for `n_points` MPs, its fixities
+    /// from the GOM's `$$START_FIXITY_*_LIQUID` (and, on the axis of an
+    /// axisymmetric model, no radial flow).
+    pub(super) fn new(
+        grid: &Grid<D, NC>,
+        model: &crate::model::AnuraModel,
+        axisymmetric: bool,
+        n_points: usize,
+    ) -> Self {
+        let n_nodes = grid.n_nodes();
+        LiquidGrid {
+            fixed: (0..n_nodes)
+                .map(|node| {
+                    let mut d = [false; D];
+                    let mesh_node = grid.mesh_node[node] as usize;
+                    if let Some(f) = model.liquid_fixity.get(mesh_node) {
+                        d.copy_from_slice(&f[..D]);
+                    }
+                    // On the axis of an axisymmetric model the water cannot
+                    // flow radially either.
+                    if axisymmetric && grid.fixed[node][0] && model.mesh.nodes[mesh_node][0] == 0.0
+                    {
+                        d[0] = true;
+                    }
+                    d
+                })
+                .collect(),
+            mass: vec![0.0; n_nodes],
+            water: vec![0.0; n_nodes],
+            drag: vec![0.0; n_nodes],
+            advective: vec![0.0; n_nodes],
+            porous: vec![[0.0; D]; n_nodes],
+            momentum: vec![[0.0; D]; n_nodes],
+            force: vec![[0.0; D]; n_nodes],
+            acceleration: vec![[0.0; D]; n_nodes],
+            velocity: vec![[0.0; D]; n_nodes],
+            p2g: vec![[LiquidContribution::ZERO; NC]; n_points],
+            remap: vec![[[0.0; D]; NC]; n_points],
+        }
+    }
+
     /// P2G of the coupled MPs' liquid (serial scatter in MP order), then the
     /// nodal n·ρw·S of the advective flux over the nodal solid mass.
     pub(super) fn p2g(

@@ -6,7 +6,7 @@
 //! S, k_r, the mixture's weight and p's force term follow from the mean p, as
 //! the kernel updates them after the smoothing.
 
-use super::step::{Particle, settle_water};
+use super::particle::{Particle, settle_water};
 
 /// Per-element sums, reused from step to step.
 pub(super) struct ElementSums {

@@ -38,6 +38,7 @@ pub mod loads;
 pub mod material;
 mod mixed;
 pub mod mohr_coulomb;
+mod particle;
 mod principal;
 pub mod run;
 pub mod seepage;

@@ -140,7 +140,7 @@ pub struct Snapshot {
     pub displacements: Vec<[f64; 3]>,
     /// Effective stress σ′ (xx, yy, zz, xy, yz, xz; kPa).
     pub stresses: Vec<[f64; 6]>,
-    /// Has yielded: accumulated plastic strain above 1e-6 (`step::PLASTIC_STRAIN_FLOOR`).
+    /// Has yielded: accumulated plastic strain above 1e-6 (`particle::PLASTIC_STRAIN_FLOOR`).
     pub plastic: Vec<bool>,
     /// Pore pressure (kPa, Anura3D's sign: negative in compression).
     pub pore_pressures: Vec<f64>,

@@ -17,7 +17,7 @@
 
 use super::grid::{Grid, NO_ELEMENT};
 use super::liquid_grid::LiquidGrid;
-use super::step::Particle;
+use super::particle::Particle;
 
 /// A bounding box `[min, max]` per axis.
 pub type Area = [[f64; 2]; 3];

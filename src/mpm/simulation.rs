@@ -30,7 +30,7 @@ pub(crate) struct PointView {
     pub stress: [f64; 6],
     /// The 0-based element it is in now.
     pub element: u32,
-    /// Has yielded: accumulated plastic strain above 1e-6 (`step::PLASTIC_STRAIN_FLOOR`).
+    /// Has yielded: accumulated plastic strain above 1e-6 (`particle::PLASTIC_STRAIN_FLOOR`).
     pub plastic: bool,
     /// Left the mesh.
     pub lost: bool,

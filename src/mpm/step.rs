@@ -44,78 +44,18 @@ use rayon::prelude::*;
 use super::b_matrix::{corner_force, strain_increment_at};
 use super::grid::Grid;
 use super::liquid::Water;
-use super::liquid_grid::{LiquidContribution, LiquidGrid, advective_flux};
+use super::liquid_grid::{LiquidGrid, advective_flux};
 use super::loading::Analysis;
 use super::loads::ExternalLoads;
 use super::material::SolidModel;
 use super::mixed::ElementSums;
+use super::particle::{
+    MIN_CHUNK, PLASTIC_STRAIN_FLOOR, Particle, per_live_mp, scatter, settle_water, velocities,
+};
 use super::seepage::SurfaceFlow;
 use super::{MpmError, RunSettings};
 use crate::element::Element;
 use crate::model::{AnuraModel, Dimension, MaterialPoint, MpState};
-
-/// MPs per rayon task: large enough that scheduling costs stay negligible.
-const MIN_CHUNK: usize = 1024;
-
-/// Accumulated plastic strain above which an MP counts as having yielded. An
-/// MP at rest on its yield surface returns round-off-sized trial stresses now
-/// and then (a balanced state is balanced to round-off, not exactly): that is
-/// no plastic flow, and stays orders of magnitude below one microstrain.
-pub const PLASTIC_STRAIN_FLOOR: f64 = 1e-6;
-
-/// The state of one material point.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct Particle<const D: usize, const NC: usize> {
-    pub position: [f64; D],
-    pub displacement: [f64; D],
-    pub velocity: [f64; D],
-    /// Shape function values at the start of the step (set in P2G).
-    pub shape: [f64; NC],
-    /// 1 / r at the start of the step (set in P2G) in 2D-axisymmetric
-    /// models, else 0: the weight of the hoop terms.
-    pub inverse_radius: f64,
-    /// Effective stress σ′ (kPa).
-    pub stress: [f64; 6],
-    /// Mass (t; t per metre in plane strain, t per radian in axisymmetry).
-    pub mass: f64,
-    /// The mass gravity pulls on (t, as `mass`): the kernel's weight of the
-    /// MP over g ([`super::loading`]).
-    pub weight: f64,
-    /// Current volume (m³; m² per metre in plane strain, m³ per radian in
-    /// axisymmetry).
-    pub volume: f64,
-    /// The pore-water part of the stress in the internal force, added to the
-    /// normal components of σ′ (kPa): S·p, p or 0 ([`super::loading`]).
-    pub pore_term: f64,
-    pub element: u32,
-    /// Index into the solver's material models.
-    pub model: u32,
-    /// Yielded in the last step.
-    pub yielded: bool,
-    /// Accumulated plastic strain: the length of C·(σ_trial − σ) summed over
-    /// the plastic updates (engineering shear).
-    pub plastic_strain: f64,
-    /// Has yielded: its accumulated plastic strain exceeds
-    /// [`PLASTIC_STRAIN_FLOOR`].
-    pub plastic: bool,
-    /// Left the mesh; frozen since.
-    pub lost: bool,
-    /// Pore pressure p (kPa, Anura3D's sign: negative in compression).
-    pub pwp: f64,
-    /// The factor of p in the internal force ([`super::loading`]).
-    pub pore_factor: f64,
-    /// How p evolves ([`super::liquid`]).
-    pub water: Water,
-    /// The liquid's velocity (coupled MPs; zero otherwise).
-    pub liquid_velocity: [f64; D],
-    /// Degree of saturation (coupled unsaturated MPs follow their retention
-    /// curve; else as mapped).
-    pub saturation: f64,
-    /// Initial volume: the kernel's masses and drag stay those of V₀.
-    pub volume0: f64,
-    /// Relative conductivity k_r of coupled unsaturated MPs (1 otherwise).
-    pub conductivity: f64,
-}
 
 /// Per-corner P2G contribution of one MP.
 #[derive(Clone, Copy, Debug)]
@@ -207,27 +147,6 @@ pub(crate) struct Solver<const D: usize, const NC: usize> {
     load_now: Vec<[f64; D]>,
 }
 
-/// Runs `f` on every MP that is not lost and its output slot, in parallel; a
-/// lost MP's slot is set to `lost` (it contributes nothing).
-pub(super) fn per_live_mp<const D: usize, const NC: usize, T: Copy + Send + Sync>(
-    particles: &mut [Particle<D, NC>],
-    out: &mut [T],
-    lost: T,
-    f: impl Fn(&mut Particle<D, NC>, &mut T) + Sync,
-) {
-    particles
-        .par_iter_mut()
-        .zip(out.par_iter_mut())
-        .with_min_len(MIN_CHUNK)
-        .for_each(|(p, out)| {
-            if p.lost {
-                *out = lost;
-            } else {
-                f(p, out);
-            }
-        });
-}
-
 impl<const D: usize, const NC: usize> Solver<D, NC> {
     /// Sets up the solver on the grid of element type `E` (see
     /// [`super::Simulation::new`]).
@@ -243,142 +162,32 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         if axisymmetric {
             grid.fix_axis(&model.mesh);
         }
-        // Material models are built for the materials MPs actually use, so an
-        // unused material with an unsupported model does not stop the check.
-        let mut slots: Vec<Option<u32>> = vec![None; model.materials.len()];
-        let mut waters: Vec<Option<Water>> = vec![None; model.materials.len()];
-        let mut models: Vec<SolidModel> = Vec::new();
+        let mut materials = MaterialSlots::new(model.materials.len());
         let mut particles = Vec::with_capacity(points.len());
         let mut inadmissible = Vec::with_capacity(points.len());
         let mut wave_speed = 0.0_f64;
         // Each MP's P-wave speed, for the density scaling.
         let mut speeds = Vec::with_capacity(points.len());
         for (point, state) in points.iter().zip(states) {
-            let bad = |reason: String| MpmError::InvalidPoint {
-                id: point.id,
-                reason,
+            let start = ParticleStart {
+                grid: &grid,
+                model,
+                analysis: &analysis,
+                settings,
+                axisymmetric,
             };
-            let material_index = point.material as usize;
-            let material = material_index
-                .checked_sub(1)
-                .and_then(|i| model.materials.get(i))
-                .ok_or_else(|| bad(format!("material {} does not exist", point.material)))?;
-            let slot = match slots[material_index - 1] {
-                Some(slot) => slot,
-                None => {
-                    models.push(SolidModel::from_material(material)?);
-                    let slot = (models.len() - 1) as u32;
-                    slots[material_index - 1] = Some(slot);
-                    slot
-                }
-            };
-            let water = match waters[material_index - 1] {
-                Some(w) => w,
-                None => {
-                    let w = Water::of(
-                        material,
-                        settings.frozen_pore_pressure,
-                        settings.unsaturated_two_phase,
-                    )?;
-                    waters[material_index - 1] = Some(w);
-                    w
-                }
-            };
-            let solid = &models[slot as usize];
-            let mut position = [0.0; D];
-            position.copy_from_slice(&point.position[..D]);
-            let finite = position.iter().all(|v| v.is_finite())
-                && state.total.iter().all(|v| v.is_finite())
-                && state.pwp.is_finite()
-                && state.saturation.is_finite();
-            if !finite {
-                return Err(bad("non-finite position or state".into()));
-            }
-            if !(point.volume > 0.0 && point.volume.is_finite()) {
-                return Err(bad(format!("volume {} is not positive", point.volume)));
-            }
-            if axisymmetric && position[0] <= 0.0 {
-                return Err(bad(format!(
-                    "radius x = {} is not positive in a 2D-axisymmetric model",
-                    position[0]
-                )));
-            }
-            let element = grid
-                .locate(&position, point.element)
-                .ok_or_else(|| bad(format!("position {:?} is outside the mesh", point.position)))?;
-            // The kernel's mass and weight of the MP, and its pore term.
-            let loading = analysis.loading(material_index - 1, material, state.saturation);
-            let density = loading.density;
-            if !(density > 0.0 && density.is_finite() && loading.weight_density.is_finite()) {
-                return Err(bad(format!(
-                    "material {} gives density {density} t/m³; check porosity and densities",
-                    point.material
-                )));
-            }
-            let mut stress = state.effective();
-            if D == 2 {
-                // Plane strain: no out-of-plane shear.
-                stress[4] = 0.0;
-                stress[5] = 0.0;
-            }
-            inadmissible.push(!solid.is_admissible(&stress, D == 2));
-            // The undrained wave: the liquid stiffens the mixture by K_w/n.
-            let speed =
-                ((solid.elasticity.p_wave_modulus() + water.bulk_over_n()) / density).sqrt();
+            let (particle, speed, admissible) = start.particle(point, state, &mut materials)?;
+            particles.push(particle);
+            inadmissible.push(!admissible);
             wave_speed = wave_speed.max(speed);
             speeds.push(speed);
-            // A coupled MP's solid carries the mixture less its water.
-            let mass = match water {
-                Water::Coupled(c) => density - c.porosity * state.saturation * c.density,
-                _ => density,
-            } * point.volume;
-            particles.push(Particle {
-                position,
-                displacement: [0.0; D],
-                velocity: [0.0; D],
-                shape: [0.0; NC],
-                inverse_radius: 0.0,
-                stress,
-                mass,
-                weight: loading.weight_density * point.volume,
-                volume: point.volume,
-                pore_term: loading.pore_factor * state.pwp,
-                element,
-                model: slot,
-                yielded: false,
-                plastic_strain: 0.0,
-                plastic: false,
-                lost: false,
-                pwp: state.pwp,
-                pore_factor: loading.pore_factor,
-                water,
-                liquid_velocity: [0.0; D],
-                saturation: state.saturation,
-                volume0: point.volume,
-                // The kernel sets k from S when it reads the MAPF.
-                conductivity: match water {
-                    Water::Coupled(c) if c.retention.is_some() => {
-                        c.conductivity.relative(state.saturation)
-                    }
-                    _ => 1.0,
-                },
-            });
         }
+        let MaterialSlots { models, waters, .. } = materials;
         let coupled = particles
             .iter()
             .any(|p| matches!(p.water, Water::Coupled(_)));
         if settings.mass_scaling && !coupled {
-            let slowest = speeds.iter().copied().fold(f64::INFINITY, f64::min);
-            let floor = wave_speed / super::MAX_MASS_SCALING.sqrt();
-            let target = slowest.max(floor);
-            if target.is_finite() && target > 0.0 {
-                for (p, &c) in particles.iter_mut().zip(&speeds) {
-                    if c > target {
-                        p.mass *= (c / target) * (c / target);
-                    }
-                }
-                wave_speed = target;
-            }
+            wave_speed = scale_masses(&mut particles, &speeds, wave_speed);
         }
         let min_altitude = grid.min_altitude();
         let dt = settings.courant * min_altitude / wave_speed;
@@ -393,35 +202,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         let n_points = particles.len();
         let mut gravity = [0.0; D];
         gravity[1] = -settings.gravity;
-        let liquid = coupled.then(|| LiquidGrid {
-            fixed: (0..n_nodes)
-                .map(|node| {
-                    let mut d = [false; D];
-                    let mesh_node = grid.mesh_node[node] as usize;
-                    if let Some(f) = model.liquid_fixity.get(mesh_node) {
-                        d.copy_from_slice(&f[..D]);
-                    }
-                    // On the axis of an axisymmetric model the water cannot
-                    // flow radially either.
-                    if axisymmetric && grid.fixed[node][0] && model.mesh.nodes[mesh_node][0] == 0.0
-                    {
-                        d[0] = true;
-                    }
-                    d
-                })
-                .collect(),
-            mass: vec![0.0; n_nodes],
-            water: vec![0.0; n_nodes],
-            drag: vec![0.0; n_nodes],
-            advective: vec![0.0; n_nodes],
-            porous: vec![[0.0; D]; n_nodes],
-            momentum: vec![[0.0; D]; n_nodes],
-            force: vec![[0.0; D]; n_nodes],
-            acceleration: vec![[0.0; D]; n_nodes],
-            velocity: vec![[0.0; D]; n_nodes],
-            p2g: vec![[LiquidContribution::ZERO; NC]; n_points],
-            remap: vec![[[0.0; D]; NC]; n_points],
-        });
+        let liquid = coupled.then(|| LiquidGrid::new(&grid, model, axisymmetric, n_points));
         let element_sums = settings
             .element_smoothing
             .then(|| ElementSums::new(grid.elements.len()));
@@ -521,17 +302,29 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         Ok(())
     }
 
-    /// Advances the state by one time step and reports what it measured.
+    /// Advances the state by one time step and reports what it measured:
+    /// P2G, the liquid and the external loads, the nodal solve, the seepage
+    /// faces, G2P with the MUSL remap, then every MP's strain, stress, pore
+    /// pressure, volume and element.
     pub fn step(&mut self) -> StepOutcome {
-        let dt = self.dt;
+        // Gravity at the CPS's `$$GRAVITY_LOAD` multiplier of the step that
+        // ends at t + Δt.
+        self.gravity[1] = -self.g * self.loads.gravity_at(self.time + self.dt);
+        self.p2g();
+        self.liquid_and_loads();
+        let residual_ratio = self.nodal_solve();
+        self.surface_flow();
+        self.g2p();
+        self.update_particles();
+        self.close_step(residual_ratio)
+    }
+
+    /// 1. P2G: each MP's mass, weight, momentum and internal force on its
+    /// element's corners, in parallel, summed to the nodes in MP order.
+    fn p2g(&mut self) {
         let grid = &self.grid;
         let axisymmetric = self.axisymmetric;
         let radius_floor = self.radius_floor;
-
-        // Gravity at the CPS's `$$GRAVITY_LOAD` multiplier of the step that
-        // ends at t + Δt.
-        self.gravity[1] = -self.g * self.loads.gravity_at(self.time + dt);
-
         // 1. P2G contributions, per MP in parallel.
         per_live_mp(
             &mut self.particles,
@@ -585,7 +378,13 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 }
             }
         }
+    }
 
+    /// 1b/1c. The liquid of coupled MPs (its mass, drag, momentum, pressure
+    /// force and weight), and the external loads of the step.
+    fn liquid_and_loads(&mut self) {
+        let dt = self.dt;
+        let grid = &self.grid;
         // 1b. The liquid of coupled MPs: its mass, drag, momentum, pressure
         // force and weight.
         if let Some(liquid) = self.liquid.as_mut() {
@@ -615,7 +414,13 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 self.liquid.as_mut().map(|l| &mut l.force[..]),
             );
         }
+    }
 
+    /// 2. Nodal accelerations and velocities; returns the step's residual
+    /// ratio ‖f_ext + f_int‖ / ‖f_ext‖ over the free directions.
+    fn nodal_solve(&mut self) -> f64 {
+        let dt = self.dt;
+        let grid = &self.grid;
         // 2. Nodal accelerations with local damping and fixities. Where the
         // liquid of coupled MPs is, the liquid's and the solid's are solved
         // together with the drag implicit in both velocities:
@@ -703,7 +508,13 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             self.node_residual[node] = node_sq.sqrt();
         }
         let residual_ratio = ratio(residual_sq.sqrt(), external_sq.sqrt());
+        residual_ratio
+    }
 
+    /// 2b. Seepage faces and infiltration.
+    fn surface_flow(&mut self) {
+        let dt = self.dt;
+        let grid = &self.grid;
         // 2b. Seepage faces and infiltration ([`super::seepage`]).
         if let (Some(flow), Some(l)) = (self.surface.as_mut(), self.liquid.as_mut()) {
             flow.level = self
@@ -721,7 +532,13 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
                 dt,
             );
         }
+    }
 
+    /// 3/4. G2P of the solid (velocity, position, the momenta of the MUSL
+    /// remap), its nodal velocities again, then the liquid's.
+    fn g2p(&mut self) {
+        let dt = self.dt;
+        let grid = &self.grid;
         // 3. G2P: MP velocity and position, and the momenta for the MUSL remap.
         let acceleration = &self.node_acceleration;
         let node_velocity = &self.node_velocity;
@@ -771,108 +588,30 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         if let Some(liquid) = self.liquid.as_mut() {
             liquid.g2p(grid, &mut self.particles, dt, self.mass_floor);
         }
+    }
 
-        // Strain increment, stress update, pore pressure, volume, relocation:
-        // per MP.
-        let liquid_velocity = self.liquid.as_ref().map(|l| &l.velocity);
-        let advective = self.liquid.as_ref().map(|l| &l.advective);
-        let node_velocity = &self.node_velocity;
-        let models = &self.models;
-        let plane_strain = self.plane_strain;
-        let smoothing = self.element_sums.is_some();
+    /// Every live MP's strain increment, stress update, pore pressure, volume
+    /// and element, in parallel ([`update_particle`]).
+    fn update_particles(&mut self) {
+        let step = ParticleUpdate {
+            grid: &self.grid,
+            models: &self.models,
+            node_velocity: &self.node_velocity,
+            liquid_velocity: self.liquid.as_ref().map(|l| &l.velocity[..]),
+            advective: self.liquid.as_ref().map(|l| &l.advective[..]),
+            dt: self.dt,
+            plane_strain: self.plane_strain,
+            smoothing: self.element_sums.is_some(),
+        };
         self.particles
             .par_iter_mut()
             .with_min_len(MIN_CHUNK)
-            .for_each(|p| {
-                if p.lost {
-                    p.yielded = false;
-                    return;
-                }
-                let element = &grid.elements[p.element as usize];
-                let strain = strain_increment_at::<D, NC>(
-                    element,
-                    &p.shape,
-                    p.inverse_radius,
-                    node_velocity,
-                    dt,
-                );
-                let model = &models[p.model as usize];
-                let before = p.stress;
-                let kind = model.update(&mut p.stress, &strain, plane_strain);
-                p.yielded = kind.is_plastic();
-                if p.yielded {
-                    let mut trial = before;
-                    model.elasticity.add_increment(&mut trial, &strain);
-                    let mut taken = [0.0; 6];
-                    for k in 0..6 {
-                        taken[k] = trial[k] - p.stress[k];
-                    }
-                    let e = model.elasticity.strain_of(&taken);
-                    p.plastic_strain += e.iter().map(|v| v * v).sum::<f64>().sqrt();
-                    p.plastic |= p.plastic_strain > PLASTIC_STRAIN_FLOOR;
-                }
-                let volumetric = strain[0] + strain[1] + strain[2];
-                match p.water {
-                    Water::Frozen => {}
-                    Water::Undrained { bulk_over_n } => {
-                        p.pwp += bulk_over_n * volumetric;
-                    }
-                    Water::Coupled(c) => {
-                        let n = c.porosity;
-                        let s = p.saturation;
-                        let partial = c.retention.is_some() && s > 0.0 && s < 1.0;
-                        // The water's volume demand per unit volume of the
-                        // mixture: partially saturated, the kernel's
-                        // S·Δε_v + A/ρw with its advective term
-                        // A = Σ ∇N·(n ρw S)_node (Δu_w − Δu_s); saturated,
-                        // (1 − n)·Δε_v,s + n·Δε_v,w.
-                        let demand = match (partial, liquid_velocity, advective) {
-                            (true, Some(v), Some(a)) => {
-                                let flux = advective_flux(
-                                    element,
-                                    a,
-                                    v,
-                                    node_velocity,
-                                    dt,
-                                    p.inverse_radius,
-                                    &p.shape,
-                                );
-                                s * volumetric + flux / c.density
-                            }
-                            _ => {
-                                // The liquid's volumetric strain, from the same operator.
-                                let liquid = liquid_velocity.map_or(0.0, |v| {
-                                    let e = strain_increment_at::<D, NC>(
-                                        element,
-                                        &p.shape,
-                                        p.inverse_radius,
-                                        v,
-                                        dt,
-                                    );
-                                    e[0] + e[1] + e[2]
-                                });
-                                (1.0 - n) * volumetric + n * liquid
-                            }
-                        };
-                        p.pwp += c.pressure_increment(p.pwp, s, demand);
-                    }
-                }
-                p.volume *= 1.0 + volumetric;
-                if !smoothing {
-                    settle_water(p);
-                }
-                if !grid.contains(p.element, &p.position) {
-                    match grid.locate(&p.position, p.element) {
-                        Some(e) => p.element = e,
-                        None => {
-                            p.lost = true;
-                            p.velocity = [0.0; D];
-                            p.liquid_velocity = [0.0; D];
-                        }
-                    }
-                }
-            });
+            .for_each(|p| update_particle(p, &step));
+    }
 
+    /// MPM-MIXED's smoothing, the clock, and what the step measured.
+    fn close_step(&mut self, residual_ratio: f64) -> StepOutcome {
+        let dt = self.dt;
         // MPM-MIXED: σ′ and p averaged over each single-material element
         // (after the MPs moved), then S and p's force term from the average.
         if let Some(sums) = self.element_sums.as_mut() {
@@ -926,63 +665,306 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
     }
 }
 
-/// The end of the kernel's step for an MP's water: S, k_r and the mixture's
-/// weight from the retention curve at the new p (coupled unsaturated MPs, with
-/// the current volume), and p's term in the internal force (Bishop's
-/// min(S·p, p) for coupled MPs).
-pub(super) fn settle_water<const D: usize, const NC: usize>(p: &mut Particle<D, NC>) {
-    match p.water {
-        Water::Coupled(c) => {
-            if let Some(curve) = c.retention {
-                p.saturation = curve.anura3d_saturation(p.pwp).1;
-                if p.saturation < 1.0 {
-                    p.conductivity = c.conductivity.relative(p.saturation);
+/// The solid model and the water of each GOM material that MPs use, built
+/// on first use, so an unused material with an unsupported model does not
+/// stop the check.
+struct MaterialSlots {
+    /// Per GOM material (0-based): its index into `models`.
+    slots: Vec<Option<u32>>,
+    /// Per GOM material (0-based): its water.
+    waters: Vec<Option<Water>>,
+    models: Vec<SolidModel>,
+}
+
+impl MaterialSlots {
+    fn new(materials: usize) -> Self {
+        MaterialSlots {
+            slots: vec![None; materials],
+            waters: vec![None; materials],
+            models: Vec::new(),
+        }
+    }
+
+    /// The model slot and the water of GOM material `index` (0-based).
+    fn get(
+        &mut self,
+        index: usize,
+        material: &crate::model::Material,
+        settings: &RunSettings,
+    ) -> Result<(u32, Water), MpmError> {
+        let slot = match self.slots[index] {
+            Some(slot) => slot,
+            None => {
+                self.models.push(SolidModel::from_material(material)?);
+                let slot = (self.models.len() - 1) as u32;
+                self.slots[index] = Some(slot);
+                slot
+            }
+        };
+        let water = match self.waters[index] {
+            Some(w) => w,
+            None => {
+                let w = Water::of(
+                    material,
+                    settings.frozen_pore_pressure,
+                    settings.unsaturated_two_phase,
+                )?;
+                self.waters[index] = Some(w);
+                w
+            }
+        };
+        Ok((slot, water))
+    }
+}
+
+/// What turns a material point and its mapped state into a [`Particle`].
+struct ParticleStart<'a, const D: usize, const NC: usize> {
+    grid: &'a Grid<D, NC>,
+    model: &'a AnuraModel,
+    analysis: &'a Analysis,
+    settings: &'a RunSettings,
+    axisymmetric: bool,
+}
+
+impl<const D: usize, const NC: usize> ParticleStart<'_, D, NC> {
+    /// The particle of `point` with `state`, its (undrained) P-wave speed, and
+    /// whether its initial stress is admissible; an error names the MP.
+    fn particle(
+        &self,
+        point: &MaterialPoint,
+        state: &MpState,
+        materials: &mut MaterialSlots,
+    ) -> Result<(Particle<D, NC>, f64, bool), MpmError> {
+        let ParticleStart {
+            grid,
+            model,
+            analysis,
+            settings,
+            axisymmetric,
+        } = *self;
+        let bad = |reason: String| MpmError::InvalidPoint {
+            id: point.id,
+            reason,
+        };
+        let material_index = point.material as usize;
+        let material = material_index
+            .checked_sub(1)
+            .and_then(|i| model.materials.get(i))
+            .ok_or_else(|| bad(format!("material {} does not exist", point.material)))?;
+        let (slot, water) = materials.get(material_index - 1, material, settings)?;
+        let models = &materials.models;
+        let solid = &models[slot as usize];
+        let mut position = [0.0; D];
+        position.copy_from_slice(&point.position[..D]);
+        let finite = position.iter().all(|v| v.is_finite())
+            && state.total.iter().all(|v| v.is_finite())
+            && state.pwp.is_finite()
+            && state.saturation.is_finite();
+        if !finite {
+            return Err(bad("non-finite position or state".into()));
+        }
+        if !(point.volume > 0.0 && point.volume.is_finite()) {
+            return Err(bad(format!("volume {} is not positive", point.volume)));
+        }
+        if axisymmetric && position[0] <= 0.0 {
+            return Err(bad(format!(
+                "radius x = {} is not positive in a 2D-axisymmetric model",
+                position[0]
+            )));
+        }
+        let element = grid
+            .locate(&position, point.element)
+            .ok_or_else(|| bad(format!("position {:?} is outside the mesh", point.position)))?;
+        // The kernel's mass and weight of the MP, and its pore term.
+        let loading = analysis.loading(material_index - 1, material, state.saturation);
+        let density = loading.density;
+        if !(density > 0.0 && density.is_finite() && loading.weight_density.is_finite()) {
+            return Err(bad(format!(
+                "material {} gives density {density} t/m³; check porosity and densities",
+                point.material
+            )));
+        }
+        let mut stress = state.effective();
+        if D == 2 {
+            // Plane strain: no out-of-plane shear.
+            stress[4] = 0.0;
+            stress[5] = 0.0;
+        }
+        let admissible = solid.is_admissible(&stress, D == 2);
+        // The undrained wave: the liquid stiffens the mixture by K_w/n.
+        let speed = ((solid.elasticity.p_wave_modulus() + water.bulk_over_n()) / density).sqrt();
+        // A coupled MP's solid carries the mixture less its water.
+        let mass = match water {
+            Water::Coupled(c) => density - c.porosity * state.saturation * c.density,
+            _ => density,
+        } * point.volume;
+        let particle = Particle {
+            position,
+            displacement: [0.0; D],
+            velocity: [0.0; D],
+            shape: [0.0; NC],
+            inverse_radius: 0.0,
+            stress,
+            mass,
+            weight: loading.weight_density * point.volume,
+            volume: point.volume,
+            pore_term: loading.pore_factor * state.pwp,
+            element,
+            model: slot,
+            yielded: false,
+            plastic_strain: 0.0,
+            plastic: false,
+            lost: false,
+            pwp: state.pwp,
+            pore_factor: loading.pore_factor,
+            water,
+            liquid_velocity: [0.0; D],
+            saturation: state.saturation,
+            volume0: point.volume,
+            // The kernel sets k from S when it reads the MAPF.
+            conductivity: match water {
+                Water::Coupled(c) if c.retention.is_some() => {
+                    c.conductivity.relative(state.saturation)
                 }
-                p.weight = (p.mass / p.volume0 + c.porosity * p.saturation * c.density) * p.volume;
-                p.pore_factor = p.saturation;
-            }
-            p.pore_term = (p.pore_factor * p.pwp).min(p.pwp);
-        }
-        Water::Undrained { .. } | Water::Frozen => p.pore_term = p.pore_factor * p.pwp,
+                _ => 1.0,
+            },
+        };
+        Ok((particle, speed, admissible))
     }
 }
 
-/// Sums every MP's per-corner vectors into `nodal` (cleared first),
-/// serially in MP order (deterministic).
-pub(super) fn scatter<const D: usize, const NC: usize>(
-    grid: &Grid<D, NC>,
-    particles: &[Particle<D, NC>],
-    per_mp: &[[[f64; D]; NC]],
-    nodal: &mut [[f64; D]],
-) {
-    nodal.fill([0.0; D]);
-    for (p, out) in particles.iter().zip(per_mp) {
-        let corners = &grid.elements[p.element as usize].corners;
-        for i in 0..NC {
-            let node = corners[i] as usize;
-            for d in 0..D {
-                nodal[node][d] += out[i][d];
+/// Density scaling of the quasi-static runs ([`RunSettings::mass_scaling`]):
+/// every MP faster than the slowest (but no more than
+/// [`super::MAX_MASS_SCALING`] in mass) gets its inertia raised to that wave
+/// speed, its weight kept. Returns the wave speed that sets the step.
+fn scale_masses<const D: usize, const NC: usize>(
+    particles: &mut [Particle<D, NC>],
+    speeds: &[f64],
+    wave_speed: f64,
+) -> f64 {
+    let slowest = speeds.iter().copied().fold(f64::INFINITY, f64::min);
+    let floor = wave_speed / super::MAX_MASS_SCALING.sqrt();
+    let target = slowest.max(floor);
+    if target.is_finite() && target > 0.0 {
+        for (p, &c) in particles.iter_mut().zip(speeds) {
+            if c > target {
+                p.mass *= (c / target) * (c / target);
             }
         }
+        return target;
     }
+    wave_speed
 }
 
-/// Nodal velocities momentum / mass; zero at nodes lighter than `floor`
-/// and in fixed directions.
-pub(super) fn velocities<const D: usize>(
-    mass: &[f64],
-    momentum: &[[f64; D]],
-    fixed: &[[bool; D]],
-    floor: f64,
-    velocity: &mut [[f64; D]],
+/// What [`update_particle`] reads of the solver in one step.
+struct ParticleUpdate<'a, const D: usize, const NC: usize> {
+    grid: &'a Grid<D, NC>,
+    models: &'a [SolidModel],
+    node_velocity: &'a [[f64; D]],
+    liquid_velocity: Option<&'a [[f64; D]]>,
+    advective: Option<&'a [f64]>,
+    dt: f64,
+    plane_strain: bool,
+    smoothing: bool,
+}
+
+/// One MP's end of a step: strain increment, stress update (and its plastic
+/// strain), pore pressure, volume, water, and its element again (lost when it
+/// left the mesh).
+fn update_particle<const D: usize, const NC: usize>(
+    p: &mut Particle<D, NC>,
+    step: &ParticleUpdate<'_, D, NC>,
 ) {
-    for node in 0..mass.len() {
-        for d in 0..D {
-            velocity[node][d] = if mass[node] <= floor || fixed[node][d] {
-                0.0
-            } else {
-                momentum[node][d] / mass[node]
+    let ParticleUpdate {
+        grid,
+        models,
+        node_velocity,
+        liquid_velocity,
+        advective,
+        dt,
+        plane_strain,
+        smoothing,
+    } = *step;
+    if p.lost {
+        p.yielded = false;
+        return;
+    }
+    let element = &grid.elements[p.element as usize];
+    let strain =
+        strain_increment_at::<D, NC>(element, &p.shape, p.inverse_radius, node_velocity, dt);
+    let model = &models[p.model as usize];
+    let before = p.stress;
+    let kind = model.update(&mut p.stress, &strain, plane_strain);
+    p.yielded = kind.is_plastic();
+    if p.yielded {
+        let mut trial = before;
+        model.elasticity.add_increment(&mut trial, &strain);
+        let mut taken = [0.0; 6];
+        for k in 0..6 {
+            taken[k] = trial[k] - p.stress[k];
+        }
+        let e = model.elasticity.strain_of(&taken);
+        p.plastic_strain += e.iter().map(|v| v * v).sum::<f64>().sqrt();
+        p.plastic |= p.plastic_strain > PLASTIC_STRAIN_FLOOR;
+    }
+    let volumetric = strain[0] + strain[1] + strain[2];
+    match p.water {
+        Water::Frozen => {}
+        Water::Undrained { bulk_over_n } => {
+            p.pwp += bulk_over_n * volumetric;
+        }
+        Water::Coupled(c) => {
+            let n = c.porosity;
+            let s = p.saturation;
+            let partial = c.retention.is_some() && s > 0.0 && s < 1.0;
+            // The water's volume demand per unit volume of the
+            // mixture: partially saturated, the kernel's
+            // S·Δε_v + A/ρw with its advective term
+            // A = Σ ∇N·(n ρw S)_node (Δu_w − Δu_s); saturated,
+            // (1 − n)·Δε_v,s + n·Δε_v,w.
+            let demand = match (partial, liquid_velocity, advective) {
+                (true, Some(v), Some(a)) => {
+                    let flux = advective_flux(
+                        element,
+                        a,
+                        v,
+                        node_velocity,
+                        dt,
+                        p.inverse_radius,
+                        &p.shape,
+                    );
+                    s * volumetric + flux / c.density
+                }
+                _ => {
+                    // The liquid's volumetric strain, from the same operator.
+                    let liquid = liquid_velocity.map_or(0.0, |v| {
+                        let e = strain_increment_at::<D, NC>(
+                            element,
+                            &p.shape,
+                            p.inverse_radius,
+                            v,
+                            dt,
+                        );
+                        e[0] + e[1] + e[2]
+                    });
+                    (1.0 - n) * volumetric + n * liquid
+                }
             };
+            p.pwp += c.pressure_increment(p.pwp, s, demand);
+        }
+    }
+    p.volume *= 1.0 + volumetric;
+    if !smoothing {
+        settle_water(p);
+    }
+    if !grid.contains(p.element, &p.position) {
+        match grid.locate(&p.position, p.element) {
+            Some(e) => p.element = e,
+            None => {
+                p.lost = true;
+                p.velocity = [0.0; D];
+                p.liquid_velocity = [0.0; D];
+            }
         }
     }
 }
