@@ -319,7 +319,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         self.close_step(residual_ratio)
     }
 
-    /// 1. P2G: each MP's mass, weight, momentum and internal force on its
+    /// Phase 1, P2G: each MP's mass, weight, momentum and internal force on its
     /// element's corners, in parallel, summed to the nodes in MP order.
     fn p2g(&mut self) {
         let grid = &self.grid;
@@ -380,7 +380,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         }
     }
 
-    /// 1b/1c. The liquid of coupled MPs (its mass, drag, momentum, pressure
+    /// Phases 1b/1c: the liquid of coupled MPs (its mass, drag, momentum, pressure
     /// force and weight), and the external loads of the step.
     fn liquid_and_loads(&mut self) {
         let dt = self.dt;
@@ -416,7 +416,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         }
     }
 
-    /// 2. Nodal accelerations and velocities; returns the step's residual
+    /// Phase 2: nodal accelerations and velocities; returns the step's residual
     /// ratio ‖f_ext + f_int‖ / ‖f_ext‖ over the free directions.
     fn nodal_solve(&mut self) -> f64 {
         let dt = self.dt;
@@ -507,11 +507,10 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
             residual_sq += node_sq;
             self.node_residual[node] = node_sq.sqrt();
         }
-        let residual_ratio = ratio(residual_sq.sqrt(), external_sq.sqrt());
-        residual_ratio
+        ratio(residual_sq.sqrt(), external_sq.sqrt())
     }
 
-    /// 2b. Seepage faces and infiltration.
+    /// Phase 2b: seepage faces and infiltration.
     fn surface_flow(&mut self) {
         let dt = self.dt;
         let grid = &self.grid;
@@ -534,7 +533,7 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         }
     }
 
-    /// 3/4. G2P of the solid (velocity, position, the momenta of the MUSL
+    /// Phases 3/4: G2P of the solid (velocity, position, the momenta of the MUSL
     /// remap), its nodal velocities again, then the liquid's.
     fn g2p(&mut self) {
         let dt = self.dt;

@@ -19,6 +19,11 @@ use crate::model::{FemNodes, Quantity};
 /// [`parse_csv`](super::parse_csv) with data-row chunks of about `chunk_bytes`
 /// (tests vary it). Owned bytes are freed as soon as the rows are parsed,
 /// before they are joined (the file's text is the largest thing held).
+///
+/// The phases: the text ([`decode`]), the dialect ([`sniff`]), the header
+/// ([`find_header`]), units and signs per column ([`column_plan`]), the data
+/// rows in parallel chunks ([`parse_rows`]), then the checks on what they
+/// gave (short rows, ids, missing values, duplicates).
 pub(super) fn parse_csv_chunked(
     path: &Path,
     bytes: std::borrow::Cow<'_, [u8]>,
@@ -26,6 +31,150 @@ pub(super) fn parse_csv_chunked(
     chunk_bytes: usize,
 ) -> Result<(FemNodes, FemReadReport), FormatError> {
     check_columns_option(&options.columns).map_err(|m| ParseError::at(path, 1, 1, m))?;
+    let (bom, text) = decode(path, &bytes)?;
+    let dialect = sniff(&text);
+    let header = find_header(path, &dialect, options)?;
+    let (columns, factors) = column_plan(path, &header, options)?;
+    let Header {
+        index: header_idx,
+        mapping,
+        headers,
+    } = header;
+    let Dialect {
+        delim,
+        decimal_comma,
+        ..
+    } = dialect;
+
+    let col_of = |f: Field| mapping.iter().position(|m| *m == Some(f));
+    let (cx, cy, cz, cnode, cregion) = (
+        col_of(Field::X),
+        col_of(Field::Y),
+        col_of(Field::Z),
+        col_of(Field::Node),
+        col_of(Field::Region),
+    );
+    let value_cols: Vec<(usize, Quantity)> = mapping
+        .iter()
+        .enumerate()
+        .filter_map(|(k, m)| match m {
+            Some(Field::Value(q)) => Some((k, *q)),
+            _ => None,
+        })
+        .collect();
+
+    let mut nodes = FemNodes {
+        dim: if cz.is_some() { 3 } else { 2 },
+        ..FemNodes::default()
+    };
+    let schema = Schema {
+        path,
+        delim,
+        decimal_comma,
+        coords: [cx, cy, cz],
+        node: cnode,
+        region: cregion,
+        value_cols: &value_cols,
+        factors: &factors,
+    };
+    let parts = parse_rows(&schema, &text, header_idx, chunk_bytes);
+    drop(text);
+    drop(bytes);
+    let merged = merge_rows(parts, value_cols.len());
+    if let Some(e) = FormatError::from_list(merged.errors) {
+        return Err(e);
+    }
+    let Rows {
+        positions,
+        ids,
+        mut values,
+        regions,
+        lines: lines_of,
+        has_value,
+        first_short,
+        first_empty_id,
+        ..
+    } = merged.rows;
+    nodes.positions = positions;
+    nodes.ids = ids
+        .into_iter()
+        .enumerate()
+        .map(|(k, id)| id.unwrap_or(k as i64 + 1))
+        .collect();
+    if nodes.positions.is_empty() {
+        return Err(ParseError::at(
+            path,
+            header_idx + 1,
+            1,
+            "the table has a header but no data rows",
+        )
+        .into());
+    }
+    check_short_rows(path, &schema, &headers, &first_short, &has_value)?;
+    // Columns absent from every row (ragged GeoStudio rows) are dropped, not zeroed;
+    // partly present columns are an error at the first row without a value.
+    let mut warnings = Vec::new();
+    let ids_given = has_value[value_cols.len()];
+    let coordinates = cx.is_some() && cy.is_some();
+    if let Some(c) = cnode {
+        let column = IdColumn {
+            index: c,
+            given: ids_given,
+            first_empty: first_empty_id,
+        };
+        if let Some(warning) = check_ids(path, header_idx, &headers, &column, coordinates)? {
+            warnings.push(warning);
+        }
+    }
+    let mut taken = take_values(path, &headers, &value_cols, &mut values, &lines_of)?;
+    nodes.fields.append(&mut taken.fields);
+    warnings.append(&mut taken.warnings);
+    if cregion.is_some() {
+        nodes.region = Some(regions);
+    }
+    if cx.is_none() || cy.is_none() {
+        if cnode.is_none() {
+            return Err(ParseError::at(
+                path,
+                header_idx + 1,
+                1,
+                "missing coordinate columns X and Y",
+            )
+            .into());
+        }
+        warnings.push(
+            "no coordinate columns: coordinates are taken from the mesh given with --fem-mesh (node k = PLY node k − 1)".into(),
+        );
+    } else {
+        check_duplicates(path, &nodes, &lines_of)?;
+    }
+    let report = FemReadReport {
+        path: path.to_path_buf(),
+        delimiter: match delim {
+            Delimiter::Byte(b'\t') => "tab".into(),
+            Delimiter::Byte(b) => (b as char).to_string(),
+            Delimiter::Blanks => "blanks".into(),
+        },
+        decimal_comma,
+        bom,
+        header_line: header_idx + 1,
+        columns,
+        nodes: nodes.len(),
+        dim: nodes.dim,
+        sign: options.sign,
+        has_coordinates: coordinates,
+        vtu: None,
+        warnings,
+    };
+    Ok((nodes, report))
+}
+
+/// The text of the file: UTF-16 refused, a UTF-8 BOM dropped (and said),
+/// Windows-1252 read with its non-ASCII bytes replaced; empty refused.
+fn decode<'b>(
+    path: &Path,
+    bytes: &'b [u8],
+) -> Result<(bool, std::borrow::Cow<'b, str>), FormatError> {
     if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
         return Err(ParseError::at(
             path,
@@ -35,9 +184,9 @@ pub(super) fn parse_csv_chunked(
         )
         .into());
     }
-    let (bom, body) = match bytes.as_ref().strip_prefix(&[0xEF, 0xBB, 0xBF]) {
+    let (bom, body) = match bytes.strip_prefix(&[0xEF, 0xBB, 0xBF]) {
         Some(rest) => (true, rest),
-        None => (false, bytes.as_ref()),
+        None => (false, bytes),
     };
     let text = match std::str::from_utf8(body) {
         Ok(t) => std::borrow::Cow::Borrowed(t),
@@ -53,6 +202,21 @@ pub(super) fn parse_csv_chunked(
         )
         .into());
     }
+    Ok((bom, text))
+}
+
+/// The dialect, from the first lines: the delimiter, decimal commas, and the
+/// lines the header is looked for in.
+struct Dialect<'t> {
+    /// The first 20 non-blank lines.
+    sample: Vec<&'t str>,
+    delim: Delimiter,
+    /// The first 51 lines.
+    lines: Vec<&'t str>,
+    decimal_comma: bool,
+}
+
+fn sniff(text: &str) -> Dialect<'_> {
     // Only the first lines are needed to sniff the dialect and find the header.
     let sample: Vec<&str> = text
         .lines()
@@ -68,7 +232,37 @@ pub(super) fn parse_csv_chunked(
                 .any(|(_, f)| f.contains(',') && f.replace(',', ".").parse::<f64>().is_ok())
         });
 
-    // Header: the first line whose fields map x and y (or node), or the user's names.
+    Dialect {
+        sample,
+        delim,
+        lines,
+        decimal_comma,
+    }
+}
+
+/// The header line: its 0-based index, its fields (column, text), and what
+/// each field means.
+struct Header {
+    index: usize,
+    mapping: Vec<Option<Field>>,
+    headers: Vec<(usize, String)>,
+}
+
+/// The first line whose fields map x and y (or node), by the synonyms or the
+/// user's `--columns`; every `--columns` name must be a header, and no field
+/// may be mapped twice.
+fn find_header(
+    path: &Path,
+    dialect: &Dialect<'_>,
+    options: &CsvOptions,
+) -> Result<Header, FormatError> {
+    let Dialect {
+        sample,
+        delim,
+        lines,
+        ..
+    } = dialect;
+    let delim = *delim;
     let mut header_idx = None;
     let mut mapping: Vec<Option<Field>> = Vec::new();
     let mut headers: Vec<(usize, String)> = Vec::new();
@@ -148,7 +342,26 @@ pub(super) fn parse_csv_chunked(
         }
     }
 
-    // Units and signs per column.
+    Ok(Header {
+        index: header_idx,
+        mapping,
+        headers,
+    })
+}
+
+/// Units and signs per column: the report of each column and the factor
+/// (unit × sign) its values are multiplied by.
+fn column_plan(
+    path: &Path,
+    header: &Header,
+    options: &CsvOptions,
+) -> Result<(Vec<ColumnReport>, Vec<f64>), FormatError> {
+    let Header {
+        index: header_idx,
+        mapping,
+        headers,
+    } = header;
+    let header_idx = *header_idx;
     let mut columns = Vec::with_capacity(headers.len());
     let mut factors = Vec::with_capacity(headers.len());
     for (k, (col, h)) in headers.iter().enumerate() {
@@ -203,40 +416,14 @@ pub(super) fn parse_csv_chunked(
         });
     }
 
-    let col_of = |f: Field| mapping.iter().position(|m| *m == Some(f));
-    let (cx, cy, cz, cnode, cregion) = (
-        col_of(Field::X),
-        col_of(Field::Y),
-        col_of(Field::Z),
-        col_of(Field::Node),
-        col_of(Field::Region),
-    );
-    let value_cols: Vec<(usize, Quantity)> = mapping
-        .iter()
-        .enumerate()
-        .filter_map(|(k, m)| match m {
-            Some(Field::Value(q)) => Some((k, *q)),
-            _ => None,
-        })
-        .collect();
+    Ok((columns, factors))
+}
 
-    let mut nodes = FemNodes {
-        dim: if cz.is_some() { 3 } else { 2 },
-        ..FemNodes::default()
-    };
-    let schema = Schema {
-        path,
-        delim,
-        decimal_comma,
-        coords: [cx, cy, cz],
-        node: cnode,
-        region: cregion,
-        value_cols: &value_cols,
-        factors: &factors,
-    };
-    // The data rows, in parallel chunks split after a newline; chunks are joined
-    // in file order, so the result does not depend on the thread count.
-    let body_start = nth_line_start(&text, header_idx + 1);
+/// The data rows after the header, in parallel chunks split after a
+/// newline; the chunks come back in file order, so the result does not
+/// depend on the thread count.
+fn parse_rows(schema: &Schema<'_>, text: &str, header_idx: usize, chunk_bytes: usize) -> Vec<Rows> {
+    let body_start = nth_line_start(text, header_idx + 1);
     let body = &text[body_start..];
     let chunks = split_chunks(body, chunk_bytes.max(1));
     let newlines: Vec<usize> = chunks
@@ -255,46 +442,23 @@ pub(super) fn parse_csv_chunked(
         .zip(first_line.par_iter().zip(&newlines))
         .map(|(chunk, (&l0, &n))| {
             // A last line without its newline is one more.
-            let rows = parse_chunk(&schema, chunk, l0, n + 1);
+            let rows = parse_chunk(schema, chunk, l0, n + 1);
             crate::progress::READ_FEM.add(chunk.len() as u64);
             rows
         })
         .collect();
-    drop(chunks);
-    drop(text);
-    drop(bytes);
-    let merged = merge_rows(parts, value_cols.len());
-    if let Some(e) = FormatError::from_list(merged.errors) {
-        return Err(e);
-    }
-    let Rows {
-        positions,
-        ids,
-        mut values,
-        regions,
-        lines: lines_of,
-        has_value,
-        first_short,
-        first_empty_id,
-        ..
-    } = merged.rows;
-    nodes.positions = positions;
-    nodes.ids = ids
-        .into_iter()
-        .enumerate()
-        .map(|(k, id)| id.unwrap_or(k as i64 + 1))
-        .collect();
-    if nodes.positions.is_empty() {
-        return Err(ParseError::at(
-            path,
-            header_idx + 1,
-            1,
-            "the table has a header but no data rows",
-        )
-        .into());
-    }
-    // A row without a field that other rows fill (fewer fields than the header)
-    // is an error at its end; a cell present but empty is not.
+    parts
+}
+
+/// A row without a field that other rows fill (fewer fields than the header)
+/// is an error at its end; a cell present but empty is not.
+fn check_short_rows(
+    path: &Path,
+    schema: &Schema<'_>,
+    headers: &[(usize, String)],
+    first_short: &[Option<(usize, usize, usize)>],
+    has_value: &[bool],
+) -> Result<(), FormatError> {
     for (t, c) in schema.tracked().into_iter().enumerate() {
         if let (Some(c), Some((line, col, n))) = (c, first_short[t])
             && has_value[t]
@@ -312,49 +476,80 @@ pub(super) fn parse_csv_chunked(
             .into());
         }
     }
-    // Columns absent from every row (ragged GeoStudio rows) are dropped, not zeroed;
-    // partly present columns are an error at the first row without a value.
-    let mut warnings = Vec::new();
-    // The id column likewise: a row without an id would silently take its row
-    // number, and with --fem-mesh another node's coordinates.
-    let ids_given = has_value[value_cols.len()];
-    if let Some(c) = cnode {
-        match first_empty_id {
-            Some((line, col)) if ids_given => {
-                return Err(ParseError::at(
-                    path,
-                    line,
-                    col,
-                    format!(
-                        "empty node id in `{}`: other rows have ids, so every row needs one",
-                        headers[c].1
-                    ),
-                )
-                .into());
-            }
-            _ if !ids_given && cx.is_some() && cy.is_some() => warnings.push(format!(
-                "column `{}` has no values in any row: nodes are numbered by row",
+    Ok(())
+}
+
+/// The node-id column: its index, whether any row gives an id, and the first
+/// row (line, column) whose id is empty.
+struct IdColumn {
+    index: usize,
+    given: bool,
+    first_empty: Option<(usize, usize)>,
+}
+
+/// The id column's checks: a row without an id would silently take its row
+/// number, and with --fem-mesh another node's coordinates. A warning when no
+/// row has an id but the table has coordinates.
+fn check_ids(
+    path: &Path,
+    header_idx: usize,
+    headers: &[(usize, String)],
+    column: &IdColumn,
+    coordinates: bool,
+) -> Result<Option<String>, FormatError> {
+    let c = column.index;
+    match column.first_empty {
+        Some((line, col)) if column.given => Err(ParseError::at(
+            path,
+            line,
+            col,
+            format!(
+                "empty node id in `{}`: other rows have ids, so every row needs one",
                 headers[c].1
-            )),
-            _ if !ids_given => {
-                return Err(ParseError::at(
-                    path,
-                    header_idx + 1,
-                    headers[c].0,
-                    format!(
-                        "column `{}` has no node ids and the table has no X and Y columns: its rows cannot be joined to mesh nodes",
-                        headers[c].1
-                    ),
-                )
-                .into());
-            }
-            _ => {}
-        }
+            ),
+        )
+        .into()),
+        _ if !column.given && coordinates => Ok(Some(format!(
+            "column `{}` has no values in any row: nodes are numbered by row",
+            headers[c].1
+        ))),
+        _ if !column.given => Err(ParseError::at(
+            path,
+            header_idx + 1,
+            headers[c].0,
+            format!(
+                "column `{}` has no node ids and the table has no X and Y columns: its rows cannot be joined to mesh nodes",
+                headers[c].1
+            ),
+        )
+        .into()),
+        _ => Ok(None),
     }
+}
+
+/// The value columns that every row fills, and warnings for those no row
+/// fills (dropped, not zeroed).
+struct Values {
+    fields: Vec<(Quantity, Vec<f64>)>,
+    warnings: Vec<String>,
+}
+
+/// Takes the value columns out of `values`: whole ones become fields, empty
+/// ones warnings, and a partly filled one is an error at its first row
+/// without a value.
+fn take_values(
+    path: &Path,
+    headers: &[(usize, String)],
+    value_cols: &[(usize, Quantity)],
+    values: &mut [Vec<f64>],
+    lines_of: &[usize],
+) -> Result<Values, FormatError> {
+    let mut fields = Vec::new();
+    let mut warnings = Vec::new();
     for (slot, &(c, q)) in value_cols.iter().enumerate() {
         let n_missing = values[slot].iter().filter(|v| v.is_nan()).count();
         if n_missing == 0 {
-            nodes.fields.push((q, std::mem::take(&mut values[slot])));
+            fields.push((q, std::mem::take(&mut values[slot])));
         } else if n_missing == values[slot].len() {
             warnings.push(format!(
                 "column `{}` has no values in any row (ragged rows): {} is absent",
@@ -377,44 +572,7 @@ pub(super) fn parse_csv_chunked(
             .into());
         }
     }
-    if cregion.is_some() {
-        nodes.region = Some(regions);
-    }
-    if cx.is_none() || cy.is_none() {
-        if cnode.is_none() {
-            return Err(ParseError::at(
-                path,
-                header_idx + 1,
-                1,
-                "missing coordinate columns X and Y",
-            )
-            .into());
-        }
-        warnings.push(
-            "no coordinate columns: coordinates are taken from the mesh given with --fem-mesh (node k = PLY node k − 1)".into(),
-        );
-    } else {
-        check_duplicates(path, &nodes, &lines_of)?;
-    }
-    let report = FemReadReport {
-        path: path.to_path_buf(),
-        delimiter: match delim {
-            Delimiter::Byte(b'\t') => "tab".into(),
-            Delimiter::Byte(b) => (b as char).to_string(),
-            Delimiter::Blanks => "blanks".into(),
-        },
-        decimal_comma,
-        bom,
-        header_line: header_idx + 1,
-        columns,
-        nodes: nodes.len(),
-        dim: nodes.dim,
-        sign: options.sign,
-        has_coordinates: cx.is_some() && cy.is_some(),
-        vtu: None,
-        warnings,
-    };
-    Ok((nodes, report))
+    Ok(Values { fields, warnings })
 }
 
 /// Duplicate node ids and coincident nodes are errors naming both lines.
