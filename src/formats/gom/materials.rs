@@ -424,20 +424,6 @@ pub fn read_materials(
             ));
         };
         let mut material = Material::new(position as u32, name, material_type.clone());
-        let real = |p: &Pair| -> Result<f64, ParseError> {
-            let tok = lex::tokens(&p.value).next().map(|(_, t)| t).unwrap_or("");
-            lex::parse_real(tok).ok_or_else(|| {
-                doc.error_at(
-                    p.value_line,
-                    0,
-                    format!(
-                        "expected a number for {}, found `{}`",
-                        p.name.trim(),
-                        p.value
-                    ),
-                )
-            })
-        };
         let type_pairs = read_properties(
             &mut cur,
             props,
@@ -446,134 +432,18 @@ pub fn read_materials(
             &mut warnings,
             &context,
         )?;
-        for (prop, p) in &type_pairs {
-            if *prop == "APPLY_DETECT_LIQUID_SURFACE" || *prop == "LIQUID_CAVITATION" {
-                continue;
-            }
-            let v = real(p)?;
-            check_range(doc, &context, prop, v, p.value_line)?;
-            match *prop {
-                "POROSITY_SOLID" => material.porosity = Some(v),
-                "DENSITY_SOLID" => material.density_solid = Some(v),
-                "DENSITY_LIQUID" => material.density_liquid = Some(v),
-                "K0_VALUE_SOLID" => material.k0 = Some(v),
-                _ => {}
-            }
-        }
-        let model_keyword = if material_type == "liquid" {
-            "MATERIAL_MODEL_LIQUID"
-        } else {
-            "MATERIAL_MODEL_SOLID"
-        };
-        let model_pair = get(&mut cur, model_keyword, true, &mut warnings)?;
-        let model = model_pair.value.clone();
-        let undrained = material_type == "saturated_material_undrained_effective";
-        match model_parameters(&model, undrained) {
-            Some(params) => {
-                let model_pairs = read_properties(
-                    &mut cur,
-                    &params,
-                    is_model_parameter,
-                    &mut get,
-                    &mut warnings,
-                    &context,
-                )?;
-                for (prop, p) in &model_pairs {
-                    let v = real(p)?;
-                    check_range(doc, &context, prop, v, p.value_line)?;
-                    match *prop {
-                        "YOUNG_MODULUS" => material.young_modulus = Some(v),
-                        "POISSON_RATIO" => material.poisson_ratio = Some(v),
-                        "FRICTION_ANGLE" | "PEAK_FRICTION_ANGLE" => {
-                            material.friction_angle = Some(v)
-                        }
-                        "COHESION" | "PEAK_COHESION" => material.cohesion = Some(v),
-                        "DILATANCY_ANGLE" | "PEAK_DILATANCY_ANGLE" => {
-                            material.dilatancy_angle = Some(v)
-                        }
-                        "TENSILE_STRENGTH" => material.tensile_strength = Some(v),
-                        _ => {}
-                    }
-                }
-            }
-            None => {
-                // Unknown or free-form model (external_soil_model, rigid_body): keep
-                // its pairs verbatim up to the next structural keyword.
-                warnings.push(format!(
-                    "{}:{}: material {position}: model `{model}` is kept verbatim; a3d-init's runner treats it as linear elastic only if E and ν are given",
-                    doc.path().display(),
-                    model_pair.value_line + 1
-                ));
-                while let Some((_, line)) = cur.peek_line() {
-                    let keyword = line.trim_end();
-                    if is_structural_keyword(keyword) || keyword == "$$NUMBER_OF_MATERIALS" {
-                        break;
-                    }
-                    get(&mut cur, "", false, &mut warnings)?;
-                }
-            }
-        }
-        material.model = Some(model);
+        apply_type_properties(doc, &context, &type_pairs, &mut material)?;
+        read_model(
+            doc,
+            &mut cur,
+            &mut get,
+            &mut warnings,
+            &mut material,
+            position,
+            &context,
+        )?;
         if material.is_unsaturated() {
-            let curve = get(&mut cur, "WATER_RETENTION_CURVE", true, &mut warnings)?;
-            match curve.value.as_str() {
-                "van_genuchten" => {
-                    let mut v = [0.0; 4];
-                    for slot in &mut v {
-                        let p = get(&mut cur, "", false, &mut warnings)?;
-                        *slot = real(&p)?;
-                    }
-                    material.retention = Some(RetentionCurve::VanGenuchten {
-                        s_min: v[0],
-                        s_max: v[1],
-                        p0: v[2],
-                        lambda: v[3],
-                    });
-                }
-                "linear" => {
-                    let p = get(&mut cur, "", false, &mut warnings)?;
-                    material.retention = Some(RetentionCurve::Linear { av: real(&p)? });
-                }
-                other => {
-                    return Err(doc.error_at(
-                        curve.value_line,
-                        0,
-                        format!(
-                            "unknown water retention curve `{other}` (known: van_genuchten, linear)"
-                        ),
-                    ));
-                }
-            }
-            let conductivity = get(&mut cur, "HYDR_CONDUCTIVITY_CURVE", true, &mut warnings)?;
-            let n_params = match conductivity.value.as_str() {
-                "constant" => 0,
-                "hillel" => 1,
-                "mualem" => 4,
-                other => {
-                    return Err(doc.error_at(
-                        conductivity.value_line,
-                        0,
-                        format!("unknown hydraulic conductivity curve `{other}` (known: constant, hillel, mualem)"),
-                    ));
-                }
-            };
-            let mut v = [0.0; 4];
-            for slot in v.iter_mut().take(n_params) {
-                let p = get(&mut cur, "", false, &mut warnings)?;
-                *slot = real(&p)?;
-            }
-            // Anura3D stores Mualem's four parameters in the same slots as the
-            // van Genuchten retention curve, so they are what its Sr uses.
-            if n_params == 4
-                && let Some(RetentionCurve::VanGenuchten {
-                    s_min,
-                    s_max,
-                    p0,
-                    lambda,
-                }) = &mut material.retention
-            {
-                [*s_min, *s_max, *p0, *lambda] = v;
-            }
+            read_water_curves(doc, &mut cur, &mut get, &mut warnings, &mut material)?;
         }
         // Everything after the head is kept verbatim.
         material.properties = pairs.split_off(3.min(pairs.len()));
@@ -583,4 +453,182 @@ pub fn read_materials(
         materials,
         warnings,
     })
+}
+
+/// A property's value as a number; an error names the property and the line.
+fn real(doc: &KeywordDocument, p: &Pair) -> Result<f64, ParseError> {
+    let tok = lex::tokens(&p.value).next().map(|(_, t)| t).unwrap_or("");
+    lex::parse_real(tok).ok_or_else(|| {
+        doc.error_at(
+            p.value_line,
+            0,
+            format!(
+                "expected a number for {}, found `{}`",
+                p.name.trim(),
+                p.value
+            ),
+        )
+    })
+}
+
+/// The material type's properties that a3d-init uses (porosity, densities,
+/// K0), each checked against its range.
+fn apply_type_properties(
+    doc: &KeywordDocument,
+    context: &str,
+    type_pairs: &[(&'static str, Pair)],
+    material: &mut Material,
+) -> Result<(), ParseError> {
+    for (prop, p) in type_pairs {
+        if *prop == "APPLY_DETECT_LIQUID_SURFACE" || *prop == "LIQUID_CAVITATION" {
+            continue;
+        }
+        let v = real(doc, p)?;
+        check_range(doc, context, prop, v, p.value_line)?;
+        match *prop {
+            "POROSITY_SOLID" => material.porosity = Some(v),
+            "DENSITY_SOLID" => material.density_solid = Some(v),
+            "DENSITY_LIQUID" => material.density_liquid = Some(v),
+            "K0_VALUE_SOLID" => material.k0 = Some(v),
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// The material model and its parameters (E, ν, φ′, c′, ψ, tension), or a
+/// model a3d-init does not know, kept verbatim up to the next structural
+/// keyword.
+fn read_model<G>(
+    doc: &KeywordDocument,
+    cur: &mut Cursor<'_>,
+    get: &mut G,
+    warnings: &mut Vec<String>,
+    material: &mut Material,
+    position: usize,
+    context: &str,
+) -> Result<(), ParseError>
+where
+    G: FnMut(&mut Cursor<'_>, &str, bool, &mut Vec<String>) -> Result<Pair, ParseError>,
+{
+    let material_type = material.material_type.clone();
+    let model_keyword = if material_type == "liquid" {
+        "MATERIAL_MODEL_LIQUID"
+    } else {
+        "MATERIAL_MODEL_SOLID"
+    };
+    let model_pair = get(cur, model_keyword, true, warnings)?;
+    let model = model_pair.value.clone();
+    let undrained = material_type == "saturated_material_undrained_effective";
+    match model_parameters(&model, undrained) {
+        Some(params) => {
+            let model_pairs =
+                read_properties(cur, &params, is_model_parameter, get, warnings, context)?;
+            for (prop, p) in &model_pairs {
+                let v = real(doc, p)?;
+                check_range(doc, context, prop, v, p.value_line)?;
+                match *prop {
+                    "YOUNG_MODULUS" => material.young_modulus = Some(v),
+                    "POISSON_RATIO" => material.poisson_ratio = Some(v),
+                    "FRICTION_ANGLE" | "PEAK_FRICTION_ANGLE" => material.friction_angle = Some(v),
+                    "COHESION" | "PEAK_COHESION" => material.cohesion = Some(v),
+                    "DILATANCY_ANGLE" | "PEAK_DILATANCY_ANGLE" => {
+                        material.dilatancy_angle = Some(v)
+                    }
+                    "TENSILE_STRENGTH" => material.tensile_strength = Some(v),
+                    _ => {}
+                }
+            }
+        }
+        None => {
+            // Unknown or free-form model (external_soil_model, rigid_body): keep
+            // its pairs verbatim up to the next structural keyword.
+            warnings.push(format!(
+                "{}:{}: material {position}: model `{model}` is kept verbatim; a3d-init's runner treats it as linear elastic only if E and ν are given",
+                doc.path().display(),
+                model_pair.value_line + 1
+            ));
+            while let Some((_, line)) = cur.peek_line() {
+                let keyword = line.trim_end();
+                if is_structural_keyword(keyword) || keyword == "$$NUMBER_OF_MATERIALS" {
+                    break;
+                }
+                get(cur, "", false, warnings)?;
+            }
+        }
+    }
+    material.model = Some(model);
+    Ok(())
+}
+
+/// An unsaturated material's water retention curve and hydraulic
+/// conductivity curve, with their parameters.
+fn read_water_curves<G>(
+    doc: &KeywordDocument,
+    cur: &mut Cursor<'_>,
+    get: &mut G,
+    warnings: &mut Vec<String>,
+    material: &mut Material,
+) -> Result<(), ParseError>
+where
+    G: FnMut(&mut Cursor<'_>, &str, bool, &mut Vec<String>) -> Result<Pair, ParseError>,
+{
+    let curve = get(cur, "WATER_RETENTION_CURVE", true, warnings)?;
+    match curve.value.as_str() {
+        "van_genuchten" => {
+            let mut v = [0.0; 4];
+            for slot in &mut v {
+                let p = get(cur, "", false, warnings)?;
+                *slot = real(doc, &p)?;
+            }
+            material.retention = Some(RetentionCurve::VanGenuchten {
+                s_min: v[0],
+                s_max: v[1],
+                p0: v[2],
+                lambda: v[3],
+            });
+        }
+        "linear" => {
+            let p = get(cur, "", false, warnings)?;
+            material.retention = Some(RetentionCurve::Linear { av: real(doc, &p)? });
+        }
+        other => {
+            return Err(doc.error_at(
+                curve.value_line,
+                0,
+                format!("unknown water retention curve `{other}` (known: van_genuchten, linear)"),
+            ));
+        }
+    }
+    let conductivity = get(cur, "HYDR_CONDUCTIVITY_CURVE", true, warnings)?;
+    let n_params = match conductivity.value.as_str() {
+        "constant" => 0,
+        "hillel" => 1,
+        "mualem" => 4,
+        other => {
+            return Err(doc.error_at(
+                conductivity.value_line,
+                0,
+                format!("unknown hydraulic conductivity curve `{other}` (known: constant, hillel, mualem)"),
+            ));
+        }
+    };
+    let mut v = [0.0; 4];
+    for slot in v.iter_mut().take(n_params) {
+        let p = get(cur, "", false, warnings)?;
+        *slot = real(doc, &p)?;
+    }
+    // Anura3D stores Mualem's four parameters in the same slots as the
+    // van Genuchten retention curve, so they are what its Sr uses.
+    if n_params == 4
+        && let Some(RetentionCurve::VanGenuchten {
+            s_min,
+            s_max,
+            p0,
+            lambda,
+        }) = &mut material.retention
+    {
+        [*s_min, *s_max, *p0, *lambda] = v;
+    }
+    Ok(())
 }
