@@ -97,26 +97,14 @@ pub fn initial_state(
 ) -> Result<KernelState, PipelineError> {
     let n = project.points.len();
     let n_dim = project.n_dim();
-    let cps = project.cps.as_ref();
-    let switch = cps
-        .and_then(|c| c.get_token("$$MP_STRESS_INITIALIZATION_FROMFILE", 0))
-        .map(str::trim)
-        == Some("1");
-    let k0 = cps
-        .and_then(|c| c.get_token("$$K0_PROCEDURE", 0))
-        .map(str::trim)
-        == Some("1");
-    let fixed_skeleton = cps
-        .and_then(|c| c.get_token("$$FIX_SOLID_SKELETON", 0))
-        .map(str::trim)
-        == Some("1");
+    let switches = CpsSwitches::of(project);
     let mut notes = Vec::new();
-    if k0 {
+    if switches.k0 {
         return Err(PipelineError::Input(format!(
             "the CPS has $$K0_PROCEDURE 1: Anura3D overwrites the MAPF state with its K0 formula after reading it, so {mapf_name} is not what the MPs start from; set $$K0_PROCEDURE 0 (a3d-init map does)"
         )));
     }
-    if !switch {
+    if !switches.from_file {
         notes.push(format!(
             "the CPS does not set $$MP_STRESS_INITIALIZATION_FROMFILE 1: Anura3D ignores {mapf_name} and every MP starts with zero stress and pore pressure"
         ));
@@ -152,27 +140,7 @@ pub fn initial_state(
             "the CPS switches $$MP_STRESS_INITIALIZATION_FROMFILE on but there is no {mapf_name}: Anura3D would read from an unopened file"
         )));
     };
-    let mut col = Vec::new();
-    for h in crate::formats::mapf::headers(n_dim) {
-        match table.column(h) {
-            Some(c) => col.push(c),
-            None => {
-                return Err(PipelineError::Input(format!(
-                    "{mapf_name}: no `{h}` column; Anura3D's reader needs {} in {n_dim}D (and always indexes Pwp[kPa])",
-                    crate::formats::mapf::headers(n_dim).join(" ")
-                )));
-            }
-        }
-    }
-    let Some(first) = table.rows.first() else {
-        return Err(PipelineError::Input(format!("{mapf_name}: no data rows")));
-    };
-    let h = first[col[col.len() - 1]];
-    if !(h.is_finite() && h > 0.0) {
-        return Err(PipelineError::Input(format!(
-            "{mapf_name}: the first row's SmoothLength[m] is {h}; Anura3D uses it as the global smoothing length and needs it > 0"
-        )));
-    }
+    let (col, h) = mapf_columns(table, n_dim, mapf_name)?;
     let rows: Vec<[f64; 3]> = table
         .rows
         .iter()
@@ -184,9 +152,15 @@ pub fn initial_state(
             ]
         })
         .collect();
-    let index = NeighbourIndex::new(&rows, n_dim);
-    // Value columns in kernel order after the coordinates.
-    let values: Vec<usize> = col[n_dim..col.len() - 1].to_vec();
+    let reader = KernelReader {
+        index: NeighbourIndex::new(&rows, n_dim),
+        rows: &rows,
+        table,
+        // Value columns in kernel order after the coordinates.
+        values: col[n_dim..col.len() - 1].to_vec(),
+        h,
+        n_dim,
+    };
     let (n_phases, partial) = phases(&project.model.materials);
     let unsaturated = n_phases == 3 || (n_phases == 2 && partial);
     let mut sr_local = 1.0;
@@ -197,36 +171,10 @@ pub fn initial_state(
     let mut effective = Vec::with_capacity(n);
     let mut scratch = Vec::new();
     let mut weights: Vec<(usize, f64)> = Vec::new();
-    let mut mapped = vec![0.0; values.len()];
+    let mut mapped = vec![0.0; reader.values.len()];
     for p in &project.points {
-        index.within(p.position, 2.0 * h * (1.0 + 1e-12), &mut scratch);
-        scratch.sort_unstable_by_key(|&(j, _)| j);
-        weights.clear();
-        weights.extend(
-            scratch
-                .iter()
-                .map(|&(j, _)| {
-                    let r = rows[j as usize];
-                    let d = (0..n_dim)
-                        .map(|k| (p.position[k] - r[k]) * (p.position[k] - r[k]))
-                        .sum::<f64>()
-                        .sqrt();
-                    (j as usize, kernel_value(d / h))
-                })
-                .filter(|&(_, w)| w != 0.0),
-        );
-        let total_w: f64 = weights.iter().map(|&(_, w)| w).sum();
-        rows_in_reach.push(weights.len() as u32);
-        for (k, &c) in values.iter().enumerate() {
-            mapped[k] = if total_w == 0.0 {
-                f64::NAN
-            } else {
-                weights
-                    .iter()
-                    .map(|&(j, w)| (w / total_w) * table.rows[j][c])
-                    .sum()
-            };
-        }
+        let (in_reach, total_w) = reader.values_at(p, &mut scratch, &mut weights, &mut mapped);
+        rows_in_reach.push(in_reach);
         if total_w == 0.0 {
             nan_points.push(p.id);
         }
@@ -248,23 +196,7 @@ pub fn initial_state(
             }
         }
         let sr = if unsaturated { sr_local } else { 1.0 };
-        let s = &mapped[1..];
-        let eff = if fixed_skeleton {
-            [0.0; 6]
-        } else if n_dim == 2 {
-            // SigX, SigY, SigXY: σ'zz receives the shear column (kernel defect).
-            [s[0] - sr * pwp, s[1] - sr * pwp, s[2], s[2], 0.0, 0.0]
-        } else {
-            // SigX, SigY, SigZ, SigXY, SigXZ → yz, SigYZ → xz.
-            [
-                s[0] - sr * pwp,
-                s[1] - sr * pwp,
-                s[2] - sr * pwp,
-                s[3],
-                s[4],
-                s[5],
-            ]
-        };
+        let eff = kernel_effective(&mapped[1..], pwp, sr, n_dim, switches.fixed_skeleton);
         let mut total = eff;
         for c in total.iter_mut().take(3) {
             *c += degree * pwp;
@@ -290,7 +222,7 @@ pub fn initial_state(
             "{carried} MPs of materials without a retention curve take the Sr of the MP before them in σ' = σ − Sr·p (Anura3D's local Sr is not reset per MP)"
         ));
     }
-    if fixed_skeleton {
+    if switches.fixed_skeleton {
         notes.push("$$FIX_SOLID_SKELETON 1: Anura3D assigns only the pore pressure from the MAPF; stresses stay 0".into());
     }
     Ok(KernelState {
@@ -305,6 +237,146 @@ pub fn initial_state(
         carried_saturation: carried,
         notes,
     })
+}
+
+/// The CPS switches that decide what Anura3D makes of the MAPF.
+struct CpsSwitches {
+    /// `$$MP_STRESS_INITIALIZATION_FROMFILE 1`: the MAPF is read.
+    from_file: bool,
+    /// `$$K0_PROCEDURE 1`: the K0 formula overwrites what was read.
+    k0: bool,
+    /// `$$FIX_SOLID_SKELETON 1`: only the pore pressure is assigned.
+    fixed_skeleton: bool,
+}
+
+impl CpsSwitches {
+    fn of(project: &Project) -> Self {
+        let on = |keyword: &str| {
+            project
+                .cps
+                .as_ref()
+                .and_then(|c| c.get_token(keyword, 0))
+                .map(str::trim)
+                == Some("1")
+        };
+        CpsSwitches {
+            from_file: on("$$MP_STRESS_INITIALIZATION_FROMFILE"),
+            k0: on("$$K0_PROCEDURE"),
+            fixed_skeleton: on("$$FIX_SOLID_SKELETON"),
+        }
+    }
+}
+
+/// The MAPF's columns in the kernel's order (coordinates, values, smoothing
+/// length), and the global smoothing length the kernel takes from the first
+/// row.
+fn mapf_columns(
+    table: &MapfTable,
+    n_dim: usize,
+    mapf_name: &str,
+) -> Result<(Vec<usize>, f64), PipelineError> {
+    let mut col = Vec::new();
+    for h in crate::formats::mapf::headers(n_dim) {
+        match table.column(h) {
+            Some(c) => col.push(c),
+            None => {
+                return Err(PipelineError::Input(format!(
+                    "{mapf_name}: no `{h}` column; Anura3D's reader needs {} in {n_dim}D (and always indexes Pwp[kPa])",
+                    crate::formats::mapf::headers(n_dim).join(" ")
+                )));
+            }
+        }
+    }
+    let Some(first) = table.rows.first() else {
+        return Err(PipelineError::Input(format!("{mapf_name}: no data rows")));
+    };
+    let h = first[col[col.len() - 1]];
+    if !(h.is_finite() && h > 0.0) {
+        return Err(PipelineError::Input(format!(
+            "{mapf_name}: the first row's SmoothLength[m] is {h}; Anura3D uses it as the global smoothing length and needs it > 0"
+        )));
+    }
+    Ok((col, h))
+}
+
+/// The kernel's interpolation of the MAPF rows, as coded.
+struct KernelReader<'a> {
+    index: NeighbourIndex,
+    /// The rows' coordinates (z = 0 in 2D).
+    rows: &'a [[f64; 3]],
+    table: &'a MapfTable,
+    /// The value columns, in the kernel's order.
+    values: Vec<usize>,
+    h: f64,
+    n_dim: usize,
+}
+
+impl KernelReader<'_> {
+    /// The Shepard values at `p` into `mapped` (NaN where no row is in
+    /// reach): the rows within 2h, in row order, weighted by the kernel as
+    /// coded. Returns the count of rows with a non-zero weight and the sum
+    /// of the weights.
+    fn values_at(
+        &self,
+        p: &crate::model::MaterialPoint,
+        scratch: &mut Vec<(u32, f64)>,
+        weights: &mut Vec<(usize, f64)>,
+        mapped: &mut [f64],
+    ) -> (u32, f64) {
+        let (h, n_dim) = (self.h, self.n_dim);
+        self.index
+            .within(p.position, 2.0 * h * (1.0 + 1e-12), scratch);
+        scratch.sort_unstable_by_key(|&(j, _)| j);
+        weights.clear();
+        weights.extend(
+            scratch
+                .iter()
+                .map(|&(j, _)| {
+                    let r = self.rows[j as usize];
+                    let d = (0..n_dim)
+                        .map(|k| (p.position[k] - r[k]) * (p.position[k] - r[k]))
+                        .sum::<f64>()
+                        .sqrt();
+                    (j as usize, kernel_value(d / h))
+                })
+                .filter(|&(_, w)| w != 0.0),
+        );
+        let total_w: f64 = weights.iter().map(|&(_, w)| w).sum();
+        for (k, &c) in self.values.iter().enumerate() {
+            mapped[k] = if total_w == 0.0 {
+                f64::NAN
+            } else {
+                weights
+                    .iter()
+                    .map(|&(j, w)| (w / total_w) * self.table.rows[j][c])
+                    .sum()
+            };
+        }
+        (weights.len() as u32, total_w)
+    }
+}
+
+/// The effective stress the kernel stores from the mapped stress columns `s`
+/// and p: σ′ = σ − Sr·p on the normals, with its column defects (2D: σ′zz
+/// receives the shear column; 3D: SigXZ goes to yz and SigYZ to xz); zero
+/// under `$$FIX_SOLID_SKELETON`.
+fn kernel_effective(s: &[f64], pwp: f64, sr: f64, n_dim: usize, fixed_skeleton: bool) -> [f64; 6] {
+    if fixed_skeleton {
+        [0.0; 6]
+    } else if n_dim == 2 {
+        // SigX, SigY, SigXY: σ'zz receives the shear column (kernel defect).
+        [s[0] - sr * pwp, s[1] - sr * pwp, s[2], s[2], 0.0, 0.0]
+    } else {
+        // SigX, SigY, SigZ, SigXY, SigXZ → yz, SigYZ → xz.
+        [
+            s[0] - sr * pwp,
+            s[1] - sr * pwp,
+            s[2] - sr * pwp,
+            s[3],
+            s[4],
+            s[5],
+        ]
+    }
 }
 
 /// The MPs (1-based ids) whose state differs between `a` and `b` by more than
