@@ -164,6 +164,109 @@ pub(crate) struct ExternalLoads<const D: usize> {
     pub notes: Vec<String>,
 }
 
+/// The water level's load ([`WaterLevel`]): the kernel's unit pressure on the
+/// free-surface sides in `$$BOUNDARY_HYDRAULIC_HEAD_AREA`, as nodal forces
+/// with each node's height, and γw. `None`, with a note saying why, when no
+/// MP runs two-phase; an empty load, with its note, when no side lies in the
+/// area.
+fn head_load<const D: usize, const NC: usize>(
+    series: &crate::model::loads::HeadSeries,
+    gamma_w: Option<f64>,
+    grid: &Grid<D, NC>,
+    active: &dyn Fn(usize) -> bool,
+    coords: &dyn Fn(u32) -> [f64; D],
+    axisymmetric: bool,
+    notes: &mut Vec<String>,
+) -> Option<WaterLevel<D>> {
+    match gamma_w {
+        None => {
+            notes.push(
+                "$$HYDRAULIC_HEAD file: the water level loads two-phase materials, and none runs two-phase here; not applied"
+                    .into(),
+            );
+            None
+        }
+        Some(gamma) => {
+            let sides = head_sides(grid, active, coords, &series.area);
+            if sides.is_empty() {
+                notes.push(
+                    "$$HYDRAULIC_HEAD file: no free-surface side lies in $$BOUNDARY_HYDRAULIC_HEAD_AREA; not applied"
+                        .into(),
+                );
+            }
+            // The kernel's unit pressure on every corner.
+            let unit = SideLoad {
+                corners: Vec::new(),
+                values: vec![[1.0; 3]; D],
+                line: 0,
+            };
+            let mut forces: Vec<(u32, [f64; D], f64)> = Vec::new();
+            for (e, nodes) in sides {
+                let x: Vec<[f64; D]> = nodes
+                    .iter()
+                    .map(|&n| coords(grid.mesh_node[n as usize]))
+                    .collect();
+                let mut at = Side::new(&unit, x);
+                at.turn_out_of(grid, e, &nodes, coords);
+                let f = at.nodal_forces(LoadPhase::Liquid, axisymmetric);
+                for (k, &node) in nodes.iter().enumerate() {
+                    match forces.iter_mut().find(|(n, _, _)| *n == node) {
+                        Some((_, sum, _)) => (0..D).for_each(|d| sum[d] += f[k][d]),
+                        None => forces.push((node, f[k], at.x[k][1])),
+                    }
+                }
+            }
+            Some((forces, gamma))
+        }
+    }
+}
+
+/// An MP load's side: the grid, the MPs of each active element (by local
+/// number), the elements that hold every corner of the side, and its corners.
+struct SideOnMps<'a, const D: usize, const NC: usize> {
+    grid: &'a Grid<D, NC>,
+    in_element: &'a HashMap<u32, Vec<u32>>,
+    holders: &'a [usize],
+    grid_nodes: &'a [u32],
+}
+
+impl<const D: usize, const NC: usize> SideOnMps<'_, D, NC> {
+    /// Shares the side's `total` force among the MPs next to it in each
+    /// active element that holds it (the kernel's tables), handing each MP
+    /// and its share to `push`; whether any MP was reached.
+    fn spread(&self, total: [f64; D], mut push: impl FnMut(u32, [f64; D])) -> bool {
+        let grid = self.grid;
+        let mut reached = false;
+        for &e in self
+            .holders
+            .iter()
+            .filter(|&&e| self.in_element.contains_key(&(e as u32)))
+        {
+            let Some(side_number) = element_side(grid, e, self.grid_nodes) else {
+                continue;
+            };
+            let mps = &self.in_element[&(e as u32)];
+            let Some(table) = adjacent_mps(D, mps.len(), side_number) else {
+                continue;
+            };
+            let loaded: Vec<u32> = table
+                .iter()
+                .filter_map(|&k| mps.get(k as usize - 1).copied())
+                .collect();
+            let share = 1.0 / loaded.len().max(1) as f64;
+            for &mp in &loaded {
+                let mut f = [0.0; D];
+                for d in 0..D {
+                    f[d] = total[d] * share;
+                }
+                push(mp, f);
+                reached = true;
+            }
+        }
+        reached
+    }
+}
+
 /// The geometry of a side: its unit normal as the kernel's node order gives
 /// it (2D: the left normal of corner 1 → 2; 3D: (c2 − c1) × (c3 − c1)) and
 /// its measure (length or area).
@@ -233,42 +336,15 @@ impl<const D: usize> ExternalLoads<D> {
             notes: Vec::new(),
         };
         if let Some(series) = &loads.head {
-            match gamma_w {
-                None => out.notes.push(
-                    "$$HYDRAULIC_HEAD file: the water level loads two-phase materials, and none runs two-phase here; not applied"
-                        .into(),
-                ),
-                Some(gamma) => {
-                    let sides = head_sides(grid, &active, &coords, &series.area);
-                    if sides.is_empty() {
-                        out.notes.push(
-                            "$$HYDRAULIC_HEAD file: no free-surface side lies in $$BOUNDARY_HYDRAULIC_HEAD_AREA; not applied"
-                                .into(),
-                        );
-                    }
-                    // The kernel's unit pressure on every corner.
-                    let unit = SideLoad {
-                        corners: Vec::new(),
-                        values: vec![[1.0; 3]; D],
-                        line: 0,
-                    };
-                    let mut forces: Vec<(u32, [f64; D], f64)> = Vec::new();
-                    for (e, nodes) in sides {
-                        let x: Vec<[f64; D]> =
-                            nodes.iter().map(|&n| coords(grid.mesh_node[n as usize])).collect();
-                        let mut at = Side::new(&unit, x);
-                        at.turn_out_of(grid, e, &nodes, &coords);
-                        let f = at.nodal_forces(LoadPhase::Liquid, axisymmetric);
-                        for (k, &node) in nodes.iter().enumerate() {
-                            match forces.iter_mut().find(|(n, _, _)| *n == node) {
-                                Some((_, sum, _)) => (0..D).for_each(|d| sum[d] += f[k][d]),
-                                None => forces.push((node, f[k], at.x[k][1])),
-                            }
-                        }
-                    }
-                    out.head = Some((forces, gamma));
-                }
-            }
+            out.head = head_load(
+                series,
+                gamma_w,
+                grid,
+                &active,
+                &coords,
+                axisymmetric,
+                &mut out.notes,
+            );
         }
         for block in &loads.blocks {
             if block.sides.is_empty() {
@@ -333,29 +409,15 @@ impl<const D: usize> ExternalLoads<D> {
                             continue;
                         }
                         let total = at.total(block.phase, axisymmetric);
-                        let mut reached = false;
-                        for &e in holders.iter().filter(|&&e| active(e)) {
-                            let Some(side_number) = element_side(grid, e, &grid_nodes) else {
-                                continue;
-                            };
-                            let mps = &in_element[&(e as u32)];
-                            let Some(table) = adjacent_mps(D, mps.len(), side_number) else {
-                                continue;
-                            };
-                            let loaded: Vec<u32> = table
-                                .iter()
-                                .filter_map(|&k| mps.get(k as usize - 1).copied())
-                                .collect();
-                            let share = 1.0 / loaded.len().max(1) as f64;
-                            for &mp in &loaded {
-                                let mut f = [0.0; D];
-                                for d in 0..D {
-                                    f[d] = total[d] * share;
-                                }
-                                out.on_mps.push((block.phase, block.system, mp, f));
-                                reached = true;
-                            }
-                        }
+                        let on = SideOnMps {
+                            grid,
+                            in_element: &in_element,
+                            holders: &holders,
+                            grid_nodes: &grid_nodes,
+                        };
+                        let reached = on.spread(total, |mp, f| {
+                            out.on_mps.push((block.phase, block.system, mp, f));
+                        });
                         if !reached {
                             skipped.push(side.line);
                         }
