@@ -354,27 +354,7 @@ fn drive(
     let mut next_snapshot = 0;
 
     let mut records = Vec::new();
-    let starts = simulation.positions();
-    if let Some(&bad) = settings
-        .monitored
-        .iter()
-        .find(|&&i| i as usize >= starts.len())
-    {
-        return Err(MpmError::InvalidSettings(format!(
-            "monitored MP {} does not exist: the model has {} MPs",
-            bad as u64 + 1,
-            starts.len()
-        )));
-    }
-    let mut monitored: Vec<MonitoredPoint> = settings
-        .monitored
-        .iter()
-        .map(|&i| MonitoredPoint {
-            id: i + 1,
-            start: starts[i as usize],
-            history: Vec::new(),
-        })
-        .collect();
+    let mut monitored = monitored_points(&settings.monitored, &simulation.positions())?;
     let mut record_monitored = |simulation: &Simulation| {
         if monitored.is_empty() {
             return;
@@ -436,63 +416,22 @@ fn drive(
         record_monitored(simulation);
     }
     let final_residual = last.map_or(0.0, |r| r.residual_ratio);
-    let (max_displacement, _) = simulation.displacement_stats();
-
-    let (mut inadmissible, mut plastic_points, mut lost) = (0, 0, 0);
-    simulation.for_each_point(|p| {
-        inadmissible += p.inadmissible as usize;
-        plastic_points += (p.plastic && !p.inadmissible) as usize;
-        lost += p.lost as usize;
-    });
-    let n_points = simulation.n_points();
+    let judged = judge(
+        simulation,
+        settings,
+        height,
+        initial_residual,
+        final_residual,
+    );
+    let Judged {
+        verdict,
+        max_displacement,
+        inadmissible,
+        plastic_points,
+        lost,
+        n_points,
+    } = judged;
     let thresholds = settings.thresholds.clone();
-    let plastic_limit = (thresholds.plastic_fraction * n_points as f64).floor() as usize;
-    let displacement_limit = thresholds.displacement_fraction * height;
-    let mut reasons = Vec::new();
-    if !below(initial_residual, tolerance) {
-        reasons.push(Reason::InitialResidual {
-            ratio: initial_residual,
-            limit: tolerance,
-        });
-    }
-    if !below(final_residual, tolerance) {
-        reasons.push(Reason::FinalResidual {
-            ratio: final_residual,
-            limit: tolerance,
-        });
-    }
-    if !below(max_displacement, displacement_limit) {
-        reasons.push(Reason::Displacement {
-            max: max_displacement,
-            limit: displacement_limit,
-        });
-    }
-    if inadmissible > plastic_limit {
-        reasons.push(Reason::InadmissibleStress {
-            count: inadmissible,
-            limit: plastic_limit,
-        });
-    }
-    if plastic_points > plastic_limit {
-        reasons.push(Reason::PlasticGrowth {
-            count: plastic_points,
-            limit: plastic_limit,
-        });
-    }
-    if lost > 0 {
-        reasons.push(Reason::LostPoints { count: lost });
-    }
-    let verdict = if reasons.is_empty() {
-        Verdict::Equilibrium {
-            initial_residual_ratio: initial_residual,
-            final_residual_ratio: final_residual,
-            max_displacement,
-            plastic_points,
-        }
-    } else {
-        Verdict::NotInEquilibrium { reasons }
-    };
-
     let rest = Rest::find(&records);
     let report = RunReport {
         dimension: model.mesh.dimension,
@@ -541,6 +480,114 @@ fn drive(
         notes: simulation.notes(),
     };
     Ok(report)
+}
+
+/// The verdict of a run and the counts it rests on.
+struct Judged {
+    verdict: Verdict,
+    max_displacement: f64,
+    inadmissible: usize,
+    plastic_points: usize,
+    lost: usize,
+    n_points: usize,
+}
+
+/// Judges the state a run ended in against the thresholds: the residual
+/// ratios at the first and last steps, the largest displacement against the
+/// model's height, inadmissible and plastic MPs, MPs lost.
+fn judge(
+    simulation: &Simulation,
+    settings: &RunSettings,
+    height: f64,
+    initial_residual: f64,
+    final_residual: f64,
+) -> Judged {
+    let tolerance = settings.thresholds.residual_ratio;
+    let (max_displacement, _) = simulation.displacement_stats();
+
+    let (mut inadmissible, mut plastic_points, mut lost) = (0, 0, 0);
+    simulation.for_each_point(|p| {
+        inadmissible += p.inadmissible as usize;
+        plastic_points += (p.plastic && !p.inadmissible) as usize;
+        lost += p.lost as usize;
+    });
+    let n_points = simulation.n_points();
+    let thresholds = &settings.thresholds;
+    let plastic_limit = (thresholds.plastic_fraction * n_points as f64).floor() as usize;
+    let displacement_limit = thresholds.displacement_fraction * height;
+    let mut reasons = Vec::new();
+    if !below(initial_residual, tolerance) {
+        reasons.push(Reason::InitialResidual {
+            ratio: initial_residual,
+            limit: tolerance,
+        });
+    }
+    if !below(final_residual, tolerance) {
+        reasons.push(Reason::FinalResidual {
+            ratio: final_residual,
+            limit: tolerance,
+        });
+    }
+    if !below(max_displacement, displacement_limit) {
+        reasons.push(Reason::Displacement {
+            max: max_displacement,
+            limit: displacement_limit,
+        });
+    }
+    if inadmissible > plastic_limit {
+        reasons.push(Reason::InadmissibleStress {
+            count: inadmissible,
+            limit: plastic_limit,
+        });
+    }
+    if plastic_points > plastic_limit {
+        reasons.push(Reason::PlasticGrowth {
+            count: plastic_points,
+            limit: plastic_limit,
+        });
+    }
+    if lost > 0 {
+        reasons.push(Reason::LostPoints { count: lost });
+    }
+    let verdict = if reasons.is_empty() {
+        Verdict::Equilibrium {
+            initial_residual_ratio: initial_residual,
+            final_residual_ratio: final_residual,
+            max_displacement,
+            plastic_points,
+        }
+    } else {
+        Verdict::NotInEquilibrium { reasons }
+    };
+
+    Judged {
+        verdict,
+        max_displacement,
+        inadmissible,
+        plastic_points,
+        lost,
+        n_points,
+    }
+}
+
+/// The monitored MPs (0-based indices) with their start positions; an index
+/// past the last MP is an error naming its id.
+fn monitored_points(indices: &[u32], starts: &[[f64; 3]]) -> Result<Vec<MonitoredPoint>, MpmError> {
+    if let Some(&bad) = indices.iter().find(|&&i| i as usize >= starts.len()) {
+        return Err(MpmError::InvalidSettings(format!(
+            "monitored MP {} does not exist: the model has {} MPs",
+            bad as u64 + 1,
+            starts.len()
+        )));
+    }
+    Ok(indices
+        .iter()
+        .map(|&i| MonitoredPoint {
+            id: i + 1,
+            start: starts[i as usize],
+            history: Vec::new(),
+        })
+        .collect())
 }
 
 /// `value < limit`, false for NaN: a measurement that is not a number fails.
