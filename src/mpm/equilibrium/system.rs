@@ -77,6 +77,57 @@ pub(super) struct System<const D: usize, const NC: usize> {
     pub axisymmetric: bool,
 }
 
+/// The free directions of the nodes that carry mass (heavier than 10⁻¹⁰ of the
+/// heaviest MP, and not fixed) numbered in node order, and the gravity load
+/// on them, summed in MP order as the runner sums it: (per node and
+/// direction the free number or [`CONSTRAINED`], the free count, f_ext,
+/// ‖f_ext‖²).
+fn number_dofs<const D: usize, const NC: usize>(
+    grid: &Grid<D, NC>,
+    points: &[Point<NC>],
+    masses: &[f64],
+    weights: &[f64],
+    gravity: f64,
+) -> (Vec<u32>, u32, Vec<f64>, f64) {
+    // Nodal masses and gravity, in MP order as the runner sums them.
+    let n_nodes = grid.n_nodes();
+    let mut node_mass = vec![0.0; n_nodes];
+    let mut node_weight = vec![0.0; n_nodes];
+    for ((p, &mass), &weight) in points.iter().zip(masses).zip(weights) {
+        let corners = &grid.elements[p.element as usize].corners;
+        for i in 0..NC {
+            node_mass[corners[i] as usize] += mass * p.shape[i];
+            node_weight[corners[i] as usize] += weight * p.shape[i];
+        }
+    }
+    let max_mass = masses.iter().copied().fold(0.0, f64::max);
+    let floor = 1e-10 * max_mass;
+    let mut dof = vec![CONSTRAINED; n_nodes * D];
+    let mut n_free = 0u32;
+    let mut external = vec![0.0; n_nodes * D];
+    let mut external_sq = 0.0;
+    for node in 0..n_nodes {
+        if node_mass[node] <= floor {
+            continue;
+        }
+        for d in 0..D {
+            if grid.fixed[node][d] {
+                continue;
+            }
+            dof[node * D + d] = n_free;
+            n_free += 1;
+            let f = if d == 1 {
+                node_weight[node] * -gravity
+            } else {
+                0.0
+            };
+            external[node * D + d] = f;
+            external_sq += f * f;
+        }
+    }
+    (dof, n_free, external, external_sq)
+}
+
 impl<const D: usize, const NC: usize> System<D, NC> {
     /// Builds the system of `model` with the MPs `points` holding the pore
     /// state of `states` (pwp and saturation; their total stress is not read),
@@ -196,42 +247,9 @@ impl<const D: usize, const NC: usize> System<D, NC> {
                 *h /= g.volume;
             }
         }
-        // Nodal masses and gravity, in MP order as the runner sums them.
+        let (dof, n_free, external, external_sq) =
+            number_dofs(&grid, &out_points, &masses, &weights, gravity);
         let n_nodes = grid.n_nodes();
-        let mut node_mass = vec![0.0; n_nodes];
-        let mut node_weight = vec![0.0; n_nodes];
-        for ((p, &mass), &weight) in out_points.iter().zip(&masses).zip(&weights) {
-            let corners = &grid.elements[p.element as usize].corners;
-            for i in 0..NC {
-                node_mass[corners[i] as usize] += mass * p.shape[i];
-                node_weight[corners[i] as usize] += weight * p.shape[i];
-            }
-        }
-        let max_mass = masses.iter().copied().fold(0.0, f64::max);
-        let floor = 1e-10 * max_mass;
-        let mut dof = vec![CONSTRAINED; n_nodes * D];
-        let mut n_free = 0u32;
-        let mut external = vec![0.0; n_nodes * D];
-        let mut external_sq = 0.0;
-        for node in 0..n_nodes {
-            if node_mass[node] <= floor {
-                continue;
-            }
-            for d in 0..D {
-                if grid.fixed[node][d] {
-                    continue;
-                }
-                dof[node * D + d] = n_free;
-                n_free += 1;
-                let f = if d == 1 {
-                    node_weight[node] * -gravity
-                } else {
-                    0.0
-                };
-                external[node * D + d] = f;
-                external_sq += f * f;
-            }
-        }
         let mut system = System {
             grid,
             points: out_points,
