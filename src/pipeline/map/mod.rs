@@ -158,34 +158,19 @@ pub fn map(
     warnings.extend(interpolate::null_point_warning(null_points, config.outside));
     stress::zero_skipped(&mut states, &result.status);
     let equilibrium_report = if source == StressSource::Equilibrium {
-        let t = Instant::now();
-        let report = equilibrium::equilibrium_stress(
+        let phase = solve_equilibrium(
             &project,
             &mut states,
-            config.mixed_state,
-            &config.equilibrium,
+            config,
             resolved.because,
+            sampler.as_ref(),
+            &placement.positions,
         )?;
-        timings.push(("equilibrium stress".to_string(), ms(t)));
-        if let Some(cloud) = &sampler {
-            let t = Instant::now();
-            match equilibrium::no_worse_than_geostatic(
-                &project,
-                &placement.positions,
-                cloud,
-                &mut states,
-                &report,
-            )? {
-                Some(Ok(note)) => notes.push(note),
-                Some(Err(warning)) => warnings.push(warning),
-                None => {}
-            }
-            timings.push(("geostatic floor".to_string(), ms(t)));
-        }
-        notes.extend(equilibrium::notes(&report));
-        assumed.extend(equilibrium::assumed_defaults(&report));
-        warnings.extend(equilibrium::warnings(&report));
-        Some(report)
+        notes.extend(phase.notes);
+        warnings.extend(phase.warnings);
+        assumed.extend(phase.assumed);
+        timings.extend(phase.timings);
+        Some(phase.report)
     } else {
         None
     };
@@ -231,5 +216,58 @@ pub fn map(
         states,
         diagnostics,
         report,
+    })
+}
+
+/// What the equilibrium phase of [`map`] adds to the report.
+struct EquilibriumPhase {
+    report: equilibrium::EquilibriumReport,
+    notes: Vec<String>,
+    warnings: Vec<String>,
+    assumed: Vec<crate::state::defaults::AssumedDefault>,
+    timings: Vec<(String, f64)>,
+}
+
+/// `--stress equilibrium`: the stress at rest on Anura3D's discretisation,
+/// then, where no state at rest exists, the geostatic floor from the FEM
+/// `cloud` (the state written is never further out of balance than the
+/// geostatic start).
+fn solve_equilibrium(
+    project: &Project,
+    states: &mut [MpState],
+    config: &MapConfig,
+    because: String,
+    cloud: Option<&interpolate::FemCloud<'_>>,
+    positions: &[[f64; 3]],
+) -> Result<EquilibriumPhase, PipelineError> {
+    let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
+    let (mut notes, mut warnings, mut timings) = (Vec::new(), Vec::new(), Vec::new());
+    let t = Instant::now();
+    let report = equilibrium::equilibrium_stress(
+        project,
+        states,
+        config.mixed_state,
+        &config.equilibrium,
+        because,
+    )?;
+    timings.push(("equilibrium stress".to_string(), ms(t)));
+    if let Some(cloud) = cloud {
+        let t = Instant::now();
+        match equilibrium::no_worse_than_geostatic(project, positions, cloud, states, &report)? {
+            Some(Ok(note)) => notes.push(note),
+            Some(Err(warning)) => warnings.push(warning),
+            None => {}
+        }
+        timings.push(("geostatic floor".to_string(), ms(t)));
+    }
+    notes.extend(equilibrium::notes(&report));
+    let assumed = equilibrium::assumed_defaults(&report);
+    warnings.extend(equilibrium::warnings(&report));
+    Ok(EquilibriumPhase {
+        report,
+        notes,
+        warnings,
+        assumed,
+        timings,
     })
 }
