@@ -262,15 +262,12 @@ impl GomDocument {
         )
     }
 
-    /// Builds the typed view. Every count, id and number is checked; errors name
-    /// the file, line and column.
-    pub fn model(&self) -> Result<(AnuraModel, GomInfo), FormatError> {
-        let mut info = GomInfo {
-            version: self.version().to_string(),
-            ..GomInfo::default()
-        };
-        let mut errors: Vec<ParseError> = Vec::new();
-
+    /// The model's dimension and element type (Anura3D's defaults, with a
+    /// warning, where the blocks are missing), which must agree.
+    fn dimension_and_element_type(
+        &self,
+        warnings: &mut Vec<String>,
+    ) -> Result<(Dimension, ElementType), FormatError> {
         let dimension = match self.single_value("$$DIMENSION") {
             Some((line, value)) => Dimension::from_gom(value).ok_or_else(|| {
                 self.doc.error_at(line, 0, format!(
@@ -278,7 +275,7 @@ impl GomDocument {
                 ))
             })?,
             None => {
-                info.warnings.push("no $$DIMENSION block: Anura3D's default 3D-cartesian is used".into());
+                warnings.push("no $$DIMENSION block: Anura3D's default 3D-cartesian is used".into());
                 Dimension::Cartesian3D
             }
         };
@@ -297,7 +294,7 @@ impl GomDocument {
                 }
             },
             None => {
-                info.warnings.push(
+                warnings.push(
                     "no $$ELEMENTTYPE block: Anura3D's default tetrahedral_old is used".into(),
                 );
                 ElementType::TetOld
@@ -320,15 +317,16 @@ impl GomDocument {
                 .into());
         }
         if element_type == ElementType::Quad4 {
-            info.warnings.push(
+            warnings.push(
                 "quadrilateral_4-noded runs only with the upstream Anura3D kernel (Anura3D/Anura3D_OpenSource)".into(),
             );
         }
-        info.formulation = self
-            .single_value("$$FORMULATION")
-            .map(|(_, v)| v.to_string());
+        Ok((dimension, element_type))
+    }
 
-        // Counters: NEl NNodes (elements first).
+    /// `$$STARTCOUNTERS`: the counts of elements and nodes, at least one of
+    /// each and fewer than 2³².
+    fn counters(&self) -> Result<(usize, usize), FormatError> {
         let counters = self.required("$$STARTCOUNTERS")?;
         let (cline, ctext) = self
             .rows(counters)
@@ -363,6 +361,25 @@ impl GomDocument {
                 .error_at(cline, 0, "more than 2^32 elements or nodes")
                 .into());
         }
+
+        Ok((n_elements, n_nodes))
+    }
+
+    /// Builds the typed view. Every count, id and number is checked; errors name
+    /// the file, line and column.
+    pub fn model(&self) -> Result<(AnuraModel, GomInfo), FormatError> {
+        let mut info = GomInfo {
+            version: self.version().to_string(),
+            ..GomInfo::default()
+        };
+        let mut errors: Vec<ParseError> = Vec::new();
+
+        let (dimension, element_type) = self.dimension_and_element_type(&mut info.warnings)?;
+        info.formulation = self
+            .single_value("$$FORMULATION")
+            .map(|(_, v)| v.to_string());
+
+        let (n_elements, n_nodes) = self.counters()?;
 
         let nodes = self.read_nodes(dimension.n_dim(), n_nodes)?;
         let (connectivity, element_lines) =
