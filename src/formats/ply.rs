@@ -199,7 +199,9 @@ pub fn parse_ply_mesh(path: &Path, bytes: &[u8]) -> Result<PlyMesh, FormatError>
     parse_ply(path, bytes, true)
 }
 
-fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, FormatError> {
+/// The PLY header: its elements with their properties, and the offset of
+/// the data after `end_header`. Only `binary_little_endian 1.0` is read.
+fn parse_header(path: &Path, bytes: &[u8]) -> Result<(Vec<Element>, usize), FormatError> {
     let at = |line: usize, col: usize, msg: String| -> FormatError {
         ParseError::at(path, line, col, msg).into()
     };
@@ -300,13 +302,11 @@ fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, 
     if !format_ok {
         return Err(at(2, 1, "missing `format binary_little_endian 1.0`".into()));
     }
-    let node_index = elements
-        .iter()
-        .position(|e| e.name == "node")
-        .ok_or_else(|| {
-            FormatError::from(ParseError::at(path, 1, 1, "the PLY has no `node` element"))
-        })?;
-    let node = &elements[node_index];
+    Ok((elements, header_end))
+}
+
+/// The `node` element must be `double x, y, z`, no more and no less.
+fn check_node_element(path: &Path, node: &Element) -> Result<(), FormatError> {
     // The first property that is not the expected `double x|y|z`, at its line
     // (or the element's line when properties are missing).
     let wrong =
@@ -334,6 +334,19 @@ fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, 
         )
         .into());
     }
+    Ok(())
+}
+
+fn parse_ply(path: &Path, bytes: &[u8], with_elements: bool) -> Result<PlyMesh, FormatError> {
+    let (elements, header_end) = parse_header(path, bytes)?;
+    let node_index = elements
+        .iter()
+        .position(|e| e.name == "node")
+        .ok_or_else(|| {
+            FormatError::from(ParseError::at(path, 1, 1, "the PLY has no `node` element"))
+        })?;
+    let node = &elements[node_index];
+    check_node_element(path, node)?;
     // Skip the elements before `node` by their sizes.
     let mut offset = header_end;
     let truncated = |offset: usize, what: &str| -> FormatError {
