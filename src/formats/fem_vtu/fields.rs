@@ -204,33 +204,15 @@ pub fn read(
             StressRule::Auto => StressRule::Total,
             rule => rule,
         };
-        let text = match rule {
-            StressRule::Effective { biot, chi } => {
-                let Some(p) = &pwp else {
-                    return Err(ParseError::new(
-                        path,
-                        tag.at,
-                        format!(
-                            "`{}` is an effective stress, but there is no pressure array to make it total",
-                            tag.name
-                        ),
-                    )
-                    .into());
-                };
-                let (chi_values, chi_text) = chi_of(chi, saturation.as_ref(), n)
-                    .map_err(|m| ParseError::new(path, tag.at, m))?;
-                for (_, v) in stress.iter_mut().filter(|(c, _)| c.is_normal()) {
-                    for i in 0..n {
-                        v[i] += biot * chi_values.as_ref().map_or(1.0, |c| c[i]) * p[i];
-                    }
-                }
-                format!(
-                    "`{}` is effective (OGS's HydroMechanics and RichardsMechanics write σ′): total σ = σ′ − α·χ·p·I in OGS's signs, i.e. σ′ + α·χ·pwp on the normal components in Anura3D's, with α = {biot} and χ = {chi_text}",
-                    tag.name
-                )
-            }
-            _ => format!("`{}` is taken as total stress", tag.name),
-        };
+        let text = make_total(
+            path,
+            tag,
+            rule,
+            &mut stress,
+            pwp.as_deref(),
+            saturation.as_ref(),
+            n,
+        )?;
         used.insert(tag.name.clone(), "stress".into());
         columns.push(column(
             &tag.name,
@@ -275,52 +257,11 @@ pub fn read(
     };
 
     // The data points: every node of every cell, once per material around it.
-    let in_cells = mesh.used();
     let mut nodes = FemNodes {
         dim,
         ..FemNodes::default()
     };
-    let mut order = Vec::new();
-    let mut regions = Vec::new();
-    let mut shared = 0;
-    for i in (0..n).filter(|&i| in_cells[i]) {
-        match &around {
-            Some(around) => {
-                if around[i].len() > 1 {
-                    shared += 1;
-                }
-                for id in &around[i] {
-                    order.push(i);
-                    regions.push(format!("mat{id}"));
-                }
-            }
-            None => order.push(i),
-        }
-    }
-    if shared > 0 {
-        notes.push(format!(
-            "{shared} nodes lie on an interface between materials: each is a data point of every material it touches"
-        ));
-    }
-    let distinct: Vec<[f64; 3]> = (0..n)
-        .filter(|&i| in_cells[i])
-        .map(|i| mesh.points[i])
-        .collect();
-    if let Some(far) = far_outlier(&distinct) {
-        return Err(ParseError::new(path, xml.points.at, far.to_string()).into());
-    }
-    if let Some((a, _)) = first_coincident(&distinct) {
-        let p = distinct[a];
-        return Err(ParseError::new(
-            path,
-            xml.points.at,
-            format!(
-                "two mesh nodes at the same place ({}, {}, {}): a3d-init takes each node as one data point",
-                p[0], p[1], p[2]
-            ),
-        )
-        .into());
-    }
+    let (order, regions) = data_points(path, &xml, &mesh, around.as_deref(), &mut notes)?;
     nodes.ids = order.iter().map(|&i| i as i64 + 1).collect();
     nodes.positions = order.iter().map(|&i| mesh.points[i]).collect();
     if around.is_some() {
@@ -587,6 +528,103 @@ fn report(
         stress_rule: None,
         notes: Vec::new(),
     }
+}
+
+/// The data points of the mesh: every node that a cell uses, once per
+/// material around it (`around`: the materials of the cells at each node),
+/// as (node index, region) in node order; a node far outside the others or
+/// two at one place are errors.
+fn data_points(
+    path: &Path,
+    xml: &VtuXml,
+    mesh: &mesh::Mesh,
+    around: Option<&[Vec<i64>]>,
+    notes: &mut Vec<String>,
+) -> Result<(Vec<usize>, Vec<String>), ParseError> {
+    let n = xml.n_points;
+    let in_cells = mesh.used();
+    let mut order = Vec::new();
+    let mut regions = Vec::new();
+    let mut shared = 0;
+    for i in (0..n).filter(|&i| in_cells[i]) {
+        match around {
+            Some(around) => {
+                if around[i].len() > 1 {
+                    shared += 1;
+                }
+                for id in &around[i] {
+                    order.push(i);
+                    regions.push(format!("mat{id}"));
+                }
+            }
+            None => order.push(i),
+        }
+    }
+    if shared > 0 {
+        notes.push(format!(
+            "{shared} nodes lie on an interface between materials: each is a data point of every material it touches"
+        ));
+    }
+    let distinct: Vec<[f64; 3]> = (0..n)
+        .filter(|&i| in_cells[i])
+        .map(|i| mesh.points[i])
+        .collect();
+    if let Some(far) = far_outlier(&distinct) {
+        return Err(ParseError::new(path, xml.points.at, far.to_string()));
+    }
+    if let Some((a, _)) = first_coincident(&distinct) {
+        let p = distinct[a];
+        return Err(ParseError::new(
+            path,
+            xml.points.at,
+            format!(
+                "two mesh nodes at the same place ({}, {}, {}): a3d-init takes each node as one data point",
+                p[0], p[1], p[2]
+            ),
+        ));
+    }
+    Ok((order, regions))
+}
+
+/// Makes the stress `stress` total by `rule`: an effective stress gains
+/// α·χ·pwp on its normal components (χ from `saturation` or as given); a
+/// total one is taken as it is. Returns the rule in words for the report.
+fn make_total(
+    path: &Path,
+    tag: &ArrayTag,
+    rule: StressRule,
+    stress: &mut [(StressComponent, Vec<f64>)],
+    pwp: Option<&[f64]>,
+    saturation: Option<&(String, Vec<f64>)>,
+    n: usize,
+) -> Result<String, ParseError> {
+    let text = match rule {
+        StressRule::Effective { biot, chi } => {
+            let Some(p) = pwp else {
+                return Err(ParseError::new(
+                    path,
+                    tag.at,
+                    format!(
+                        "`{}` is an effective stress, but there is no pressure array to make it total",
+                        tag.name
+                    ),
+                ));
+            };
+            let (chi_values, chi_text) =
+                chi_of(chi, saturation, n).map_err(|m| ParseError::new(path, tag.at, m))?;
+            for (_, v) in stress.iter_mut().filter(|(c, _)| c.is_normal()) {
+                for i in 0..n {
+                    v[i] += biot * chi_values.as_ref().map_or(1.0, |c| c[i]) * p[i];
+                }
+            }
+            format!(
+                "`{}` is effective (OGS's HydroMechanics and RichardsMechanics write σ′): total σ = σ′ − α·χ·p·I in OGS's signs, i.e. σ′ + α·χ·pwp on the normal components in Anura3D's, with α = {biot} and χ = {chi_text}",
+                tag.name
+            )
+        }
+        _ => format!("`{}` is taken as total stress", tag.name),
+    };
+    Ok(text)
 }
 
 #[cfg(test)]
