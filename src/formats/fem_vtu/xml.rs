@@ -208,59 +208,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<VtuXml, ParseError> {
     })?;
     let root = doc.root_element();
     let at = |node: roxmltree::Node| pos(node.range().start.min(head.len()));
-    if root.tag_name().name() != "VTKFile" {
-        return Err(err(path, at(root), "expected a <VTKFile> document"));
-    }
-    match root.attribute("type") {
-        Some("UnstructuredGrid") => {}
-        Some("PUnstructuredGrid") => {
-            return Err(err(
-                path,
-                at(root),
-                "a parallel .pvtu: give its pieces merged into one .vtu (OGS: pvtu2vtu)",
-            ));
-        }
-        other => {
-            return Err(err(
-                path,
-                at(root),
-                format!(
-                    "VTKFile type `{}`: a3d-init reads UnstructuredGrid (.vtu)",
-                    other.unwrap_or("")
-                ),
-            ));
-        }
-    }
-    let big_endian = root.attribute("byte_order") == Some("BigEndian");
-    let header_bytes = match root.attribute("header_type") {
-        None | Some("UInt32") => 4,
-        Some("UInt64") => 8,
-        Some(other) => {
-            return Err(err(
-                path,
-                at(root),
-                format!("header_type `{other}`: expected UInt32 or UInt64"),
-            ));
-        }
-    };
-    let zlib = match root.attribute("compressor") {
-        None | Some("") => false,
-        Some("vtkZLibDataCompressor") => true,
-        Some(other) => {
-            return Err(err(
-                path,
-                at(root),
-                format!(
-                    "compressor `{other}` is not read (zlib is): write the file with zlib or without compression"
-                ),
-            ));
-        }
-    };
-    let layout = Layout {
-        big_endian,
-        header_bytes,
-        zlib,
-    };
+    let layout = layout_of(path, root, at(root))?;
     let grid = child(root, "UnstructuredGrid")
         .ok_or_else(|| err(path, at(root), "no <UnstructuredGrid>"))?;
     let pieces: Vec<_> = grid
@@ -363,22 +311,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<VtuXml, ParseError> {
             "arrays are `appended` but the file has no <AppendedData>",
         ));
     }
-    let mut encoding = formats.join(" and ");
-    if let Some(a) = &appended {
-        encoding.push_str(match a.encoding {
-            AppendedEncoding::Base64 => " (base64)",
-            AppendedEncoding::Raw => " (raw)",
-        });
-    }
-    encoding.push_str(if zlib { ", zlib" } else { ", uncompressed" });
-    encoding.push_str(if header_bytes == 8 {
-        ", UInt64 headers"
-    } else {
-        ", UInt32 headers"
-    });
-    if big_endian {
-        encoding.push_str(", big-endian");
-    }
+    let encoding = encoding_text(&formats, appended.as_ref(), &layout);
     Ok(VtuXml {
         layout,
         appended,
@@ -393,6 +326,91 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<VtuXml, ParseError> {
         encoding,
         budget: Budget::of_file(bytes.len()),
     })
+}
+
+/// The `<VTKFile>` root's checks (an UnstructuredGrid, not a parallel
+/// piece) and the layout its attributes give: byte order, header size and
+/// compression. Errors are at the root's position `root_at`.
+fn layout_of(path: &Path, root: roxmltree::Node, root_at: Position) -> Result<Layout, ParseError> {
+    if root.tag_name().name() != "VTKFile" {
+        return Err(err(path, root_at, "expected a <VTKFile> document"));
+    }
+    match root.attribute("type") {
+        Some("UnstructuredGrid") => {}
+        Some("PUnstructuredGrid") => {
+            return Err(err(
+                path,
+                root_at,
+                "a parallel .pvtu: give its pieces merged into one .vtu (OGS: pvtu2vtu)",
+            ));
+        }
+        other => {
+            return Err(err(
+                path,
+                root_at,
+                format!(
+                    "VTKFile type `{}`: a3d-init reads UnstructuredGrid (.vtu)",
+                    other.unwrap_or("")
+                ),
+            ));
+        }
+    }
+    let big_endian = root.attribute("byte_order") == Some("BigEndian");
+    let header_bytes = match root.attribute("header_type") {
+        None | Some("UInt32") => 4,
+        Some("UInt64") => 8,
+        Some(other) => {
+            return Err(err(
+                path,
+                root_at,
+                format!("header_type `{other}`: expected UInt32 or UInt64"),
+            ));
+        }
+    };
+    let zlib = match root.attribute("compressor") {
+        None | Some("") => false,
+        Some("vtkZLibDataCompressor") => true,
+        Some(other) => {
+            return Err(err(
+                path,
+                root_at,
+                format!(
+                    "compressor `{other}` is not read (zlib is): write the file with zlib or without compression"
+                ),
+            ));
+        }
+    };
+    Ok(Layout {
+        big_endian,
+        header_bytes,
+        zlib,
+    })
+}
+
+/// The encoding in words for the report: the array formats, the appended
+/// data's encoding, compression, header size and byte order.
+fn encoding_text(formats: &[&str], appended: Option<&Appended>, layout: &Layout) -> String {
+    let mut encoding = formats.join(" and ");
+    if let Some(a) = appended {
+        encoding.push_str(match a.encoding {
+            AppendedEncoding::Base64 => " (base64)",
+            AppendedEncoding::Raw => " (raw)",
+        });
+    }
+    encoding.push_str(if layout.zlib {
+        ", zlib"
+    } else {
+        ", uncompressed"
+    });
+    encoding.push_str(if layout.header_bytes == 8 {
+        ", UInt64 headers"
+    } else {
+        ", UInt32 headers"
+    });
+    if layout.big_endian {
+        encoding.push_str(", big-endian");
+    }
+    encoding
 }
 
 fn child<'a, 'i>(node: roxmltree::Node<'a, 'i>, name: &str) -> Option<roxmltree::Node<'a, 'i>> {
