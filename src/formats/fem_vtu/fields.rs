@@ -243,18 +243,7 @@ pub fn read(
     }
 
     // Regions from the material of each cell.
-    let mut materials: Vec<(i64, usize)> = Vec::new();
-    let around = match find(path, &xml, Role::Region, explicit)? {
-        Some(tag) => {
-            scalar_array(path, tag, Role::Region)?;
-            let ids = values(path, bytes, &xml, tag, xml.n_cells)?;
-            let ids = kept_cell_ids(path, tag, &ids, &mesh)?;
-            materials = material_counts(&ids);
-            used.insert(tag.name.clone(), "region (mat<id>)".into());
-            Some(mesh.around(&ids))
-        }
-        None => None,
-    };
+    let (materials, around) = regions(path, bytes, &xml, &mesh, explicit, &mut used)?;
 
     // The data points: every node of every cell, once per material around it.
     let mut nodes = FemNodes {
@@ -292,20 +281,7 @@ pub fn read(
         notes,
         ..report(path, &xml, &mesh, &used, materials)
     };
-    let report = FemReadReport {
-        path: path.to_path_buf(),
-        delimiter: String::new(),
-        decimal_comma: false,
-        bom: false,
-        header_line: 0,
-        columns,
-        nodes: nodes.len(),
-        dim,
-        sign,
-        has_coordinates: true,
-        warnings,
-        vtu: Some(vtu),
-    };
+    let report = vtu_fem_report(path, columns, &nodes, sign, warnings, vtu);
     Ok((nodes, report))
 }
 
@@ -584,6 +560,55 @@ fn data_points(
         ));
     }
     Ok((order, regions))
+}
+
+/// The count of cells of each material id, and the material ids around each
+/// node (`None` without a material array).
+type CellRegions = (Vec<(i64, usize)>, Option<Vec<Vec<i64>>>);
+
+/// The regions of the cells from their material array (`mat<id>`): the
+/// count of cells of each material, and the materials around each node.
+fn regions(
+    path: &Path,
+    bytes: &[u8],
+    xml: &VtuXml,
+    mesh: &mesh::Mesh,
+    explicit: &[(Role, String)],
+    used: &mut BTreeMap<String, String>,
+) -> Result<CellRegions, ParseError> {
+    let Some(tag) = find(path, xml, Role::Region, explicit)? else {
+        return Ok((Vec::new(), None));
+    };
+    scalar_array(path, tag, Role::Region)?;
+    let ids = values(path, bytes, xml, tag, xml.n_cells)?;
+    let ids = kept_cell_ids(path, tag, &ids, mesh)?;
+    used.insert(tag.name.clone(), "region (mat<id>)".into());
+    Ok((material_counts(&ids), Some(mesh.around(&ids))))
+}
+
+/// The reader's report of a `.vtu`: no CSV dialect, coordinates always.
+fn vtu_fem_report(
+    path: &Path,
+    columns: Vec<ColumnReport>,
+    nodes: &FemNodes,
+    sign: SignConvention,
+    warnings: Vec<String>,
+    vtu: VtuReport,
+) -> FemReadReport {
+    FemReadReport {
+        path: path.to_path_buf(),
+        delimiter: String::new(),
+        decimal_comma: false,
+        bom: false,
+        header_line: 0,
+        columns,
+        nodes: nodes.len(),
+        dim: nodes.dim,
+        sign,
+        has_coordinates: true,
+        warnings,
+        vtu: Some(vtu),
+    }
 }
 
 /// Makes the stress `stress` total by `rule`: an effective stress gains

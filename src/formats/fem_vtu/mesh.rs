@@ -227,6 +227,34 @@ pub fn read(
             "no cells: the nodes of the cells are the data points",
         ));
     }
+    let (dim, notes) = plane_of(path, xml, &kinds, &mut points)?;
+    let mesh = Mesh {
+        points,
+        cells,
+        nodes,
+        dim,
+        kinds,
+        notes,
+    };
+    let orphans = mesh.used().iter().filter(|u| !**u).count();
+    let mut mesh = mesh;
+    if orphans > 0 {
+        mesh.notes.push(format!(
+            "{orphans} points belong to no cell and were left out (the data points are the nodes of the cells)"
+        ));
+    }
+    Ok(mesh)
+}
+
+/// The model's dimension from its cell kinds (2D or 3D, not both; from z
+/// when no cell has one); 2D cells must lie in one x–y plane, which is moved
+/// to z = 0 (said in the notes).
+fn plane_of(
+    path: &Path,
+    xml: &VtuXml,
+    kinds: &BTreeMap<CellKind, usize>,
+    points: &mut [[f64; 3]],
+) -> Result<(usize, Vec<String>), ParseError> {
     let mut notes = Vec::new();
     let dims: Vec<usize> = kinds.keys().map(|k| k.dim()).filter(|&d| d > 0).collect();
     let dim = match (dims.iter().min(), dims.iter().max()) {
@@ -256,25 +284,10 @@ pub fn read(
         }
         if z != 0.0 {
             notes.push(format!("2D cells in the plane z = {z}: z set to 0"));
-            for p in &mut points {
+            for p in points.iter_mut() {
                 p[2] = 0.0;
             }
         }
     }
-    let mesh = Mesh {
-        points,
-        cells,
-        nodes,
-        dim,
-        kinds,
-        notes,
-    };
-    let orphans = mesh.used().iter().filter(|u| !**u).count();
-    let mut mesh = mesh;
-    if orphans > 0 {
-        mesh.notes.push(format!(
-            "{orphans} points belong to no cell and were left out (the data points are the nodes of the cells)"
-        ));
-    }
-    Ok(mesh)
+    Ok((dim, notes))
 }
