@@ -87,170 +87,179 @@ pub enum BenchWhat {
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
-    let threads = rayon::current_num_threads();
     match args.what {
-        BenchWhat::Map => {
-            let mut rng = ChaCha8Rng::seed_from_u64(1);
-            let dim = args.dim.clamp(2, 3);
-            let mut cloud = |n: usize| -> Vec<[f64; 3]> {
-                (0..n)
-                    .map(|_| {
-                        [
-                            rng.random_range(0.0..1.0),
-                            rng.random_range(0.0..1.0),
-                            if dim == 3 {
-                                rng.random_range(0.0..1.0)
-                            } else {
-                                0.0
-                            },
-                        ]
-                    })
-                    .collect()
-            };
-            let nodes = cloud(args.nodes);
-            let points = cloud(args.points);
-            let values: Vec<f64> = nodes.iter().map(|p| p[0] + 2.0 * p[1]).collect();
-            // Support radius 2h holding `neighbours` nodes on average.
-            let support = if dim == 3 {
-                (args.neighbours / (args.nodes as f64 * 4.0 / 3.0 * std::f64::consts::PI)).cbrt()
-            } else {
-                (args.neighbours / (args.nodes as f64 * std::f64::consts::PI)).sqrt()
-            };
-            let h = support / 2.0;
-            let cloud = NodeCloud {
-                positions: &nodes,
-                dim,
-                values: &values,
-                n_fields: 1,
-                group: None,
-                node_volume: 1.0 / args.nodes as f64,
-            };
-            let settings = MapSettings {
-                kernel: KernelKind::Cubic,
-                h,
-                min_shepard: 0.0,
-                outside: OutsidePolicy::Nearest,
-            };
-            let mut best = f64::INFINITY;
-            let mut mean_neighbours = 0.0;
-            for _ in 0..args.repeat.max(1) {
-                let t = Instant::now();
-                let search = match args.search {
-                    SearchArg::Grid => mapper::Search::Grid,
-                    SearchArg::Kdtree => mapper::Search::KdTree,
-                };
-                let r = mapper::map_points_with(&cloud, &points, None, &settings, search, true)
-                    .map_err(|e| anyhow::anyhow!("{e}"))?;
-                best = best.min(t.elapsed().as_secs_f64());
-                mean_neighbours =
-                    r.n_neighbours.iter().map(|&n| n as f64).sum::<f64>() / points.len() as f64;
-            }
-            say!(
-                "map {dim}D ({:?}): {} nodes → {} points, cubic, h = {h:.5}, {mean_neighbours:.1} neighbours/query, {threads} thread(s): {:.3} s (index build included) = {:.3e} queries/s ({:.3e} per thread)",
-                args.search,
-                args.nodes,
-                args.points,
-                best,
-                args.points as f64 / best,
-                args.points as f64 / best / threads as f64
-            );
-        }
-        BenchWhat::Loo => {
-            let mut rng = ChaCha8Rng::seed_from_u64(2);
-            let nodes: Vec<[f64; 3]> = (0..args.nodes)
-                .map(|_| {
-                    [
-                        rng.random_range(0.0..100.0),
-                        rng.random_range(0.0..100.0),
-                        0.0,
-                    ]
-                })
-                .collect();
-            let values: Vec<f64> = nodes.iter().map(|p| 9.81 * (100.0 - p[1])).collect();
-            let l = mapper::median_spacing(&nodes, 2);
-            let t = Instant::now();
-            let obj = crate::kernel::loo::LooObjective::new(
-                &nodes,
-                2,
-                &values,
-                1,
-                KernelKind::Cubic,
-                2.5 * l,
-            )
-            .map_err(|e| anyhow::anyhow!("{e}"))?;
-            let build = t.elapsed().as_secs_f64();
-            let mut best = f64::INFINITY;
-            for _ in 0..args.repeat.max(1) {
-                let t = Instant::now();
-                std::hint::black_box(obj.evaluate(l, crate::kernel::loo::Norm::L1));
-                best = best.min(t.elapsed().as_secs_f64());
-            }
-            let t = Instant::now();
-            let c = crate::calibrate::calibrate(
-                |h| obj.evaluate(h, crate::kernel::loo::Norm::L1),
-                0.3 * l,
-                2.5 * l,
-                &Default::default(),
-            );
-            let full = t.elapsed().as_secs_f64() + build;
-            say!(
-                "loo: {} nodes, {threads} thread(s): neighbour lists {:.3} s, one objective {:.2} ms, full calibration {:.3} s ({} evaluations, h/l = {:.3})",
-                args.nodes,
-                build,
-                best * 1e3,
-                full,
-                c.evaluations,
-                c.h / l
-            );
-        }
-        BenchWhat::E2e => e2e(&args)?,
-        BenchWhat::Equilibrium => equilibrium(&args)?,
-        BenchWhat::Fos => super::bench_fos::fos(&args)?,
-        BenchWhat::Runner => super::bench_runner::runner(&args)?,
-        BenchWhat::Csv => {
-            let text = generated_fem_csv(args.nodes, 3);
-            let mb = text.len() as f64 / 1e6;
-            let options = crate::formats::fem_csv::CsvOptions::default();
-            let mut best = f64::INFINITY;
-            for _ in 0..args.repeat.max(1) {
-                let t = Instant::now();
-                let (nodes, _) = crate::formats::fem_csv::parse_csv(
-                    Path::new("bench.csv"),
-                    text.as_bytes(),
-                    &options,
-                )?;
-                best = best.min(t.elapsed().as_secs_f64());
-                std::hint::black_box(nodes);
-            }
-            say!(
-                "csv: {} rows × 10 columns, {mb:.1} MB, {threads} thread(s): {best:.3} s = {:.0} MB/s",
-                args.nodes,
-                mb / best
-            );
-        }
-        BenchWhat::Gom => {
-            let nx = ((args.elements as f64 / 2.0).sqrt().round() as usize).max(1);
-            let ny = (args.elements / (2 * nx)).max(1);
-            let mesh = generate::structured_tri_mesh(0.0, 0.0, nx as f64, ny as f64, nx, ny);
-            let spec = MaterialSpec::dry_soil("soil");
-            let text = model_to_text(&generate::single_material_model(mesh, &spec, 3), "2023");
-            let mb = text.len() as f64 / 1e6;
-            let mut best = f64::INFINITY;
-            for _ in 0..args.repeat.max(1) {
-                let copy = text.clone();
-                let t = Instant::now();
-                let doc = GomDocument::parse(Path::new("bench.GOM"), copy)?;
-                let (model, _) = doc.model()?;
-                best = best.min(t.elapsed().as_secs_f64());
-                std::hint::black_box(model);
-            }
-            say!(
-                "gom: {} elements, {mb:.1} MB, {threads} thread(s): {best:.3} s = {:.0} MB/s (lossless document + typed view)",
-                2 * nx * ny,
-                mb / best
-            );
-        }
+        BenchWhat::Map => map(&args),
+        BenchWhat::Loo => loo(&args),
+        BenchWhat::E2e => e2e(&args),
+        BenchWhat::Equilibrium => equilibrium(&args),
+        BenchWhat::Fos => super::bench_fos::fos(&args),
+        BenchWhat::Runner => super::bench_runner::runner(&args),
+        BenchWhat::Csv => csv(&args),
+        BenchWhat::Gom => gom(&args),
     }
+}
+
+/// `bench map`: kernel mapping throughput on uniform random clouds.
+fn map(args: &BenchArgs) -> anyhow::Result<()> {
+    let threads = rayon::current_num_threads();
+    let mut rng = ChaCha8Rng::seed_from_u64(1);
+    let dim = args.dim.clamp(2, 3);
+    let mut cloud = |n: usize| -> Vec<[f64; 3]> {
+        (0..n)
+            .map(|_| {
+                [
+                    rng.random_range(0.0..1.0),
+                    rng.random_range(0.0..1.0),
+                    if dim == 3 {
+                        rng.random_range(0.0..1.0)
+                    } else {
+                        0.0
+                    },
+                ]
+            })
+            .collect()
+    };
+    let nodes = cloud(args.nodes);
+    let points = cloud(args.points);
+    let values: Vec<f64> = nodes.iter().map(|p| p[0] + 2.0 * p[1]).collect();
+    // Support radius 2h holding `neighbours` nodes on average.
+    let support = if dim == 3 {
+        (args.neighbours / (args.nodes as f64 * 4.0 / 3.0 * std::f64::consts::PI)).cbrt()
+    } else {
+        (args.neighbours / (args.nodes as f64 * std::f64::consts::PI)).sqrt()
+    };
+    let h = support / 2.0;
+    let cloud = NodeCloud {
+        positions: &nodes,
+        dim,
+        values: &values,
+        n_fields: 1,
+        group: None,
+        node_volume: 1.0 / args.nodes as f64,
+    };
+    let settings = MapSettings {
+        kernel: KernelKind::Cubic,
+        h,
+        min_shepard: 0.0,
+        outside: OutsidePolicy::Nearest,
+    };
+    let mut best = f64::INFINITY;
+    let mut mean_neighbours = 0.0;
+    for _ in 0..args.repeat.max(1) {
+        let t = Instant::now();
+        let search = match args.search {
+            SearchArg::Grid => mapper::Search::Grid,
+            SearchArg::Kdtree => mapper::Search::KdTree,
+        };
+        let r = mapper::map_points_with(&cloud, &points, None, &settings, search, true)
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+        best = best.min(t.elapsed().as_secs_f64());
+        mean_neighbours =
+            r.n_neighbours.iter().map(|&n| n as f64).sum::<f64>() / points.len() as f64;
+    }
+    say!(
+        "map {dim}D ({:?}): {} nodes → {} points, cubic, h = {h:.5}, {mean_neighbours:.1} neighbours/query, {threads} thread(s): {:.3} s (index build included) = {:.3e} queries/s ({:.3e} per thread)",
+        args.search,
+        args.nodes,
+        args.points,
+        best,
+        args.points as f64 / best,
+        args.points as f64 / best / threads as f64
+    );
+    Ok(())
+}
+
+/// `bench loo`: the leave-one-out objective and a full calibration.
+fn loo(args: &BenchArgs) -> anyhow::Result<()> {
+    let threads = rayon::current_num_threads();
+    let mut rng = ChaCha8Rng::seed_from_u64(2);
+    let nodes: Vec<[f64; 3]> = (0..args.nodes)
+        .map(|_| {
+            [
+                rng.random_range(0.0..100.0),
+                rng.random_range(0.0..100.0),
+                0.0,
+            ]
+        })
+        .collect();
+    let values: Vec<f64> = nodes.iter().map(|p| 9.81 * (100.0 - p[1])).collect();
+    let l = mapper::median_spacing(&nodes, 2);
+    let t = Instant::now();
+    let obj =
+        crate::kernel::loo::LooObjective::new(&nodes, 2, &values, 1, KernelKind::Cubic, 2.5 * l)
+            .map_err(|e| anyhow::anyhow!("{e}"))?;
+    let build = t.elapsed().as_secs_f64();
+    let mut best = f64::INFINITY;
+    for _ in 0..args.repeat.max(1) {
+        let t = Instant::now();
+        std::hint::black_box(obj.evaluate(l, crate::kernel::loo::Norm::L1));
+        best = best.min(t.elapsed().as_secs_f64());
+    }
+    let t = Instant::now();
+    let c = crate::calibrate::calibrate(
+        |h| obj.evaluate(h, crate::kernel::loo::Norm::L1),
+        0.3 * l,
+        2.5 * l,
+        &Default::default(),
+    );
+    let full = t.elapsed().as_secs_f64() + build;
+    say!(
+        "loo: {} nodes, {threads} thread(s): neighbour lists {:.3} s, one objective {:.2} ms, full calibration {:.3} s ({} evaluations, h/l = {:.3})",
+        args.nodes,
+        build,
+        best * 1e3,
+        full,
+        c.evaluations,
+        c.h / l
+    );
+    Ok(())
+}
+
+/// `bench csv`: FEM CSV reading throughput.
+fn csv(args: &BenchArgs) -> anyhow::Result<()> {
+    let threads = rayon::current_num_threads();
+    let text = generated_fem_csv(args.nodes, 3);
+    let mb = text.len() as f64 / 1e6;
+    let options = crate::formats::fem_csv::CsvOptions::default();
+    let mut best = f64::INFINITY;
+    for _ in 0..args.repeat.max(1) {
+        let t = Instant::now();
+        let (nodes, _) =
+            crate::formats::fem_csv::parse_csv(Path::new("bench.csv"), text.as_bytes(), &options)?;
+        best = best.min(t.elapsed().as_secs_f64());
+        std::hint::black_box(nodes);
+    }
+    say!(
+        "csv: {} rows × 10 columns, {mb:.1} MB, {threads} thread(s): {best:.3} s = {:.0} MB/s",
+        args.nodes,
+        mb / best
+    );
+    Ok(())
+}
+
+/// `bench gom`: GOM parsing throughput.
+fn gom(args: &BenchArgs) -> anyhow::Result<()> {
+    let threads = rayon::current_num_threads();
+    let nx = ((args.elements as f64 / 2.0).sqrt().round() as usize).max(1);
+    let ny = (args.elements / (2 * nx)).max(1);
+    let mesh = generate::structured_tri_mesh(0.0, 0.0, nx as f64, ny as f64, nx, ny);
+    let spec = MaterialSpec::dry_soil("soil");
+    let text = model_to_text(&generate::single_material_model(mesh, &spec, 3), "2023");
+    let mb = text.len() as f64 / 1e6;
+    let mut best = f64::INFINITY;
+    for _ in 0..args.repeat.max(1) {
+        let copy = text.clone();
+        let t = Instant::now();
+        let doc = GomDocument::parse(Path::new("bench.GOM"), copy)?;
+        let (model, _) = doc.model()?;
+        best = best.min(t.elapsed().as_secs_f64());
+        std::hint::black_box(model);
+    }
+    say!(
+        "gom: {} elements, {mb:.1} MB, {threads} thread(s): {best:.3} s = {:.0} MB/s (lossless document + typed view)",
+        2 * nx * ny,
+        mb / best
+    );
     Ok(())
 }
 
