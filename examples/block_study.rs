@@ -33,7 +33,8 @@ struct Row {
     r2: f64,
 }
 
-fn main() -> Result<(), Box<dyn std::error::Error>> {
+/// Calibrates h on every layout, size and kernel of the study, printing each.
+fn calibrations() -> Result<Vec<Row>, Box<dyn std::error::Error>> {
     let sizes = [0.5, 1.0, 2.5, 5.0, 10.0];
     let kernels = [
         ("cubic", KernelKind::Cubic),
@@ -77,6 +78,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             }
         }
     }
+    Ok(rows)
+}
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let rows = calibrations()?;
     // Slopes h = s·l through the origin (least squares), against the nominal mesh
     // size (the paper's l) and against the median nearest-node spacing.
     let fit = |layout: &str, kernel: &str, nominal: bool| {

@@ -82,6 +82,21 @@ fn demo_runs_the_whole_chain() {
             "{label} FS {factor} printed: {stdout}"
         );
     }
+    docs_quote_the_run(tmp.path(), &out);
+    map_step_failure_is_the_demos_map(tmp.path(), &out, &stdout);
+    strength_reduction_on_the_dry_slope(tmp.path(), &out);
+}
+
+/// A JSON file the demo wrote.
+fn json(path: &std::path::Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).unwrap()).unwrap()
+}
+
+/// docs/slope.md quotes this run: its opening paragraph, FS(t), the
+/// minimum-depth rule, and the dry slope against the infinite slope.
+fn docs_quote_the_run(tmp: &std::path::Path, out: &std::path::Path) {
+    let report = json(&out.join("report.json"));
+    let curve = json(&out.join("fos_time.json"));
     // docs/slope.md's opening paragraph quotes this run (#39); line breaks
     // there are only layout.
     let slope_md = std::fs::read_to_string(
@@ -176,8 +191,8 @@ fn demo_runs_the_whole_chain() {
     let depths: Vec<String> = ["0.05", "0.145", "0.3", "0.6"]
         .iter()
         .map(|d| {
-            let dir = tmp.path().join(format!("depth{d}"));
-            let (_, fos) = common::fos(&out, &dir, &["--zero-pwp", "--min-depth", d]);
+            let dir = tmp.join(format!("depth{d}"));
+            let (_, fos) = common::fos(out, &dir, &["--zero-pwp", "--min-depth", d]);
             format!("{:.3}", fos["factor"].as_f64().unwrap())
         })
         .collect();
@@ -201,8 +216,12 @@ fn demo_runs_the_whole_chain() {
         (infinite..infinite + 0.01).contains(&dry),
         "dry factor {dry} vs the infinite slope's {infinite}"
     );
-    // `map --step failure` with the flags the demo prints writes the same
-    // MAPF as the demo's map step, and its report names the step (#39).
+}
+
+/// `map --step failure` with the flags the demo prints writes the same MAPF
+/// as the demo's map step, and its report names the step; the folder reads
+/// back without warnings.
+fn map_step_failure_is_the_demos_map(tmp: &std::path::Path, out: &std::path::Path, stdout: &str) {
     let line = stdout
         .lines()
         .find(|l| l.contains("--step failure"))
@@ -210,7 +229,7 @@ fn demo_runs_the_whole_chain() {
     let args: Vec<&str> = line[line.find("map --fem").unwrap()..]
         .split_whitespace()
         .collect();
-    let failure = tmp.path().join("failure");
+    let failure = tmp.join("failure");
     let o = Command::new(env!("CARGO_BIN_EXE_a3d-init"))
         .args(&args)
         .args(["--out", failure.to_str().unwrap()])
@@ -247,11 +266,17 @@ fn demo_runs_the_whole_chain() {
     let text = String::from_utf8_lossy(&o.stdout).into_owned();
     assert_eq!(o.status.code(), Some(0));
     assert!(text.contains("warnings   none"), "{text}");
-    // Strength reduction on the dry slope, as docs/slope-stability.md runs
-    // it: seconds again (not minutes, #39), within 2 % of limit equilibrium,
-    // and the four measures the table quotes.
-    let srm = tmp.path().join("srm_dry");
-    let (text, fos) = common::fos(&out, &srm, &["--method", "srm", "--zero-pwp"]);
+}
+
+/// Strength reduction on the dry slope, as docs/slope-stability.md runs it:
+/// seconds again (not minutes), within 2 % of limit equilibrium, and the four
+/// measures the table quotes; docs/slope.md's table of both states.
+fn strength_reduction_on_the_dry_slope(tmp: &std::path::Path, out: &std::path::Path) {
+    let dry = json(&out.join("fos_zero_pwp/fos.json"))["factor"]
+        .as_f64()
+        .unwrap();
+    let srm = tmp.join("srm_dry");
+    let (text, fos) = common::fos(out, &srm, &["--method", "srm", "--zero-pwp"]);
     let factor = fos["factor"].as_f64().unwrap();
     assert!(
         (factor / dry - 1.0).abs() < 0.02,
@@ -260,8 +285,8 @@ fn demo_runs_the_whole_chain() {
     assert!(fos["iterations"].as_u64().unwrap() <= 8, "{text}");
     common::assert_four_measures_quoted("shipped slope, dry", &srm.join("fos.json"));
     // docs/slope.md's table of both states, the mapped one run here too.
-    let mapped = tmp.path().join("srm_mapped");
-    common::fos(&out, &mapped, &["--method", "srm"]);
+    let mapped = tmp.join("srm_mapped");
+    common::fos(out, &mapped, &["--method", "srm"]);
     let slope_md = std::fs::read_to_string(
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("docs/slope.md"),
     )
