@@ -8,6 +8,7 @@
 pub mod anura3d;
 pub mod calibrate;
 pub mod check;
+pub mod demo;
 pub mod diff;
 mod direct;
 pub mod failure;
