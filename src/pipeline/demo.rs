@@ -87,6 +87,15 @@ fn range(states: &[MpState], f: impl Fn(&MpState) -> f64) -> (f64, f64) {
         })
 }
 
+/// The factor of FS(t) at the saved output at time `t` (NaN if none).
+fn factor_at(curve: &FosTimeReport, t: f64) -> f64 {
+    curve
+        .curve
+        .iter()
+        .find(|p| p.time == t)
+        .map_or(f64::NAN, |p| p.factor)
+}
+
 /// FS(t) and where it first falls to 1.
 struct FailureTime {
     series: Vec<(f64, LoadedFem)>,
@@ -128,13 +137,7 @@ fn failure_time(
     let k = curve.first_failing_output().ok_or_else(|| {
         PipelineError::Numerical("FS(t) crosses 1 but no saved output has FS ≤ 1".into())
     })?;
-    let fs_at = |t: f64| {
-        curve
-            .curve
-            .iter()
-            .find(|p| p.time == t)
-            .map_or(f64::NAN, |p| p.factor)
-    };
+    let fs_at = |t: f64| factor_at(&curve, t);
     say(format!(
         "2 FS(t)      {} OGS outputs over {:.1} h, {} ({:.1} s): FS = {:.3} at t = 0, first FS ≤ 1 at t = {:.3} h; paper (SLOPE/W on SEEP/W): 1.56 h, {:+.0} %",
         series.len(),
@@ -416,13 +419,7 @@ pub fn demo(
         time_h,
     } = failure_time(&project, &pvd, say)?;
     let (t_map, fem_at) = &series[k];
-    let fs_at = |t: f64| {
-        curve
-            .curve
-            .iter()
-            .find(|p| p.time == t)
-            .map_or(f64::NAN, |p| p.factor)
-    };
+    let fs_at = |t: f64| factor_at(&curve, t);
 
     // 3. Calibrate h on the pore pressures of the first output with FS ≤ 1.
     let outcome = calibrate::calibrate_h(
