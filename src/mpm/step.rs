@@ -86,7 +86,7 @@ pub struct StepOutcome {
     /// MPs whose stress update was plastic in this step.
     pub yielded: usize,
     /// MPs that have yielded in any step so far (accumulated plastic strain
-    /// above [`PLASTIC_STRAIN_FLOOR`]).
+    /// above `particle::PLASTIC_STRAIN_FLOOR`, 1e-6).
     pub plastic: usize,
 }
 
