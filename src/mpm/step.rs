@@ -168,14 +168,14 @@ impl<const D: usize, const NC: usize> Solver<D, NC> {
         let mut wave_speed = 0.0_f64;
         // Each MP's P-wave speed, for the density scaling.
         let mut speeds = Vec::with_capacity(points.len());
+        let start = ParticleStart {
+            grid: &grid,
+            model,
+            analysis: &analysis,
+            settings,
+            axisymmetric,
+        };
         for (point, state) in points.iter().zip(states) {
-            let start = ParticleStart {
-                grid: &grid,
-                model,
-                analysis: &analysis,
-                settings,
-                axisymmetric,
-            };
             let (particle, speed, admissible) = start.particle(point, state, &mut materials)?;
             particles.push(particle);
             inadmissible.push(!admissible);
