@@ -5,7 +5,7 @@ use std::path::Path;
 
 use a3d_init::formats::gom::GomDocument;
 use a3d_init::formats::gom::write::model_to_text;
-use a3d_init::model::generate::{self, MaterialSpec};
+use a3d_testkit::generate::{self, MaterialSpec};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 
 fn big_gom() -> String {

@@ -15,9 +15,7 @@ use std::time::Duration;
 use a3d_init::element::{self, Element, Simplex, TetOld, Tri3};
 use a3d_init::model::{AnuraModel, MaterialPoint, Mesh, MpState};
 use a3d_init::mpm::{RunSettings, Simulation};
-use a3d_init::testkit::{
-    column_tet, column_tri3, geostatic_states, mohr_coulomb_material, place_points,
-};
+use a3d_testkit::{column_tet, column_tri3, geostatic_states, mohr_coulomb_material, place_points};
 use criterion::{Criterion, SamplingMode, Throughput, criterion_group, criterion_main};
 
 /// Steps per measured iteration.

@@ -4,8 +4,8 @@
 //! Criterion reports the rate as elements/s, one element being one MP.
 
 use a3d_init::model::AnuraModel;
-use a3d_init::model::generate::{self, MaterialSpec};
 use a3d_init::place::place_material_points;
+use a3d_testkit::generate::{self, MaterialSpec};
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
 
 fn bench_case(c: &mut Criterion, name: &str, model: &AnuraModel) {

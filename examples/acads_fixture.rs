@@ -12,7 +12,7 @@ use std::path::Path;
 
 use a3d_init::formats::gom::write::model_to_text;
 use a3d_init::model::AnuraModel;
-use a3d_init::model::generate::{self, MaterialSpec};
+use a3d_testkit::generate::{self, MaterialSpec};
 
 /// The ground of ACADS 1(a) (m).
 fn ground(x: f64) -> f64 {

@@ -20,7 +20,7 @@ use a3d_init::calibrate::{AnnealSettings, calibrate};
 use a3d_init::kernel::KernelKind;
 use a3d_init::kernel::loo::{LooObjective, Norm};
 use a3d_init::kernel::mapper::median_spacing;
-use a3d_init::model::generate::{structured_square_nodes, unstructured_square_nodes};
+use a3d_testkit::generate::{structured_square_nodes, unstructured_square_nodes};
 use plotters::prelude::*;
 
 struct Row {

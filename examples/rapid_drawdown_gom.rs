@@ -13,8 +13,8 @@ use std::path::Path;
 
 use a3d_init::formats::gom::write::model_to_text;
 use a3d_init::formats::ply::read_ply_mesh;
-use a3d_init::model::generate::{self, MaterialSpec};
 use a3d_init::model::{Dimension, ElementType, Mesh};
+use a3d_testkit::generate::{self, MaterialSpec};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));

@@ -13,10 +13,10 @@ use std::fmt::Write as _;
 use std::path::Path;
 
 use a3d_init::formats::gom::write::model_to_text;
-use a3d_init::model::generate::slope_fixture_clay_top as clay_top;
-use a3d_init::model::generate::{self, MaterialSpec};
 use a3d_init::model::{AnuraModel, Dimension, ElementType, Material, Mesh, RetentionCurve};
 use a3d_init::place::place_material_points;
+use a3d_testkit::generate::slope_fixture_clay_top as clay_top;
+use a3d_testkit::generate::{self, MaterialSpec};
 
 const SAND: f64 = 0.6;
 const BASE: f64 = -0.5;

@@ -1,5 +1,8 @@
-//! The `a3d-init` binary: a thin shell around [`a3d_init::cli::main`].
+//! The `a3d-init` binary: the command line over the `a3d_init` library
+//! (crates/a3d-init-lib). It parses, calls and prints; see [`cli`].
+
+mod cli;
 
 fn main() -> std::process::ExitCode {
-    a3d_init::cli::main()
+    cli::main()
 }

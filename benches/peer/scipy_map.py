@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Peer for `a3d-init bench e2e` (#17): the same cubic-spline Shepard mapping in
+"""Peer for `a3d-bench e2e` (#17): the same cubic-spline Shepard mapping in
 scipy (cKDTree, all threads), compute only: read the FEM CSV and the MP positions,
 map pwp and the six total stresses, no output written.
 

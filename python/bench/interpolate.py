@@ -1,5 +1,5 @@
 """Speed of ``a3d_init.interpolate`` against the Rust library's own mapper
-(``a3d-init bench map``) on the same problem: uniform random clouds in the unit
+(``a3d-bench map``) on the same problem: uniform random clouds in the unit
 cube, 10^6 nodes and 10^6 points by default, the cubic kernel with about 50
 nodes in each support, one field. Prints queries/s for both and their ratio.
 
@@ -27,7 +27,7 @@ parser.add_argument("--nodes", type=int, default=1_000_000)
 parser.add_argument("--points", type=int, default=1_000_000)
 parser.add_argument("--neighbours", type=float, default=50.0)
 parser.add_argument("--repeat", type=int, default=3)
-parser.add_argument("--bin", default=str(ROOT / "target/release/a3d-init"))
+parser.add_argument("--bin", default=str(ROOT / "target/release/a3d-bench"))
 args = parser.parse_args()
 
 rng = np.random.default_rng(1)
@@ -47,7 +47,7 @@ print(f"python interpolate: {args.nodes} nodes -> {args.points} points, h = {h:.
 
 if Path(args.bin).is_file():
     out = subprocess.run(
-        [args.bin, "bench", "map", "--dim", "3", "--nodes", str(args.nodes), "--points", str(args.points),
+        [args.bin, "map", "--dim", "3", "--nodes", str(args.nodes), "--points", str(args.points),
          "--neighbours", str(args.neighbours), "--repeat", str(args.repeat)],
         check=True, capture_output=True, text=True,
     ).stdout
@@ -55,4 +55,4 @@ if Path(args.bin).is_file():
     print(f"bench map:          {rust_rate:.3e} queries/s")
     print(f"python / rust:      {python_rate / rust_rate:.3f}")
 else:
-    print(f"no binary at {args.bin}: build it (cargo build --release) to compare with bench map")
+    print(f"no binary at {args.bin}: build it (cargo build --release -p a3d-bench) to compare with bench map")

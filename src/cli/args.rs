@@ -4,15 +4,13 @@
 
 use std::path::PathBuf;
 
+use a3d_init::formats::fem_csv::{self, CsvOptions, SignConvention};
+use a3d_init::formats::fem_vtu::{self, StressRule, VtuOptions};
+use a3d_init::pipeline::fem::FemOptions;
+use a3d_init::pipeline::start::StateSource;
 use anyhow::{Context, bail};
-use serde::Serialize;
 
-use crate::formats::fem_csv::{self, CsvOptions, SignConvention};
-use crate::formats::fem_vtu::{self, StressRule, VtuOptions};
-use crate::pipeline::fem::{FemOptions, LoadedFem};
-use crate::pipeline::start::StateSource;
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum SignArg {
     /// Stresses compression positive, pwp positive below the water table (CSV and .gsz default).
     Geostudio,
@@ -65,20 +63,6 @@ pub struct FemArgs {
 }
 
 impl FemArgs {
-    /// The defaults for these files (GeoStudio signs, last step, no overrides).
-    pub fn files(paths: Vec<PathBuf>) -> FemArgs {
-        FemArgs {
-            fem: paths,
-            columns: None,
-            fem_units: None,
-            fem_sign: None,
-            fem_sigma: None,
-            fem_mesh: None,
-            analysis: None,
-            step: "last".into(),
-        }
-    }
-
     /// The library options these arguments describe.
     pub fn options(&self) -> anyhow::Result<FemOptions> {
         if self.fem.is_empty() {
@@ -131,11 +115,6 @@ impl FemArgs {
                 .context("reading the FEM files")?,
         })
     }
-
-    /// Reads and joins the FEM files.
-    pub fn load(&self) -> anyhow::Result<LoadedFem> {
-        Ok(crate::pipeline::fem::load(&self.options()?)?)
-    }
 }
 
 /// Where `verify`, `run` and `fos` take a mapped state from: a folder written
@@ -153,14 +132,6 @@ pub struct StateInputs {
 }
 
 impl StateInputs {
-    /// A folder written by `map`.
-    pub fn folder(dir: PathBuf) -> StateInputs {
-        StateInputs {
-            dir: Some(dir),
-            ..StateInputs::default()
-        }
-    }
-
     /// The source the arguments name; an error unless exactly one way is given.
     pub fn source(&self) -> anyhow::Result<StateSource> {
         match (&self.dir, &self.mpm, &self.state) {
@@ -277,20 +248,20 @@ fn numbers<const N: usize>(text: &str, flag: &str) -> anyhow::Result<[f64; N]> {
 impl LeArgs {
     /// The method of slices `method` names with the half-sine interslice
     /// function (`None` for `srm`).
-    pub fn method_of(method: MethodArg) -> Option<crate::slope::Method> {
+    pub fn method_of(method: MethodArg) -> Option<a3d_init::slope::Method> {
         Self::with_interslice(method, IntersliceArg::HalfSine)
     }
 
     /// The method of slices `method` names (`None` for `srm`).
-    pub fn method(&self, method: MethodArg) -> Option<crate::slope::Method> {
+    pub fn method(&self, method: MethodArg) -> Option<a3d_init::slope::Method> {
         Self::with_interslice(method, self.interslice)
     }
 
     fn with_interslice(
         method: MethodArg,
         interslice: IntersliceArg,
-    ) -> Option<crate::slope::Method> {
-        use crate::slope::{Interslice, Method};
+    ) -> Option<a3d_init::slope::Method> {
+        use a3d_init::slope::{Interslice, Method};
         let interslice = match interslice {
             IntersliceArg::HalfSine => Interslice::HalfSine,
             IntersliceArg::Constant => Interslice::Constant,
@@ -307,8 +278,11 @@ impl LeArgs {
 
     /// The library's limit-equilibrium options (method: Morgenstern–Price
     /// unless `method` names another).
-    pub fn options(&self, method: MethodArg) -> anyhow::Result<crate::pipeline::slope::LeOptions> {
-        use crate::slope::{CircleSearch, SearchSettings, Suction};
+    pub fn options(
+        &self,
+        method: MethodArg,
+    ) -> anyhow::Result<a3d_init::pipeline::slope::LeOptions> {
+        use a3d_init::slope::{CircleSearch, SearchSettings, Suction};
         let range = |t: &Option<String>, flag: &str| -> anyhow::Result<Option<(f64, f64)>> {
             t.as_deref()
                 .map(|t| numbers::<2>(t, flag).map(|[a, b]| (a.min(b), a.max(b))))
@@ -334,8 +308,8 @@ impl LeArgs {
         if self.phi_b.is_some() && self.suction != SuctionArg::PhiB {
             bail!("--phi-b applies with --suction phi-b");
         }
-        let defaults = crate::pipeline::slope::LeOptions::default();
-        Ok(crate::pipeline::slope::LeOptions {
+        let defaults = a3d_init::pipeline::slope::LeOptions::default();
+        Ok(a3d_init::pipeline::slope::LeOptions {
             method: self.method(method).unwrap_or(defaults.method),
             suction: match self.suction {
                 SuctionArg::Bishop => Suction::Bishop,

@@ -7,8 +7,8 @@ use std::path::PathBuf;
 
 use super::args::FemArgs;
 use super::print::wrote;
-use crate::kernel::KernelKind;
-use crate::pipeline::{self, calibrate::CalibrateOptions};
+use a3d_init::kernel::KernelKind;
+use a3d_init::pipeline::{self, calibrate::CalibrateOptions};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum NormArg {
@@ -17,12 +17,12 @@ pub enum NormArg {
     Relative,
 }
 
-impl From<NormArg> for crate::kernel::loo::Norm {
+impl From<NormArg> for a3d_init::kernel::loo::Norm {
     fn from(n: NormArg) -> Self {
         match n {
-            NormArg::L1 => crate::kernel::loo::Norm::L1,
-            NormArg::L2 => crate::kernel::loo::Norm::L2,
-            NormArg::Relative => crate::kernel::loo::Norm::Relative,
+            NormArg::L1 => a3d_init::kernel::loo::Norm::L1,
+            NormArg::L2 => a3d_init::kernel::loo::Norm::L2,
+            NormArg::Relative => a3d_init::kernel::loo::Norm::Relative,
         }
     }
 }

@@ -5,7 +5,7 @@
 use std::path::PathBuf;
 
 use super::Verdict;
-use crate::pipeline::{self, diff::DiffOptions};
+use a3d_init::pipeline::{self, diff::DiffOptions};
 
 #[derive(Debug, clap::Args)]
 pub struct DiffArgs {
@@ -36,7 +36,7 @@ pub fn run(args: DiffArgs) -> anyhow::Result<()> {
     let report = pipeline::diff::diff(&args.a, &args.b, &options)?;
     // say!: a closed stdout must not turn a verdict into an error.
     if args.json {
-        say!("{}", serde_json::to_string_pretty(&report)?);
+        say!("{}", pipeline::json_text(&report)?);
     } else {
         for n in &report.notes {
             say!("{n}");

@@ -11,8 +11,8 @@ use anyhow::{Context, bail};
 
 use super::args::{FemArgs, LeArgs, MethodArg};
 use super::print::wrote;
-use crate::pipeline::fos_time::{self, FosTimeOptions, SeriesInput};
-use crate::pipeline::output::Destination;
+use a3d_init::pipeline::fos_time::{self, FosTimeOptions, SeriesInput};
+use a3d_init::pipeline::output::Destination;
 
 #[derive(Debug, clap::Args)]
 pub struct FosTimeArgs {
@@ -62,7 +62,8 @@ pub fn run(args: FosTimeArgs) -> anyhow::Result<()> {
     let (csv, vtu) = (fem_options.csv, fem_options.vtu);
     let input = match (args.fem.fem.as_slice(), &args.times) {
         ([one], None)
-            if crate::pipeline::fem::reader_for(one) == crate::pipeline::fem::FemReader::Gsz =>
+            if a3d_init::pipeline::fem::reader_for(one)
+                == a3d_init::pipeline::fem::FemReader::Gsz =>
         {
             SeriesInput::Gsz {
                 path: one.clone(),

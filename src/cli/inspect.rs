@@ -5,8 +5,10 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use crate::formats::fem_vtu::{self, VtuReport};
-use crate::pipeline::inspect::{self, FemSummary, GszStep, GszSummary, ProjectSummary, VtuSummary};
+use a3d_init::formats::fem_vtu::{self, VtuReport};
+use a3d_init::pipeline::inspect::{
+    self, FemSummary, GszStep, GszSummary, ProjectSummary, VtuSummary,
+};
 
 #[derive(Debug, clap::Args)]
 pub struct InspectArgs {
@@ -31,8 +33,7 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
         let summary = inspect::fem(&args.fem.options()?)?;
         let mut out = std::io::stdout().lock();
         if args.json {
-            serde_json::to_writer_pretty(&mut out, &summary.reports)?;
-            writeln!(out)?;
+            a3d_init::pipeline::write_json(&mut out, &summary.reports)?;
             return Ok(());
         }
         return Ok(print_fem(&mut out, &summary)?);
@@ -47,8 +48,7 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
         let summary = inspect::gsz(model)?;
         let mut out = std::io::stdout().lock();
         if args.json {
-            serde_json::to_writer_pretty(&mut out, &summary.project)?;
-            writeln!(out)?;
+            a3d_init::pipeline::write_json(&mut out, &summary.project)?;
         } else {
             print_gsz(&mut out, &summary)?;
         }
@@ -61,8 +61,7 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
         let summary = inspect::vtu(model)?;
         let mut out = std::io::stdout().lock();
         if args.json {
-            serde_json::to_writer_pretty(&mut out, &summary)?;
-            writeln!(out)?;
+            a3d_init::pipeline::write_json(&mut out, &summary)?;
         } else {
             print_vtu(&mut out, &summary)?;
         }
@@ -79,8 +78,7 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
     let summary = inspect::project(model, args.mps.as_deref(), args.force)?;
     let mut out = std::io::stdout().lock();
     if args.json {
-        serde_json::to_writer_pretty(&mut out, &summary)?;
-        writeln!(out)?;
+        a3d_init::pipeline::write_json(&mut out, &summary)?;
         return Ok(());
     }
     print_summary(&mut out, &summary)?;
@@ -179,7 +177,7 @@ fn print_summary(out: &mut impl Write, s: &ProjectSummary) -> std::io::Result<()
     } else {
         writeln!(out, "warnings")?;
         for w in &s.warnings {
-            writeln!(out, "  - {w}")?;
+            writeln!(out, "  - {}", super::spelled(w))?;
         }
     }
     Ok(())
@@ -214,7 +212,7 @@ fn print_fem(out: &mut impl Write, s: &FemSummary) -> std::io::Result<()> {
             )?;
         }
         for w in &r.warnings {
-            writeln!(out, "  warning: {w}")?;
+            writeln!(out, "  warning: {}", super::spelled(w))?;
         }
     }
     for n in &s.notes {
@@ -308,7 +306,7 @@ fn print_gsz(out: &mut impl Write, s: &GszSummary) -> std::io::Result<()> {
                         .collect::<Vec<_>>()
                         .join(", ")
                 )?;
-                if let Some(extent) = crate::diagnose::Extent::of(&nodes.positions, nodes.dim) {
+                if let Some(extent) = a3d_init::diagnose::Extent::of(&nodes.positions, nodes.dim) {
                     writeln!(out, "  extent {extent}")?;
                 }
                 if let Some((_, subset)) = note.split_once("; the table lists") {

@@ -6,13 +6,13 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use super::args::{FemArgs, LeArgs, MethodArg};
-use crate::kernel::KernelKind;
-use crate::pipeline::map::{
+use a3d_init::kernel::KernelKind;
+use a3d_init::pipeline::map::{
     EquilibriumOptions, MapConfig, MaterialMap, MixedState, Outside, SmoothingLength, StressSource,
 };
-use crate::pipeline::output::Destination;
-use crate::pipeline::slope::LeOptions;
-use crate::pipeline::{self, mapping::MapJob};
+use a3d_init::pipeline::output::Destination;
+use a3d_init::pipeline::slope::LeOptions;
+use a3d_init::pipeline::{self, mapping::MapJob};
 
 /// A clap mirror of one of the library's plain enums: the same variants, with
 /// their help, and the conversion into the library's type (the library does
@@ -174,14 +174,14 @@ impl MapArgs {
                 "--failure-method srm: FS(t) runs a method of slices on every saved step; strength reduction is `fos --method srm` on the mapped folder"
             );
         }
-        if self.failure_trials == 0 || self.failure_trials > crate::slope::MAX_TRIALS {
+        if self.failure_trials == 0 || self.failure_trials > a3d_init::slope::MAX_TRIALS {
             anyhow::bail!(
                 "--failure-trials {}: expected 1 to {}",
                 self.failure_trials,
-                crate::slope::MAX_TRIALS
+                a3d_init::slope::MAX_TRIALS
             );
         }
-        let mut le = crate::pipeline::fos_time::FosTimeOptions::default().le;
+        let mut le = a3d_init::pipeline::fos_time::FosTimeOptions::default().le;
         le.method = LeArgs::method_of(self.failure_method).unwrap_or(le.method);
         le.search.trials = self.failure_trials;
         Ok(le)
@@ -247,7 +247,7 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         say_err!("  note: {n}");
     }
     for w in &r.warnings {
-        say_err!("  warning: {w}");
+        say_err!("  warning: {}", super::spelled(w));
     }
     say_err!(
         "  wrote {}/ : {} ({:.2} s)",

@@ -23,9 +23,6 @@ macro_rules! say_err {
 }
 
 pub mod args;
-mod bench;
-mod bench_fos;
-mod bench_runner;
 pub mod calibrate;
 mod demo;
 mod diff;
@@ -41,6 +38,7 @@ use std::io::Write;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use a3d_init::pipeline::setting::{Setting, spell_settings};
 use clap::{Parser, Subcommand};
 
 /// a3d-init: carry a FEM seepage/stress state onto Anura3D material points.
@@ -59,8 +57,6 @@ pub enum Command {
     Map(map::MapArgs),
     /// Calibrate the smoothing length h by leave-one-out cross-validation (paper Eq. 4).
     Calibrate(calibrate::CalibrateArgs),
-    /// Print speed figures of the hot paths on generated data.
-    Bench(bench::BenchArgs),
     /// Compare two Anura3D projects or files (GOM, CPS, MAPF, mps.csv) within tolerances.
     Diff(diff::DiffArgs),
     /// Run the paper's slope application end to end on the shipped fixture.
@@ -103,21 +99,24 @@ pub fn write_line(to_stderr: bool, args: std::fmt::Arguments<'_>) {
 /// True when `e` comes from writing to a closed pipe.
 fn is_broken_pipe(e: &anyhow::Error) -> bool {
     let pipe = Some(std::io::ErrorKind::BrokenPipe);
-    e.chain().any(|c| {
-        c.downcast_ref::<std::io::Error>().map(std::io::Error::kind) == pipe
-            || c.downcast_ref::<serde_json::Error>()
-                .and_then(serde_json::Error::io_error_kind)
-                == pipe
-    })
+    e.chain()
+        .any(|c| c.downcast_ref::<std::io::Error>().map(std::io::Error::kind) == pipe)
 }
 
 /// An error that carries its own exit code (1 = a negative verdict).
-#[derive(Debug, thiserror::Error)]
-#[error("{message}")]
+#[derive(Debug)]
 pub struct Verdict {
     pub message: String,
     pub code: u8,
 }
+
+impl std::fmt::Display for Verdict {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for Verdict {}
 
 impl Verdict {
     /// `Ok` when `holds`, else a negative verdict (exit 1) saying `message`.
@@ -149,7 +148,7 @@ pub fn main() -> ExitCode {
             }
             // clap repeats a bad value whole: cut a long one.
             let text = e.render().to_string();
-            let text = crate::formats::error::clip_long_words(&text, MAX_PRINTED_WORD);
+            let text = a3d_init::formats::error::clip_long_words(&text, MAX_PRINTED_WORD);
             let _ = write!(std::io::stderr(), "{text}");
             return ExitCode::from(2);
         }
@@ -197,19 +196,41 @@ pub fn main() -> ExitCode {
 
 /// Longest word an error line repeats whole (paths included); every reader
 /// already cuts the tokens it quotes to
-/// [`crate::formats::error::MAX_ECHOED_WORD`] characters.
+/// [`a3d_init::formats::error::MAX_ECHOED_WORD`] characters.
 const MAX_PRINTED_WORD: usize = 512;
 
 /// The error's chain as one line, with the command-line flag where the
 /// library names a concept, and no word longer than [`MAX_PRINTED_WORD`].
 fn message(e: &anyhow::Error) -> String {
-    let text = match e.downcast_ref::<crate::pipeline::PipelineError>() {
-        Some(crate::pipeline::PipelineError::Exists(path)) => {
+    let text = match e.downcast_ref::<a3d_init::pipeline::PipelineError>() {
+        Some(a3d_init::pipeline::PipelineError::Exists(path)) => {
             format!("{} exists; pass --force to replace it", path.display())
         }
-        _ => format!("{e:#}"),
+        _ => spelled(&format!("{e:#}")),
     };
-    crate::formats::error::clip_long_words(&text, MAX_PRINTED_WORD).into_owned()
+    a3d_init::formats::error::clip_long_words(&text, MAX_PRINTED_WORD).into_owned()
+}
+
+/// The command-line flag of each setting the library names.
+fn flag(setting: Setting) -> &'static str {
+    match setting {
+        Setting::Columns => "--columns",
+        Setting::FemUnits => "--fem-units",
+        Setting::FemSign => "--fem-sign",
+        Setting::FemMesh => "--fem-mesh",
+        Setting::Analysis => "--analysis",
+        Setting::GeneratedCps => "--generate-cps",
+        Setting::Replace => "--force",
+        Setting::SmoothingLength => "--h",
+        Setting::Outside => "--outside",
+        Setting::StressSource => "--stress",
+        Setting::MixedState => "--mixed-state",
+    }
+}
+
+/// A library message with the flags of the settings it names.
+pub fn spelled(message: &str) -> String {
+    spell_settings(message, flag)
 }
 
 /// Runs one parsed command.
@@ -218,7 +239,6 @@ pub fn run(cli: Cli) -> anyhow::Result<()> {
         Command::Inspect(args) => inspect::run(args),
         Command::Map(args) => map::run(args),
         Command::Calibrate(args) => calibrate::run(args),
-        Command::Bench(args) => bench::run(args),
         Command::Diff(args) => diff::run(args),
         Command::Verify(args) => verify::run_verify(args),
         Command::Demo(args) => demo::run(args),

@@ -5,10 +5,10 @@
 
 use std::path::Path;
 
-use crate::mpm;
-use crate::mpm::fos::FosReport;
-use crate::pipeline::check::VerifyOutcome;
-use crate::pipeline::fos::FosAnalysis;
+use a3d_init::mpm;
+use a3d_init::mpm::fos::FosReport;
+use a3d_init::pipeline::check::VerifyOutcome;
+use a3d_init::pipeline::fos::FosAnalysis;
 
 /// The `wrote      DIR/ (a, b, c)` line a command prints once its folder is written.
 pub fn wrote(target: &Path, files: &[&str]) -> String {
@@ -83,13 +83,16 @@ pub fn verify_outcome(o: &VerifyOutcome, target: &Path) {
             }
         }
     }
-    say!("{}", wrote(target, &crate::pipeline::check::file_names(o)));
+    say!(
+        "{}",
+        wrote(target, &a3d_init::pipeline::check::file_names(o))
+    );
 }
 
 /// The lines that say how mps.csv compares with the MAPF: counts of MPs
 /// compared (never more than the model's), rows that match no MP, MPs
 /// without a row, and the worst MPs where there are any.
-pub fn table_comparison(t: &crate::pipeline::verify::TableComparison) -> Vec<String> {
+pub fn table_comparison(t: &a3d_init::pipeline::verify::TableComparison) -> Vec<String> {
     let mut lines = Vec::new();
     if t.differing == 0 {
         lines.push(format!(
@@ -229,7 +232,7 @@ pub fn run_report(r: &mpm::RunReport) {
 /// Prints a factor-of-safety analysis: the factor of the method asked, then
 /// what limit equilibrium and strength reduction found, and their comparison.
 pub fn fos_report(analysis: &FosAnalysis, target: &Path, elapsed: f64) {
-    use crate::pipeline::fos::{factor_line, file_names};
+    use a3d_init::pipeline::fos::{factor_line, file_names};
     say!("factor     {}", factor_line(analysis));
     if let Some(le) = &analysis.limit_equilibrium {
         le_report(le);
@@ -272,7 +275,7 @@ pub fn fos_report(analysis: &FosAnalysis, target: &Path, elapsed: f64) {
 }
 
 /// A limit-equilibrium analysis: method, search, suction, materials.
-pub fn le_report(le: &crate::pipeline::slope::LeReport) {
+pub fn le_report(le: &a3d_init::pipeline::slope::LeReport) {
     let a = &le.analysis;
     let counts = &a.search.counts;
     say!(
@@ -340,7 +343,7 @@ pub fn le_report(le: &crate::pipeline::slope::LeReport) {
     }
     say!("runtime    {:.2} s", le.runtime_s);
     for w in &le.warnings {
-        say_err!("  warning: {w}");
+        say_err!("  warning: {}", super::spelled(w));
     }
 }
 
@@ -349,7 +352,7 @@ pub fn le_report(le: &crate::pipeline::slope::LeReport) {
 pub fn srm_report(report: &FosReport) {
     say!(
         "strength reduction: {}",
-        crate::pipeline::fos::srm_factor_line(report)
+        a3d_init::pipeline::fos::srm_factor_line(report)
     );
     say!(
         "method     strength reduction: tan φ′/F, c′/F, ψ ≤ φ′_F; {}; {} MPs, window {:.2} s per trial, dt = {:.3e} s, damping α = {}",
@@ -363,7 +366,7 @@ pub fn srm_report(report: &FosReport) {
         report.time_step,
         report.settings.run.damping
     );
-    let names = |v: &[crate::mpm::fos::MaterialNote]| {
+    let names = |v: &[a3d_init::mpm::fos::MaterialNote]| {
         if v.is_empty() {
             "none".to_string()
         } else {

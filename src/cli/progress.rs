@@ -1,6 +1,6 @@
 //! Progress bars (indicatif) for the library's long-running phases, drawn on
 //! stderr only when it is a terminal. A thread polls the counters of
-//! `crate::progress` and shows a bar for a phase once it has run a second.
+//! `a3d_init::progress` and shows a bar for a phase once it has run a second.
 
 use std::io::IsTerminal;
 use std::sync::Arc;
@@ -23,7 +23,7 @@ pub fn show() -> Option<Progress> {
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
     let thread = std::thread::spawn(move || {
-        let counters = crate::progress::all();
+        let counters = a3d_init::progress::all();
         let mut state: Vec<(Option<Instant>, Option<ProgressBar>)> =
             counters.iter().map(|_| (None, None)).collect();
         while !flag.load(Ordering::Relaxed) {

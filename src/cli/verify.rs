@@ -12,9 +12,9 @@ use anyhow::Context;
 use super::Verdict as ExitVerdict;
 use super::args::StateInputs;
 use super::print;
-use crate::mpm;
-use crate::pipeline::output::Destination;
-use crate::pipeline::{self, check::VerifyOptions, fos::FosOptions, runout::RunOptions};
+use a3d_init::mpm;
+use a3d_init::pipeline::output::Destination;
+use a3d_init::pipeline::{self, check::VerifyOptions, fos::FosOptions, runout::RunOptions};
 
 #[derive(Debug, clap::Args)]
 pub struct VerifyArgs {

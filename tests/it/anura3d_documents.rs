@@ -311,7 +311,7 @@ fn malformed_cps_gives_positioned_errors() {
 fn generated_models_survive_write_then_read() {
     use a3d_init::formats::gom::write::model_to_text;
     use a3d_init::model::RetentionCurve;
-    use a3d_init::model::generate;
+    use a3d_testkit::generate;
     // A saturated Mohr–Coulomb sand with van Genuchten retention.
     let mut spec = soil_spec(0.4554, 2500.0, 2.087e-11);
     spec.name = "sand".into();

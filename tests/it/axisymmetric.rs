@@ -17,7 +17,7 @@ use a3d_init::formats::gom::GomDocument;
 use a3d_init::model::{AnuraModel, Dimension, MaterialPoint, MpState, gamma_water};
 use a3d_init::mpm::{RunSettings, verify};
 use a3d_init::place::place_material_points;
-use a3d_init::testkit::{column_tri3, elastic_material, zero_states};
+use a3d_testkit::{column_tri3, elastic_material, zero_states};
 
 const HEIGHT: f64 = 10.0;
 const LAYERS: usize = 20;

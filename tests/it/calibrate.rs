@@ -156,7 +156,7 @@ fn loo_objective_without_fields_is_an_error_not_a_panic() {
 #[test]
 fn block_study_five_metre_triangles_is_pinned() {
     use a3d_init::kernel::mapper::{self, MapSettings, NodeCloud, OutsidePolicy};
-    use a3d_init::model::generate::unstructured_square_nodes;
+    use a3d_testkit::generate::unstructured_square_nodes;
     let f = |p: &[f64; 3]| 9.81 * (50.0 - p[1]);
     let nodes = unstructured_square_nodes(50.0, 5.0, 1);
     let values: Vec<f64> = nodes.iter().map(f).collect();

@@ -15,10 +15,10 @@ use common::*;
 use std::path::{Path, PathBuf};
 
 use a3d_init::formats::gom::write::model_to_text;
-use a3d_init::model::generate::{self, MaterialSpec};
 use a3d_init::model::{AnuraModel, ComputationMethod, Material, MaterialPoint, MpState};
 use a3d_init::mpm::equilibrium::{self, EquilibriumOutcome, EquilibriumSettings};
 use a3d_init::mpm::{Elasticity, ReturnMap, RunSettings, Simulation, SolidModel};
+use a3d_testkit::generate::{self, MaterialSpec};
 
 const G: f64 = 9.81;
 
@@ -60,7 +60,7 @@ fn points(model: &AnuraModel) -> Vec<MaterialPoint> {
 }
 
 fn dry_states(points: &[MaterialPoint]) -> Vec<MpState> {
-    a3d_init::testkit::zero_states(points)
+    a3d_testkit::zero_states(points)
 }
 
 fn solve(model: &AnuraModel, points: &[MaterialPoint], states: &[MpState]) -> EquilibriumOutcome {

@@ -413,7 +413,7 @@ fn unreadable_variants_are_refused_with_their_place() {
 #[test]
 fn an_ogs_column_maps_onto_an_anura3d_column() {
     let tmp = tempfile::tempdir().unwrap();
-    let mesh = a3d_init::model::generate::structured_tri_mesh(0.0, 0.0, 0.5, HEIGHT, 5, 20);
+    let mesh = a3d_testkit::generate::structured_tri_mesh(0.0, 0.0, 0.5, HEIGHT, 5, 20);
     let gom = tmp.path().join("col.GOM");
     write_gom(&gom, mesh, &soil_spec(K0, 1e4, 1e-10));
     std::fs::write(

@@ -13,7 +13,7 @@ use std::process::Command;
 
 use a3d_init::formats::gom::write::model_to_text;
 use a3d_init::formats::{mapf, mps_table};
-use a3d_init::model::generate::{self, MaterialSpec};
+use a3d_testkit::generate::{self, MaterialSpec};
 
 fn saturated_spec() -> MaterialSpec {
     soil_spec(0.3 / 0.7, 2e4, 1e-10)

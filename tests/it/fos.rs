@@ -7,7 +7,7 @@ use crate::common;
 
 use a3d_init::model::{AnuraModel, MaterialPoint, MpState};
 use a3d_init::mpm::{FosOutcome, FosReport, FosSettings, strength_reduction};
-use a3d_init::testkit::{
+use a3d_testkit::{
     cut_geostatic_states, inclined_layer_tri3, infinite_slope_states, mohr_coulomb_material,
     place_points, saturated, vertical_cut_tri3,
 };
@@ -205,7 +205,7 @@ fn same_factor_on_one_and_two_threads() {
 #[test]
 fn elastic_materials_are_left_alone_and_named() {
     use a3d_init::mpm::FosError;
-    use a3d_init::testkit::{column_tri3, elastic_material, geostatic_states};
+    use a3d_testkit::{column_tri3, elastic_material, geostatic_states};
     let model = column_tri3(1.0, 1.0, 2, 2, elastic_material(1e4, 0.3, 2650.0, 0.4));
     let points = place_points(&model);
     let states = geostatic_states(&model, &points, G, 0.43, None);
@@ -302,7 +302,7 @@ fn one_percent_more_pore_pressure_moves_the_factor_by_about_one_percent() {
 /// rest, is the same within the bracket's tolerance.
 #[test]
 fn density_scaling_keeps_the_factor_with_a_longer_step() {
-    use a3d_init::testkit::elastic_material;
+    use a3d_testkit::elastic_material;
     let (mut model, mut points, states, settings) = layer(false);
     let mut base = elastic_material(4e5, 0.3, 2650.0, 0.4);
     base.index = 2;

@@ -10,9 +10,9 @@ use common::*;
 use std::path::{Path, PathBuf};
 
 use a3d_init::formats::fem_csv::CsvOptions;
-use a3d_init::model::generate;
 use a3d_init::pipeline::fos_time::{self, FosTimeOptions, SeriesInput};
 use a3d_init::pipeline::output::Destination;
+use a3d_testkit::generate;
 
 /// Node tables at `n` times over 2 h, the table rising from 0 to 1.8 times
 /// the stand-in's and the suction cap falling from 6 to 1.5 kPa

@@ -11,7 +11,7 @@ use std::process::Command;
 use a3d_init::formats::fem_csv::CsvOptions;
 use a3d_init::formats::gsz::{StepChoice, read_project, read_step};
 use a3d_init::model::Quantity;
-use a3d_init::model::generate;
+use a3d_testkit::generate;
 
 fn ply_bytes(nodes: &[[f64; 3]], header_override: Option<&str>) -> Vec<u8> {
     let header = header_override.map(str::to_string).unwrap_or_else(|| {

@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use a3d_init::formats::cps::CpsDocument;
 use a3d_init::formats::gom::write::model_to_text;
 use a3d_init::formats::{mapf, mps_table};
-use a3d_init::model::generate::{self, MaterialSpec};
+use a3d_testkit::generate::{self, MaterialSpec};
 
 const GAMMA_W: f64 = 9.807;
 

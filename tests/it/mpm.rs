@@ -15,7 +15,7 @@ use a3d_init::mpm::{
     Elasticity, MohrCoulomb, MpmError, Reason, ReturnKind, RunSettings, Simulation, SolidModel,
     Verdict, run, verify,
 };
-use a3d_init::testkit::{
+use a3d_testkit::{
     column_tet, column_tri3, geostatic_states, mohr_coulomb_material, place_points, saturated,
     zero_states,
 };

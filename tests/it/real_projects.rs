@@ -11,7 +11,7 @@ use common::*;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
-use a3d_init::model::generate;
+use a3d_testkit::generate;
 
 fn real(rel: &str) -> PathBuf {
     fixture("real-projects").join(rel)

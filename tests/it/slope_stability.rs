@@ -9,7 +9,7 @@ use a3d_init::slope::{
     self, CircleSearch, Domain, Dry, Interslice, Method, PoreField, PoreSample, Problem, Region,
     SearchSettings, SlopeMaterial, Suction, Surface, WaterTable,
 };
-use a3d_init::testkit::slopes::{self, MP, Published, material};
+use a3d_testkit::slopes::{self, MP, Published, material};
 
 fn problem<'a>(
     domain: &'a Domain,

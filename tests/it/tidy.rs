@@ -1,5 +1,6 @@
 //! Repository hygiene: every Rust file opens with a `//!` paragraph saying what
-//! it owns, and no stub macros are left in the library.
+//! it owns, no stub macros are left in the library, and the workspace's crate
+//! graph keeps its layers (each crate depends only on the layers beneath it).
 
 use std::path::{Path, PathBuf};
 
@@ -17,7 +18,7 @@ fn rust_files(dir: &Path, out: &mut Vec<PathBuf>) {
 fn all_rust_files() -> Vec<PathBuf> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut files = Vec::new();
-    for dir in ["src", "tests", "benches", "examples"] {
+    for dir in ["src", "crates", "tests", "benches", "examples"] {
         if root.join(dir).exists() {
             rust_files(&root.join(dir), &mut files);
         }
@@ -44,9 +45,7 @@ fn every_rust_file_opens_with_a_module_doc() {
 
 #[test]
 fn no_stub_macros_in_the_library() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut files = Vec::new();
-    rust_files(&root, &mut files);
+    let files = source_files();
     let stubs = ["todo!(", "unimplemented!(", "dbg!("];
     for path in files {
         let text = std::fs::read_to_string(&path).unwrap();
@@ -54,6 +53,17 @@ fn no_stub_macros_in_the_library() {
             assert!(!text.contains(stub), "{} contains {stub}", path.display());
         }
     }
+}
+
+/// The program's sources: the binary's `src/` and every crate's `src/`.
+fn source_files() -> Vec<PathBuf> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut files = Vec::new();
+    rust_files(&root.join("src"), &mut files);
+    for krate in std::fs::read_dir(root.join("crates")).unwrap() {
+        rust_files(&krate.unwrap().path().join("src"), &mut files);
+    }
+    files
 }
 
 /// The modules `tests/it/main.rs` declares, in order.
@@ -129,9 +139,7 @@ fn the_architecture_test_table_matches_the_binary() {
 /// CHANGELOG.md and the tests, not by `(#NN)` tags in the code.
 #[test]
 fn no_issue_tags_in_library_comments() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut files = Vec::new();
-    rust_files(&root, &mut files);
+    let files = source_files();
     let mut tagged = Vec::new();
     for path in files {
         let text = std::fs::read_to_string(&path).unwrap();
@@ -153,4 +161,124 @@ fn no_issue_tags_in_library_comments() {
         }
     }
     assert!(tagged.is_empty(), "issue tags in src comments: {tagged:?}");
+}
+
+/// The workspace's layers, lowest first. A crate's `[dependencies]` name only
+/// crates before it; the test kit is a dev-dependency but for the benchmark
+/// binary; `a3d-init` (the binary) comes last.
+const LAYERS: [&str; 12] = [
+    "a3d-progress",
+    "a3d-model",
+    "a3d-element",
+    "a3d-kernel",
+    "a3d-formats",
+    "a3d-state",
+    "a3d-mpm",
+    "a3d-slope",
+    "a3d-testkit",
+    "a3d-init-lib",
+    "a3d-bench",
+    "a3d-init",
+];
+
+/// The dependencies a manifest names, as (section, crate): `dependencies`
+/// (the target-specific tables included) or `dev-dependencies`.
+fn manifest_dependencies(manifest: &Path) -> Vec<(String, String)> {
+    let text = std::fs::read_to_string(manifest).unwrap();
+    let mut section = String::new();
+    let mut out = Vec::new();
+    for line in text.lines().map(str::trim) {
+        if let Some(name) = line.strip_prefix('[').and_then(|l| l.strip_suffix(']')) {
+            let last = name.rsplit('.').next().unwrap_or_default();
+            let own = name == last || name.starts_with("target.");
+            section = match last {
+                "dependencies" | "dev-dependencies" if own => last.to_string(),
+                _ => String::new(),
+            };
+            continue;
+        }
+        if section.is_empty() || line.is_empty() || line.starts_with('#') {
+            continue;
+        }
+        let name = line.split(['=', '.', ' ']).next().unwrap().trim();
+        out.push((section.clone(), name.to_string()));
+    }
+    out
+}
+
+fn manifest_of(krate: &str) -> PathBuf {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    if krate == "a3d-init" {
+        root.join("Cargo.toml")
+    } else {
+        root.join("crates").join(krate).join("Cargo.toml")
+    }
+}
+
+#[test]
+fn the_crate_graph_keeps_its_layers() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut folders: Vec<String> = std::fs::read_dir(root.join("crates"))
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    folders.sort();
+    let mut layered: Vec<String> = LAYERS[..LAYERS.len() - 1]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    layered.sort();
+    assert_eq!(folders, layered, "crates/ against the layer list");
+    let mut wrong = Vec::new();
+    for (rank, krate) in LAYERS.iter().enumerate() {
+        assert!(
+            root.join("crates").join(krate).join("README.md").exists() || *krate == "a3d-init",
+            "{krate} has no README.md"
+        );
+        for (section, dep) in manifest_dependencies(&manifest_of(krate)) {
+            let Some(dep_rank) = LAYERS.iter().position(|l| *l == dep) else {
+                continue;
+            };
+            let test_kit = dep == "a3d-testkit" && section == "dev-dependencies";
+            let self_with_features = dep == "a3d-init-lib" && *krate == "a3d-init";
+            if dep_rank >= rank && !test_kit && !self_with_features {
+                wrong.push(format!("{krate} -> {dep} ({section})"));
+            }
+            if dep == "a3d-testkit" && section == "dependencies" && *krate != "a3d-bench" {
+                wrong.push(format!("{krate} ships the test kit"));
+            }
+        }
+    }
+    assert!(
+        wrong.is_empty(),
+        "dependencies against the layers: {wrong:?}"
+    );
+}
+
+/// The heavy crates compile only where they are used, and the command line
+/// is clap, anyhow and indicatif over the library.
+#[test]
+fn heavy_and_front_end_crates_stay_where_they_are_used() {
+    let users = |wanted: &str| -> Vec<&str> {
+        LAYERS
+            .iter()
+            .copied()
+            .filter(|k| {
+                manifest_dependencies(&manifest_of(k))
+                    .iter()
+                    .any(|(section, dep)| section == "dependencies" && dep == wanted)
+            })
+            .collect()
+    };
+    assert_eq!(users("faer"), ["a3d-mpm"]);
+    assert_eq!(users("plotters"), ["a3d-init-lib"]);
+    assert_eq!(users("indicatif"), ["a3d-init"]);
+    assert_eq!(users("clap"), ["a3d-bench", "a3d-init"]);
+    let mut binary: Vec<String> = manifest_dependencies(&manifest_of("a3d-init"))
+        .into_iter()
+        .filter(|(section, _)| section == "dependencies")
+        .map(|(_, dep)| dep)
+        .collect();
+    binary.sort();
+    assert_eq!(binary, ["a3d-init-lib", "anyhow", "clap", "indicatif"]);
 }

@@ -9,10 +9,10 @@ use common::kernel_run::{run_kernel, vtk_scalars, vtk_vectors};
 use common::{anura3d_kernel_or_skip, run_map, run_ok, soil_spec};
 
 use a3d_init::formats::gom::write::model_to_text;
-use a3d_init::model::generate;
 use a3d_init::model::{AnuraModel, MaterialPoint, MpState};
 use a3d_init::mpm::{Formulation, RunSettings, Simulation};
-use a3d_init::testkit::{
+use a3d_testkit::generate;
+use a3d_testkit::{
     column_tri3, coupled, elastic_material, geostatic_states, impermeable_where_fixed,
     place_points, zero_states,
 };

@@ -8,7 +8,7 @@ use common::*;
 
 use std::path::{Path, PathBuf};
 
-use a3d_init::model::generate;
+use a3d_testkit::generate;
 
 fn mapped_block(dir: &Path) -> PathBuf {
     let mesh = generate::structured_tri_mesh(0.0, 0.0, 4.0, 10.0, 4, 10);

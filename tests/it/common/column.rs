@@ -3,7 +3,7 @@
 
 use a3d_init::model::{AnuraModel, Material, MaterialPoint, MpState};
 use a3d_init::mpm::{Reason, RunOutput, RunReport, RunSettings, Verdict, run, verify};
-use a3d_init::testkit::{elastic_material, geostatic_states, zero_states};
+use a3d_testkit::{elastic_material, geostatic_states, zero_states};
 
 pub const G: f64 = 9.81;
 /// Stiff enough that the settling displacements stay far below an element.

@@ -13,7 +13,7 @@ use std::process::Command;
 
 use a3d_init::formats::gom::write::model_to_text;
 use a3d_init::model::Mesh;
-use a3d_init::model::generate::{self, MaterialSpec};
+use a3d_testkit::generate::{self, MaterialSpec};
 
 /// `fixtures/<rel>` of this repository.
 pub fn fixture(rel: &str) -> PathBuf {

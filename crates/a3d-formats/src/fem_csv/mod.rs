@@ -1,0 +1,129 @@
+//! FEM node tables: GeoStudio-style CSV exports in their many dialects, and the
+//! `node.csv` that GeoStudio keeps inside a `.gsz` (with coordinates from the
+//! sibling `Mesh.ply`). Spec: `formats/geostudio-csv.md`.
+//!
+//! The reader sniffs the dialect (BOM, delimiter `,` `;` tab or blanks, decimal
+//! comma, preamble lines), matches headers loosely through a synonym table,
+//! converts units given in the header to m and kPa, and converts signs to
+//! Anura3D's (tension positive, pwp negative in compression) when the source is
+//! GeoStudio. Every conversion is recorded in [`FemReadReport`]. Errors name the
+//! file, line and column.
+//!
+//! The reader is split by concept: `headers` (column roles, the synonym
+//! table, units), `options` (reader options, `--columns`, `--fem-units`),
+//! `dialect` (delimiter sniffing, field splitting), `table` (the whole-table
+//! pass: header, column report, assembly, checks), `rows` (the data rows in
+//! parallel chunks, and the field-by-field path with positioned errors) and
+//! `fast` (the allocation-free path for common rows). This file holds the
+//! report types and the entry points.
+
+use std::path::{Path, PathBuf};
+
+use super::error::FormatError;
+use a3d_model::FemNodes;
+
+mod dialect;
+mod fast;
+mod headers;
+mod options;
+mod rows;
+mod table;
+#[cfg(test)]
+mod tests;
+
+pub use headers::{Field, normalise, synonym, unit_factor};
+pub use options::{
+    CsvOptions, SignConvention, UnitOverride, parse_columns_option, parse_units_option,
+};
+
+/// How one column was understood.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct ColumnReport {
+    pub header: String,
+    /// Field name, or "ignored".
+    pub understood_as: String,
+    pub unit: Option<String>,
+    pub factor: f64,
+    pub sign_flipped: bool,
+}
+
+/// What the reader did, for `inspect --fem` and `report.json`.
+#[derive(Clone, Debug, serde::Serialize)]
+pub struct FemReadReport {
+    pub path: PathBuf,
+    pub delimiter: String,
+    pub decimal_comma: bool,
+    pub bom: bool,
+    /// 1-based line of the header.
+    pub header_line: usize,
+    pub columns: Vec<ColumnReport>,
+    pub nodes: usize,
+    pub dim: usize,
+    pub sign: SignConvention,
+    /// False for a GeoStudio `node.csv` (coordinates live in the mesh PLY).
+    pub has_coordinates: bool,
+    pub warnings: Vec<String>,
+    /// What the VTU reader found (a `.vtu` or `.pvd`; the dialect fields
+    /// above are then empty).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub vtu: Option<crate::fem_vtu::VtuReport>,
+}
+
+/// Reads a node table. `path` names the file in errors.
+pub fn read_csv(
+    path: &Path,
+    options: &CsvOptions,
+) -> Result<(FemNodes, FemReadReport), FormatError> {
+    let bytes = super::input::read_bytes(path)?;
+    table::parse_csv_chunked(path, bytes.into(), options, rows::CHUNK_BYTES)
+}
+
+/// Parses node-table bytes (see [`read_csv`]).
+pub fn parse_csv(
+    path: &Path,
+    bytes: &[u8],
+    options: &CsvOptions,
+) -> Result<(FemNodes, FemReadReport), FormatError> {
+    table::parse_csv_chunked(path, bytes.into(), options, rows::CHUNK_BYTES)
+}
+
+/// Gives a GeoStudio `node.csv` its coordinates from the mesh PLY: node id k is
+/// PLY node k − 1. 2D when every z is 0.
+pub fn attach_mesh(
+    nodes: &mut FemNodes,
+    csv_path: &Path,
+    mesh: &[[f64; 3]],
+) -> Result<(), FormatError> {
+    for (i, id) in nodes.ids.iter().enumerate() {
+        let k = *id;
+        if k < 1 || k as usize > mesh.len() {
+            return Err(FormatError::file(
+                csv_path,
+                format!(
+                    "node {k} (row {}) has no coordinates: the mesh has {} nodes",
+                    i + 1,
+                    mesh.len()
+                ),
+            ));
+        }
+        nodes.positions[i] = mesh[k as usize - 1];
+    }
+    if let Some((a, b)) = super::extent::first_coincident(&nodes.positions) {
+        return Err(FormatError::file(
+            csv_path,
+            format!(
+                "duplicate node: node {} (row {}) is at the same mesh point as node {} (row {})",
+                nodes.ids[b],
+                b + 1,
+                nodes.ids[a],
+                a + 1
+            ),
+        ));
+    }
+    nodes.dim = if nodes.positions.iter().all(|p| p[2] == 0.0) {
+        2
+    } else {
+        3
+    };
+    Ok(())
+}

@@ -1,0 +1,321 @@
+//! The data-row pass: the [`Schema`] it reads against, the [`Rows`] it fills,
+//! the split of the body into chunks parsed in parallel and joined in file
+//! order, and the field-by-field path ([`slow_row`]) that reads any row and
+//! names the line and column of every error.
+
+use std::path::Path;
+
+use super::dialect::{Delimiter, parse_number, split_line};
+use super::fast::{fast_row, is_blank};
+use crate::error::ParseError;
+use a3d_model::Quantity;
+
+/// Bytes per chunk of the data-row pass (split after the next newline).
+pub(super) const CHUNK_BYTES: usize = 1 << 20;
+
+/// The data-row pass stops after a row that brings the errors past this count.
+const MAX_ROW_ERRORS: usize = 20;
+
+/// What the data-row pass needs to know about the table.
+pub(super) struct Schema<'a> {
+    pub(super) path: &'a Path,
+    pub(super) delim: Delimiter,
+    pub(super) decimal_comma: bool,
+    /// Column of x, y, z.
+    pub(super) coords: [Option<usize>; 3],
+    pub(super) node: Option<usize>,
+    pub(super) region: Option<usize>,
+    pub(super) value_cols: &'a [(usize, Quantity)],
+    /// Unit factor × sign per column.
+    pub(super) factors: &'a [f64],
+}
+
+impl Schema<'_> {
+    /// The columns whose missing fields are tracked: the values, then node, then region.
+    pub(super) fn tracked(&self) -> Vec<Option<usize>> {
+        let mut out: Vec<Option<usize>> = self.value_cols.iter().map(|(c, _)| Some(*c)).collect();
+        out.push(self.node);
+        out.push(self.region);
+        out
+    }
+}
+
+/// Data rows read from one chunk (or from the whole body once merged).
+#[derive(Default)]
+pub(super) struct Rows {
+    pub(super) positions: Vec<[f64; 3]>,
+    /// The id column's value, when the row has one.
+    pub(super) ids: Vec<Option<i64>>,
+    /// One vector per value column with a value (NaN when absent) for every row.
+    pub(super) values: Vec<Vec<f64>>,
+    pub(super) regions: Vec<String>,
+    /// 1-based line of each row.
+    pub(super) lines: Vec<usize>,
+    /// Per tracked column ([`Schema::tracked`]): some row has a value.
+    pub(super) has_value: Vec<bool>,
+    /// Per tracked column: the first row that lacks the field, as (line,
+    /// column past its end, fields in the row).
+    pub(super) first_short: Vec<Option<(usize, usize, usize)>>,
+    /// The first row whose id cell is present but empty, as (line, column).
+    pub(super) first_empty_id: Option<(usize, usize)>,
+    pub(super) errors: Vec<ParseError>,
+}
+
+impl Rows {
+    /// Empty rows with room for `capacity` rows (a chunk's line count: its
+    /// columns are then allocated once, not grown by doubling).
+    pub(super) fn new(schema: &Schema<'_>, capacity: usize) -> Rows {
+        let n_tracked = schema.value_cols.len() + 2;
+        Rows {
+            positions: Vec::with_capacity(capacity),
+            ids: Vec::with_capacity(capacity),
+            values: (0..schema.value_cols.len())
+                .map(|_| Vec::with_capacity(capacity))
+                .collect(),
+            lines: Vec::with_capacity(capacity),
+            has_value: vec![false; n_tracked],
+            first_short: vec![None; n_tracked],
+            ..Rows::default()
+        }
+    }
+
+    pub(super) fn short(&mut self, t: usize, line: usize, col: usize, n_fields: usize) {
+        if self.first_short[t].is_none() {
+            self.first_short[t] = Some((line, col, n_fields));
+        }
+    }
+}
+
+/// The merged rows and the row errors kept (as many as the serial pass would).
+pub(super) struct Merged {
+    pub(super) rows: Rows,
+    pub(super) errors: Vec<ParseError>,
+}
+
+/// Joins chunk results in file order. Errors are cut as a serial pass would:
+/// after the row that brings them past [`MAX_ROW_ERRORS`].
+pub(super) fn merge_rows(parts: Vec<Rows>, n_values: usize) -> Merged {
+    let n: usize = parts.iter().map(|p| p.positions.len()).sum();
+    let n_rows: usize = parts
+        .iter()
+        .map(|p| p.values.first().map_or(0, Vec::len))
+        .sum();
+    let mut rows = Rows {
+        positions: Vec::with_capacity(n),
+        ids: Vec::with_capacity(n),
+        // Each column with its own capacity (`vec![v; n]` clones would have none).
+        values: (0..n_values).map(|_| Vec::with_capacity(n_rows)).collect(),
+        lines: Vec::with_capacity(n),
+        has_value: vec![false; n_values + 2],
+        first_short: vec![None; n_values + 2],
+        ..Rows::default()
+    };
+    let mut errors: Vec<ParseError> = Vec::new();
+    let mut full = false;
+    for part in parts {
+        rows.positions.extend_from_slice(&part.positions);
+        rows.ids.extend_from_slice(&part.ids);
+        for (all, v) in rows.values.iter_mut().zip(&part.values) {
+            all.extend_from_slice(v);
+        }
+        rows.regions.extend(part.regions);
+        rows.lines.extend_from_slice(&part.lines);
+        for (t, h) in part.has_value.iter().enumerate() {
+            rows.has_value[t] |= h;
+            if rows.first_short[t].is_none() {
+                rows.first_short[t] = part.first_short[t];
+            }
+        }
+        if rows.first_empty_id.is_none() {
+            rows.first_empty_id = part.first_empty_id;
+        }
+        for e in part.errors {
+            if full {
+                break;
+            }
+            if errors.len() > MAX_ROW_ERRORS
+                && errors.last().map(|l| l.position.line) != Some(e.position.line)
+            {
+                full = true;
+                break;
+            }
+            errors.push(e);
+        }
+    }
+    Merged { rows, errors }
+}
+
+/// Byte offset of 0-based line `k` of `text` (its length when there are fewer lines).
+pub(super) fn nth_line_start(text: &str, k: usize) -> usize {
+    if k == 0 {
+        return 0;
+    }
+    text.bytes()
+        .enumerate()
+        .filter(|&(_, b)| b == b'\n')
+        .nth(k - 1)
+        .map_or(text.len(), |(i, _)| i + 1)
+}
+
+/// Splits `text` into pieces of about `size` bytes, each ending just after a newline
+/// (the last one excepted).
+pub(super) fn split_chunks(text: &str, size: usize) -> Vec<&str> {
+    let bytes = text.as_bytes();
+    let mut out = Vec::with_capacity(bytes.len() / size + 1);
+    let mut start = 0;
+    while start < bytes.len() {
+        let mut end = (start + size).min(bytes.len());
+        match bytes[end..].iter().position(|&b| b == b'\n') {
+            Some(k) => end += k + 1,
+            None => end = bytes.len(),
+        }
+        out.push(&text[start..end]);
+        start = end;
+    }
+    out
+}
+
+/// Parses the rows of one chunk whose first line is `first_line` (1-based)
+/// and which holds at most `lines` lines.
+pub(super) fn parse_chunk(
+    schema: &Schema<'_>,
+    chunk: &str,
+    first_line: usize,
+    lines: usize,
+) -> Rows {
+    let mut rows = Rows::new(schema, lines);
+    let mut ranges: Vec<(usize, usize)> = Vec::with_capacity(32);
+    let mut scratch: Vec<f64> = Vec::with_capacity(schema.value_cols.len());
+    for (k, line) in chunk.lines().enumerate() {
+        let line_no = first_line + k;
+        if is_blank(line) {
+            continue;
+        }
+        if !fast_row(schema, line, line_no, &mut ranges, &mut scratch, &mut rows) {
+            slow_row(schema, line, line_no, &mut rows);
+        }
+        if rows.errors.len() > MAX_ROW_ERRORS {
+            break;
+        }
+    }
+    rows
+}
+
+/// Any row, read field by field with positioned errors.
+pub(super) fn slow_row(schema: &Schema<'_>, line: &str, line_no: usize, rows: &mut Rows) {
+    let path = schema.path;
+    let fields = split_line(line, schema.delim);
+    let end_col = line.chars().count() + 1;
+    let n_fields = fields.len();
+    let n_values = schema.value_cols.len();
+    let get = |k: usize| fields.get(k).filter(|(_, t)| !t.is_empty());
+    let number = |k: usize, what: &str, errors: &mut Vec<ParseError>| -> Option<f64> {
+        match get(k) {
+            Some((col, text)) => match parse_number(text, schema.decimal_comma) {
+                Some(v) => Some(v),
+                None => {
+                    errors.push(ParseError::at(
+                        path,
+                        line_no,
+                        *col,
+                        format!("expected a number for {what}, found `{text}`"),
+                    ));
+                    None
+                }
+            },
+            None => None,
+        }
+    };
+    let mut pos = [0.0; 3];
+    let mut ok = true;
+    for (slot, name) in [(0, "x"), (1, "y"), (2, "z")] {
+        let Some(c) = schema.coords[slot] else {
+            continue;
+        };
+        match number(c, name, &mut rows.errors) {
+            Some(v) => pos[slot] = v * schema.factors[c],
+            None => {
+                if get(c).is_none() {
+                    let msg = if slot == 2 {
+                        "missing z: some rows are 3D and this one is 2D (mixed 2D/3D rows)"
+                            .to_string()
+                    } else {
+                        format!("missing {name} coordinate")
+                    };
+                    rows.errors
+                        .push(ParseError::at(path, line_no, end_col, msg));
+                }
+                ok = false;
+            }
+        }
+    }
+    let id = match schema.node {
+        Some(c) => match get(c) {
+            Some((col, text)) => match text.parse::<i64>() {
+                Ok(v) => {
+                    rows.has_value[n_values] = true;
+                    Some(v)
+                }
+                Err(_) => {
+                    rows.errors.push(ParseError::at(
+                        path,
+                        line_no,
+                        *col,
+                        format!("expected an integer node id, found `{text}`"),
+                    ));
+                    ok = false;
+                    None
+                }
+            },
+            None => {
+                match fields.get(c) {
+                    // Present but empty: an error when other rows have ids.
+                    Some((col, _)) => {
+                        if rows.first_empty_id.is_none() {
+                            rows.first_empty_id = Some((line_no, *col));
+                        }
+                    }
+                    None => rows.short(n_values, line_no, end_col, n_fields),
+                }
+                None
+            }
+        },
+        None => None,
+    };
+    for (slot, &(c, q)) in schema.value_cols.iter().enumerate() {
+        match number(c, &q.name(), &mut rows.errors) {
+            Some(v) => {
+                rows.has_value[slot] = true;
+                rows.values[slot].push(v * schema.factors[c]);
+            }
+            None => {
+                if get(c).is_some() {
+                    ok = false;
+                } else if c >= n_fields {
+                    rows.short(slot, line_no, end_col, n_fields);
+                }
+                rows.values[slot].push(f64::NAN);
+            }
+        }
+    }
+    if !ok {
+        return;
+    }
+    if let Some(c) = schema.region {
+        match get(c) {
+            Some((_, t)) => {
+                rows.has_value[n_values + 1] = true;
+                rows.regions.push(t.clone());
+            }
+            None => {
+                if c >= n_fields {
+                    rows.short(n_values + 1, line_no, end_col, n_fields);
+                }
+                rows.regions.push(String::new());
+            }
+        }
+    }
+    rows.ids.push(id);
+    rows.positions.push(pos);
+    rows.lines.push(line_no);
+}
