@@ -8,7 +8,7 @@
 use std::path::Path;
 use std::time::Instant;
 
-use a3d_init::pipeline::plot::{self, Overlay};
+use a3d_init::pipeline::io::plot::{self, Overlay};
 use a3d_init::slope::{self, Analysis, Interslice, Method, Problem, SearchSettings, Suction};
 use a3d_testkit::slopes::{self, Published};
 use plotters::style::RGBColor;

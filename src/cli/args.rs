@@ -4,10 +4,12 @@
 
 use std::path::PathBuf;
 
-use a3d_init::formats::fem_csv::{self, CsvOptions, SignConvention};
+use a3d_init::formats::fem_csv::{self, CsvOptions};
+
+use a3d_init::formats::fem::SignConvention;
 use a3d_init::formats::fem_vtu::{self, StressRule, VtuOptions};
+use a3d_init::pipeline::check::start::StateSource;
 use a3d_init::pipeline::fem::FemOptions;
-use a3d_init::pipeline::start::StateSource;
 use anyhow::{Context, bail};
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
@@ -281,7 +283,7 @@ impl LeArgs {
     pub fn options(
         &self,
         method: MethodArg,
-    ) -> anyhow::Result<a3d_init::pipeline::slope::LeOptions> {
+    ) -> anyhow::Result<a3d_init::pipeline::stability::slope::LeOptions> {
         use a3d_init::slope::{CircleSearch, SearchSettings, Suction};
         let range = |t: &Option<String>, flag: &str| -> anyhow::Result<Option<(f64, f64)>> {
             t.as_deref()
@@ -308,8 +310,8 @@ impl LeArgs {
         if self.phi_b.is_some() && self.suction != SuctionArg::PhiB {
             bail!("--phi-b applies with --suction phi-b");
         }
-        let defaults = a3d_init::pipeline::slope::LeOptions::default();
-        Ok(a3d_init::pipeline::slope::LeOptions {
+        let defaults = a3d_init::pipeline::stability::slope::LeOptions::default();
+        Ok(a3d_init::pipeline::stability::slope::LeOptions {
             method: self.method(method).unwrap_or(defaults.method),
             suction: match self.suction {
                 SuctionArg::Bishop => Suction::Bishop,

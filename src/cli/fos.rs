@@ -1,4 +1,4 @@
-//! `a3d-init fos`: arguments and printing around [`pipeline::fos::fos`], the
+//! `a3d-init fos`: arguments and printing around [`pipeline::stability::fos::fos`], the
 //! factor of safety of the state `verify` judges (for a map folder, the state
 //! Anura3D will hold): by limit equilibrium (`--method`, default
 //! Morgenstern–Price) or by strength reduction on the built-in runner
@@ -9,10 +9,10 @@ use std::time::Instant;
 
 use super::args::{LeArgs, MethodArg, StateInputs};
 use super::print;
-use a3d_init::pipeline::output::Destination;
+use a3d_init::pipeline::io::output::Destination;
 use a3d_init::pipeline::{
     self,
-    fos::{FosMethod, FosOptions},
+    stability::fos::{FosMethod, FosOptions},
 };
 
 #[derive(Debug, clap::Args)]
@@ -74,7 +74,7 @@ pub fn run(args: FosArgs) -> anyhow::Result<()> {
         drained: !args.coupled,
     };
     let to = Destination::new(args.out.as_deref(), args.force);
-    let (analysis, target) = pipeline::fos::fos(&args.inputs.source()?, &options, to)?;
+    let (analysis, target) = pipeline::stability::fos::fos(&args.inputs.source()?, &options, to)?;
     print::fos_report(&analysis, &target, started.elapsed().as_secs_f64());
     Ok(())
 }

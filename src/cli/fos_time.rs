@@ -1,5 +1,5 @@
 //! `a3d-init fos-time`: arguments and printing around
-//! [`pipeline::fos_time::fos_time`], the factor of safety over a time series of
+//! [`pipeline::stability::fos_time::fos_time`], the factor of safety over a time series of
 //! FEM pore-pressure fields (every saved step of a `.gsz` analysis, or node
 //! tables with `--times`) by limit equilibrium, the first time it falls to 1
 //! (bisected between saved times), and strength reduction at that time.
@@ -11,8 +11,8 @@ use anyhow::{Context, bail};
 
 use super::args::{FemArgs, LeArgs, MethodArg};
 use super::print::wrote;
-use a3d_init::pipeline::fos_time::{self, FosTimeOptions, SeriesInput};
-use a3d_init::pipeline::output::Destination;
+use a3d_init::pipeline::io::output::Destination;
+use a3d_init::pipeline::stability::fos_time::{self, FosTimeOptions, SeriesInput};
 
 #[derive(Debug, clap::Args)]
 pub struct FosTimeArgs {

@@ -1,5 +1,5 @@
 //! `a3d-init map`: turns the arguments into a [`MapJob`], runs
-//! [`pipeline::mapping::map`] (load the project and the FEM nodes, map, write
+//! [`pipeline::map::job::map`] (load the project and the FEM nodes, map, write
 //! into an atomic output folder) and prints a summary.
 
 use std::path::PathBuf;
@@ -7,12 +7,12 @@ use std::time::Instant;
 
 use super::args::{FemArgs, LeArgs, MethodArg};
 use a3d_init::kernel::KernelKind;
+use a3d_init::pipeline::io::output::Destination;
 use a3d_init::pipeline::map::{
     EquilibriumOptions, MapConfig, MaterialMap, MixedState, Outside, SmoothingLength, StressSource,
 };
-use a3d_init::pipeline::output::Destination;
-use a3d_init::pipeline::slope::LeOptions;
-use a3d_init::pipeline::{self, mapping::MapJob};
+use a3d_init::pipeline::stability::slope::LeOptions;
+use a3d_init::pipeline::{self, map::job::MapJob};
 
 /// A clap mirror of one of the library's plain enums: the same variants, with
 /// their help, and the conversion into the library's type (the library does
@@ -181,7 +181,7 @@ impl MapArgs {
                 a3d_init::slope::MAX_TRIALS
             );
         }
-        let mut le = a3d_init::pipeline::fos_time::FosTimeOptions::default().le;
+        let mut le = a3d_init::pipeline::stability::fos_time::FosTimeOptions::default().le;
         le.method = LeArgs::method_of(self.failure_method).unwrap_or(le.method);
         le.search.trials = self.failure_trials;
         Ok(le)
@@ -203,7 +203,7 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
     let started = Instant::now();
     let progress = super::progress::show();
     let to = Destination::new(args.out.as_deref(), args.force);
-    let (mapped, written) = pipeline::mapping::map(&args.job()?, to)?;
+    let (mapped, written) = pipeline::map::job::map(&args.job()?, to)?;
     drop(progress);
     let r = &mapped.report;
     say_err!(

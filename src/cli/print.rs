@@ -8,7 +8,7 @@ use std::path::Path;
 use a3d_init::mpm;
 use a3d_init::mpm::fos::FosReport;
 use a3d_init::pipeline::check::VerifyOutcome;
-use a3d_init::pipeline::fos::FosAnalysis;
+use a3d_init::pipeline::stability::fos::FosAnalysis;
 
 /// The `wrote      DIR/ (a, b, c)` line a command prints once its folder is written.
 pub fn wrote(target: &Path, files: &[&str]) -> String {
@@ -92,7 +92,7 @@ pub fn verify_outcome(o: &VerifyOutcome, target: &Path) {
 /// The lines that say how mps.csv compares with the MAPF: counts of MPs
 /// compared (never more than the model's), rows that match no MP, MPs
 /// without a row, and the worst MPs where there are any.
-pub fn table_comparison(t: &a3d_init::pipeline::verify::TableComparison) -> Vec<String> {
+pub fn table_comparison(t: &a3d_init::pipeline::check::folder::TableComparison) -> Vec<String> {
     let mut lines = Vec::new();
     if t.differing == 0 {
         lines.push(format!(
@@ -232,7 +232,7 @@ pub fn run_report(r: &mpm::RunReport) {
 /// Prints a factor-of-safety analysis: the factor of the method asked, then
 /// what limit equilibrium and strength reduction found, and their comparison.
 pub fn fos_report(analysis: &FosAnalysis, target: &Path, elapsed: f64) {
-    use a3d_init::pipeline::fos::{factor_line, file_names};
+    use a3d_init::pipeline::stability::fos::{factor_line, file_names};
     say!("factor     {}", factor_line(analysis));
     if let Some(le) = &analysis.limit_equilibrium {
         le_report(le);
@@ -275,7 +275,7 @@ pub fn fos_report(analysis: &FosAnalysis, target: &Path, elapsed: f64) {
 }
 
 /// A limit-equilibrium analysis: method, search, suction, materials.
-pub fn le_report(le: &a3d_init::pipeline::slope::LeReport) {
+pub fn le_report(le: &a3d_init::pipeline::stability::slope::LeReport) {
     let a = &le.analysis;
     let counts = &a.search.counts;
     say!(
@@ -352,7 +352,7 @@ pub fn le_report(le: &a3d_init::pipeline::slope::LeReport) {
 pub fn srm_report(report: &FosReport) {
     say!(
         "strength reduction: {}",
-        a3d_init::pipeline::fos::srm_factor_line(report)
+        a3d_init::pipeline::stability::fos::srm_factor_line(report)
     );
     say!(
         "method     strength reduction: tan φ′/F, c′/F, ψ ≤ φ′_F; {}; {} MPs, window {:.2} s per trial, dt = {:.3e} s, damping α = {}",

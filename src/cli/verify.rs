@@ -1,8 +1,8 @@
 //! `a3d-init verify` and `a3d-init run`: arguments and printing around
 //! [`pipeline::check::verify`] (is the mapped state in equilibrium under
-//! gravity, and where not) and [`pipeline::runout::run`] (the same solver kept
+//! gravity, and where not) and [`pipeline::check::runout::run`] (the same solver kept
 //! going for a given time, with snapshots). `verify --fos` runs
-//! [`pipeline::fos::fos`] instead.
+//! [`pipeline::stability::fos::fos`] instead.
 
 use std::path::PathBuf;
 use std::time::Instant;
@@ -13,8 +13,10 @@ use super::Verdict as ExitVerdict;
 use super::args::StateInputs;
 use super::print;
 use a3d_init::mpm;
-use a3d_init::pipeline::output::Destination;
-use a3d_init::pipeline::{self, check::VerifyOptions, fos::FosOptions, runout::RunOptions};
+use a3d_init::pipeline::io::output::Destination;
+use a3d_init::pipeline::{
+    self, check::VerifyOptions, check::runout::RunOptions, stability::fos::FosOptions,
+};
 
 #[derive(Debug, clap::Args)]
 pub struct VerifyArgs {
@@ -71,7 +73,8 @@ pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
             damping: args.damping,
             ..FosOptions::srm()
         };
-        let (report, target) = pipeline::fos::fos(&source, &options, args.destination())?;
+        let (report, target) =
+            pipeline::stability::fos::fos(&source, &options, args.destination())?;
         print::fos_report(&report, &target, started.elapsed().as_secs_f64());
         return Ok(());
     }
@@ -108,7 +111,7 @@ pub fn run_run(args: RunArgs) -> anyhow::Result<()> {
         damping: args.verify.damping,
         drained: args.verify.drained,
     };
-    let outcome = pipeline::runout::run(&source, &options, args.verify.destination())?;
+    let outcome = pipeline::check::runout::run(&source, &options, args.verify.destination())?;
     let r = &outcome.report;
     say!(
         "run        {} MPs, {} steps, t = {:.3} s, damping α = {}",

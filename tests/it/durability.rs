@@ -13,10 +13,10 @@ use std::process::Command;
 
 use a3d_init::pipeline::ErrorKind;
 use a3d_init::pipeline::fem::FemOptions;
+use a3d_init::pipeline::io::output::Destination;
+use a3d_init::pipeline::io::output::trace::{self, Event};
 use a3d_init::pipeline::map::MapConfig;
-use a3d_init::pipeline::mapping::{self, MapJob};
-use a3d_init::pipeline::output::Destination;
-use a3d_init::pipeline::output::trace::{self, Event};
+use a3d_init::pipeline::map::job::{self, MapJob};
 use common::{fixture, run_map};
 
 /// `map` of the shipped slope into `out`, as arguments of the binary.
@@ -93,18 +93,18 @@ fn map_outputs_are_synced_before_the_publishing_rename_and_a_failed_sync_keeps_t
 
     // A new folder.
     trace::start();
-    mapping::map(&job, Destination::new(Some(&target), false)).unwrap();
+    job::map(&job, Destination::new(Some(&target), false)).unwrap();
     assert_durable_order(&trace::take(), &target);
 
     // --force over the old one (RENAME_EXCHANGE).
     trace::start();
-    mapping::map(&job, Destination::new(Some(&target), true)).unwrap();
+    job::map(&job, Destination::new(Some(&target), true)).unwrap();
     assert_durable_order(&trace::take(), &target);
 
     // The two-rename fallback.
     trace::disable_exchange(true);
     trace::start();
-    let result = mapping::map(&job, Destination::new(Some(&target), true));
+    let result = job::map(&job, Destination::new(Some(&target), true));
     trace::disable_exchange(false);
     result.unwrap();
     assert_durable_order(&trace::take(), &target);
@@ -130,7 +130,7 @@ fn map_outputs_are_synced_before_the_publishing_rename_and_a_failed_sync_keeps_t
     ] {
         trace::disable_exchange(!exchange);
         trace::fail_sync_of(Some(failing));
-        let result = mapping::map(&job, Destination::new(Some(&target), true));
+        let result = job::map(&job, Destination::new(Some(&target), true));
         trace::fail_sync_of(None);
         trace::disable_exchange(false);
         let Err(e) = result else {

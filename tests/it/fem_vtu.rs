@@ -10,8 +10,8 @@ use common::*;
 
 use std::path::PathBuf;
 
+use a3d_init::formats::fem::StepChoice;
 use a3d_init::formats::fem_vtu::{self, Chi, StressRule, VtuOptions};
-use a3d_init::formats::gsz::StepChoice;
 use a3d_init::formats::mps_table;
 use a3d_init::model::{FemNodes, Quantity, StressComponent};
 
@@ -299,7 +299,7 @@ fn sheared_blocks_show_no_kelvin_factor_and_ogs_component_order() {
 #[test]
 fn units_and_signs_can_be_given() {
     let kpa = VtuOptions {
-        units: a3d_init::formats::fem_csv::UnitOverride {
+        units: a3d_init::formats::fem::UnitOverride {
             pressure: Some("kPa".into()),
             length: None,
         },
@@ -324,7 +324,7 @@ fn units_and_signs_can_be_given() {
         report.warnings
     );
     let kept = VtuOptions {
-        sign: Some(a3d_init::formats::fem_csv::SignConvention::TensionPositive),
+        sign: Some(a3d_init::formats::fem::SignConvention::TensionPositive),
         ..VtuOptions::default()
     };
     let positive = read("hm2d_quad8.vtu", &kept);

@@ -10,8 +10,8 @@ use common::*;
 use std::path::{Path, PathBuf};
 
 use a3d_init::formats::fem_csv::CsvOptions;
-use a3d_init::pipeline::fos_time::{self, FosTimeOptions, SeriesInput};
-use a3d_init::pipeline::output::Destination;
+use a3d_init::pipeline::io::output::Destination;
+use a3d_init::pipeline::stability::fos_time::{self, FosTimeOptions, SeriesInput};
 use a3d_testkit::generate;
 
 /// Node tables at `n` times over 2 h, the table rising from 0 to 1.8 times
@@ -173,7 +173,7 @@ fn the_factor_at_the_129_h_output_does_not_depend_on_the_trial_count() {
     let factors: Vec<f64> = [(2000, "2,000"), (5000, "5,000"), (20000, "20,000")]
         .iter()
         .map(|&(trials, label)| {
-            let mut le = a3d_init::pipeline::slope::LeOptions::default();
+            let mut le = a3d_init::pipeline::stability::slope::LeOptions::default();
             le.search.trials = trials;
             let report = fos_time::factor_of_field(&project, fem, &le).unwrap();
             // docs/slope.md's table quotes the factor and the best circle.
@@ -205,7 +205,7 @@ fn the_factor_at_the_129_h_output_does_not_depend_on_the_trial_count() {
     let first = &series[0].1;
     let (mut at_zero, mut circles) = (Vec::new(), Vec::new());
     for trials in [2000, 5000, 20000] {
-        let mut le = a3d_init::pipeline::slope::LeOptions::default();
+        let mut le = a3d_init::pipeline::stability::slope::LeOptions::default();
         le.search.trials = trials;
         let report = fos_time::factor_of_field(&project, first, &le).unwrap();
         at_zero.push(format!("{:.4}", report.factor));

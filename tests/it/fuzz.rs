@@ -425,13 +425,25 @@ fn fuzz_gsz() {
     let mesh = std::fs::read(dir.join("1-initial-steady-state_Mesh.ply")).unwrap();
     let read = |path: &Path| -> Case {
         let _ = gsz::read_project(path);
-        gsz::read_step(path, None, &gsz::StepChoice::Last, &CsvOptions::default()).into()
+        gsz::read_step(
+            path,
+            None,
+            &a3d_init::formats::fem::StepChoice::Last,
+            &CsvOptions::default(),
+        )
+        .into()
     };
     // The unmutated archive reads.
     let tmp = tempfile::tempdir().unwrap();
     let good = tmp.path().join("good.gsz");
     make_gsz(&good, GSZ_XML, &csv, &mesh);
-    gsz::read_step(&good, None, &gsz::StepChoice::Last, &CsvOptions::default()).unwrap();
+    gsz::read_step(
+        &good,
+        None,
+        &a3d_init::formats::fem::StepChoice::Last,
+        &CsvOptions::default(),
+    )
+    .unwrap();
     let mut failures = Vec::new();
     failures.extend(fuzz("gsz-csv", &csv, None, |path, bytes| {
         make_gsz(path, GSZ_XML, bytes, &mesh);

@@ -8,8 +8,9 @@ use std::io::Write;
 use std::path::Path;
 use std::process::Command;
 
+use a3d_init::formats::fem::StepChoice;
 use a3d_init::formats::fem_csv::CsvOptions;
-use a3d_init::formats::gsz::{StepChoice, read_project, read_step};
+use a3d_init::formats::gsz::{read_project, read_step};
 use a3d_init::model::Quantity;
 use a3d_testkit::generate;
 

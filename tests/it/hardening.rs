@@ -87,7 +87,7 @@ fn no_staging_left(dir: &Path) {
     for entry in std::fs::read_dir(dir).unwrap() {
         let name = entry.unwrap().file_name().to_string_lossy().into_owned();
         assert!(
-            !name.starts_with(".a3d-init") || name == a3d_init::pipeline::output::MARKER,
+            !name.starts_with(".a3d-init") || name == a3d_init::pipeline::io::output::MARKER,
             "{name} left in {}",
             dir.display()
         );
@@ -169,14 +169,14 @@ fn verify_run_and_fos_out_may_not_hold_the_state_and_fem_mesh_is_an_input() {
         assert_eq!(std::fs::read(&state).unwrap(), before, "{command}");
     }
     // The same through the library, without the CLI.
-    let source = a3d_init::pipeline::start::StateSource::Table {
+    let source = a3d_init::pipeline::check::start::StateSource::Table {
         model: gom.clone(),
         state: state.clone(),
     };
-    let e = a3d_init::pipeline::fos::fos(
+    let e = a3d_init::pipeline::stability::fos::fos(
         &source,
         &Default::default(),
-        a3d_init::pipeline::output::Destination::new(Some(&state_dir), true),
+        a3d_init::pipeline::io::output::Destination::new(Some(&state_dir), true),
     )
     .unwrap_err();
     assert_eq!(e.kind(), a3d_init::pipeline::ErrorKind::Output, "{e}");
@@ -1193,7 +1193,7 @@ fn regression_38_force_never_replaces_a_folder_a3d_init_did_not_write() {
     assert_eq!(code, 0, "{text}");
     let (code, text) = map(&fem, &gom, &empty, &["--force"]);
     assert_eq!(code, 0, "{text}");
-    assert!(empty.join(a3d_init::pipeline::output::MARKER).is_file());
+    assert!(empty.join(a3d_init::pipeline::io::output::MARKER).is_file());
     // A series: step 0 beside the .pvd, step 1 inside an earlier output.
     // Mapping step 0 reads step 1 nowhere, but may not replace its folder.
     let vtu = crafted_vtu(tmp.path(), "run_0.vtu", |t| t);
@@ -1242,7 +1242,7 @@ fn regression_38_every_snapshot_time_gets_its_own_file() {
     for name in ["mps_t0.001.vtu", "mps_t0.002.vtu", "mps_t0.003.vtu"] {
         assert!(out.join(name).is_file(), "{name}: {text}");
     }
-    let names = a3d_init::pipeline::runout::snapshot_names(&[0.3, 0.8, 1.2, 2.0]);
+    let names = a3d_init::pipeline::check::runout::snapshot_names(&[0.3, 0.8, 1.2, 2.0]);
     let names: Vec<&str> = names.iter().map(|(_, n)| n.as_str()).collect();
     assert_eq!(
         names,

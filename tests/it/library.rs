@@ -11,14 +11,14 @@ use a3d_init::kernel::KernelKind;
 use a3d_init::kernel::loo::Norm;
 use a3d_init::pipeline::calibrate::CalibrateOptions;
 use a3d_init::pipeline::check::VerifyOptions;
+use a3d_init::pipeline::check::runout::RunOptions;
+use a3d_init::pipeline::check::start::StateSource;
 use a3d_init::pipeline::diff::DiffOptions;
 use a3d_init::pipeline::fem::FemOptions;
-use a3d_init::pipeline::fos::FosOptions;
+use a3d_init::pipeline::io::output::Destination;
 use a3d_init::pipeline::map::MapConfig;
-use a3d_init::pipeline::mapping::{self, MapJob};
-use a3d_init::pipeline::output::Destination;
-use a3d_init::pipeline::runout::RunOptions;
-use a3d_init::pipeline::start::StateSource;
+use a3d_init::pipeline::map::job::{self, MapJob};
+use a3d_init::pipeline::stability::fos::FosOptions;
 use a3d_init::pipeline::{self, ErrorKind};
 use common::{fixture, mini_regions_csv, run_ok};
 
@@ -41,7 +41,7 @@ fn map_verify_run_fos_diff_inspect_and_calibrate_run_without_the_cli() {
 
     // map, twice: the second into an existing folder needs force.
     let out = tmp.path().join("out");
-    let (mapped, written) = mapping::map(&job, Destination::new(Some(&out), false)).unwrap();
+    let (mapped, written) = job::map(&job, Destination::new(Some(&out), false)).unwrap();
     assert_eq!(written.folder, out);
     assert!(
         written.files.iter().any(|f| f == "TwoMat.MAPF"),
@@ -49,7 +49,7 @@ fn map_verify_run_fos_diff_inspect_and_calibrate_run_without_the_cli() {
         written.files
     );
     assert_eq!(mapped.states.len(), mapped.project.points.len());
-    let e = mapping::map(&job, Destination::new(Some(&out), false))
+    let e = job::map(&job, Destination::new(Some(&out), false))
         .err()
         .unwrap();
     assert_eq!(e.kind(), ErrorKind::Output);
@@ -99,7 +99,7 @@ fn map_verify_run_fos_diff_inspect_and_calibrate_run_without_the_cli() {
     }
 
     // run, a short run-out.
-    let run = pipeline::runout::run(
+    let run = pipeline::check::runout::run(
         &source,
         &RunOptions {
             time: 0.05,
@@ -112,7 +112,7 @@ fn map_verify_run_fos_diff_inspect_and_calibrate_run_without_the_cli() {
     .unwrap();
     assert_eq!(run.snapshots.len(), 1);
     assert!(run.folder.join("run.json").is_file());
-    let e = pipeline::runout::run(
+    let e = pipeline::check::runout::run(
         &source,
         &RunOptions {
             time: f64::NAN,
@@ -129,7 +129,7 @@ fn map_verify_run_fos_diff_inspect_and_calibrate_run_without_the_cli() {
     // fos (strength reduction: the mini model's ground is level, so limit
     // equilibrium has no slip surface to try, and says so), on the same
     // start verify judged.
-    let e = pipeline::fos::fos(
+    let e = pipeline::stability::fos::fos(
         &source,
         &FosOptions::default(),
         Destination::new(None, true),
@@ -138,7 +138,8 @@ fn map_verify_run_fos_diff_inspect_and_calibrate_run_without_the_cli() {
     .unwrap();
     assert!(e.to_string().contains("no trial circle"), "{e}");
     let (fos, fos_dir) =
-        pipeline::fos::fos(&source, &FosOptions::srm(), Destination::new(None, true)).unwrap();
+        pipeline::stability::fos::fos(&source, &FosOptions::srm(), Destination::new(None, true))
+            .unwrap();
     assert!(fos.factor.is_finite() && fos.factor > 0.0, "{}", fos.factor);
     assert_eq!(fos.n_points, mapped.states.len());
     assert!(fos_dir.join("fos.json").is_file());
@@ -181,7 +182,7 @@ fn regression_verify_counts_mps_compared_never_more_than_the_model() {
     let tmp = tempfile::tempdir().unwrap();
     let job = mini_job(tmp.path());
     let out = tmp.path().join("out");
-    mapping::map(&job, Destination::new(Some(&out), false)).unwrap();
+    job::map(&job, Destination::new(Some(&out), false)).unwrap();
     let mps = out.join("mps.csv");
     let text = std::fs::read_to_string(&mps).unwrap();
     let rows: Vec<&str> = text.lines().collect();

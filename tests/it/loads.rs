@@ -8,7 +8,8 @@ use common::kernel_run::{run_in_place, vtk_scalars, vtk_vectors};
 
 use a3d_init::model::MpState;
 use a3d_init::mpm::{RunSettings, Simulation};
-use a3d_init::pipeline::{Project, runner};
+use a3d_init::pipeline::Project;
+use a3d_init::pipeline::check::runner;
 
 /// `test-1001` (a 0.1 m wide column of 20 TRI3 elements with 3 MPs each
 /// under two empty ones; a −20 kPa vertical traction on the side between

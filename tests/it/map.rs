@@ -253,7 +253,7 @@ fn bad_inputs_exit_2_and_leave_no_output() {
         (
             "bad_columns_override",
             &["--columns", "pwp=Pressure"],
-            "seep.csv:1:1: --columns pwp=Pressure: no such header",
+            "seep.csv:1:1: the column mapping (--columns) names pwp=Pressure: no such header",
         ),
         (
             "bad_columns_field",

@@ -4,12 +4,13 @@
 
 use std::path::Path;
 
+use a3d_init::formats::fem::StepChoice;
 use a3d_init::formats::fem_csv::CsvOptions;
-use a3d_init::formats::gsz::StepChoice;
 use a3d_init::formats::mapf;
+use a3d_init::pipeline::Project;
 use a3d_init::pipeline::fem::{self, FemOptions};
+use a3d_init::pipeline::map::write;
 use a3d_init::pipeline::map::{self, MapConfig, StressSource};
-use a3d_init::pipeline::{Project, write};
 
 #[test]
 fn library_map_writes_the_mapf_of_the_sample_slope() {

@@ -384,7 +384,7 @@ fn fem_in_feet_is_named_with_both_extents_and_the_factor() {
         "site-ft.csv: the FEM nodes do not reach the model",
         "FEM nodes: x 3280.840 .. 3313.648, y 656.168 .. 672.572 m",
         "model mesh: x 1000.000 .. 1010.000, y 200.000 .. 205.000 m",
-        "the FEM looks 3.28× larger than the model: is it in ft? use --fem-units length=ft",
+        "the FEM looks 3.28× larger than the model: is it in ft? give the FEM units (--fem-units) length=ft",
     ] {
         assert!(stderr.contains(part), "{part}: {stderr}");
     }

@@ -470,8 +470,8 @@ fn ponding_above_the_ground_is_warned_of() {
         line: vec![[20.0, y], [70.0, y]],
         gamma_w: 9.81,
     };
-    let warning = a3d_init::pipeline::slope::ponding(&domain, &table(36.0)).unwrap();
+    let warning = a3d_init::pipeline::stability::slope::ponding(&domain, &table(36.0)).unwrap();
     assert!(warning.contains("ponding"), "{warning}");
-    assert!(a3d_init::pipeline::slope::ponding(&domain, &table(24.0)).is_none());
-    assert!(a3d_init::pipeline::slope::ponding(&domain, &Dry).is_none());
+    assert!(a3d_init::pipeline::stability::slope::ponding(&domain, &table(24.0)).is_none());
+    assert!(a3d_init::pipeline::stability::slope::ponding(&domain, &Dry).is_none());
 }

@@ -787,7 +787,8 @@ fn hydraulic_areas_are_read_from_the_gom() {
 /// are applied, not noted.
 #[test]
 fn what_the_gom_lacks_is_noted_and_its_loads_are_read() {
-    use a3d_init::pipeline::{Project, runner};
+    use a3d_init::pipeline::Project;
+    use a3d_init::pipeline::check::runner;
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/anura3d/test-1001");
     let mut project = Project::load(&dir).unwrap();
     let (boundaries, notes) = runner::hydraulic(&project);

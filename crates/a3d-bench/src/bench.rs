@@ -295,9 +295,9 @@ pub fn generated_fem_csv(n: usize, seed: u64) -> String {
 /// phases.
 fn e2e(args: &BenchArgs) -> anyhow::Result<()> {
     use a3d_init::pipeline::fem::FemOptions;
+    use a3d_init::pipeline::io::output::{OutputDir, ReadLog};
+    use a3d_init::pipeline::map::job::{self, MapJob};
     use a3d_init::pipeline::map::{MapConfig, Outside, SmoothingLength};
-    use a3d_init::pipeline::mapping::{self, MapJob};
-    use a3d_init::pipeline::output::{OutputDir, ReadLog};
     let threads = rayon::current_num_threads();
     let tmp;
     let dir = match &args.dir {
@@ -347,11 +347,12 @@ fn e2e(args: &BenchArgs) -> anyhow::Result<()> {
     };
     let reads = ReadLog::start();
     let t = Instant::now();
-    let mapped = mapping::compute(&job)?;
+    let mapped = job::compute(&job)?;
     let compute_s = t.elapsed().as_secs_f64();
     let t = Instant::now();
     let out = OutputDir::create(&dir.join("out"), true, &reads, "bench")?;
-    let written = a3d_init::pipeline::write::write_project(&mapped, &out.staging(), args.fem_vtu)?;
+    let written =
+        a3d_init::pipeline::map::write::write_project(&mapped, &out.staging(), args.fem_vtu)?;
     let write_s = t.elapsed().as_secs_f64();
     // The commit: every file and the folder synced to disk, the rename, the
     // parent synced (what durability costs).

@@ -15,8 +15,8 @@ use crate::bench::BenchArgs;
 use a3d_init::formats::fem_csv::CsvOptions;
 use a3d_init::pipeline::Project;
 use a3d_init::pipeline::fem::{self, FemOptions};
-use a3d_init::pipeline::fos_time::{self, FosTimeOptions, SeriesInput};
-use a3d_init::pipeline::slope::LeOptions;
+use a3d_init::pipeline::stability::fos_time::{self, FosTimeOptions, SeriesInput};
+use a3d_init::pipeline::stability::slope::LeOptions;
 use a3d_testkit::generate;
 
 /// [`generate::rising_table_series`] written as node tables into `dir`.

@@ -8,7 +8,7 @@
 //! the Jacobian and det J, global gradients, its measure, the inverse map and
 //! point location, Anura3D's local MP tables and, for linear simplices, the
 //! affine shape functions of one element in global coordinates ([`simplex`]).
-//! [`crate::place`] creates MPs through it; [`a3d_mpm`] builds its grid
+//! [`crate::place`] creates MPs through it; `a3d_mpm` builds its grid
 //! through it. Callers that are not generic over the type use
 //! [`mesh_element`].
 //!

@@ -10,9 +10,11 @@
 use std::path::Path;
 
 use super::error::{FormatError, ParseError};
-use super::fem_csv::{self, CsvOptions, FemReadReport, UnitOverride};
+use super::fem::{FemReadReport, UnitOverride};
+use super::fem_csv::{self, CsvOptions};
 use super::input;
 use super::ply;
+use crate::fem::{FAILURE_NEEDS_MODEL, StepChoice};
 use a3d_model::FemNodes;
 
 /// One saved step of an analysis.
@@ -249,71 +251,6 @@ pub fn read_project(path: &Path) -> Result<GszProject, FormatError> {
         unit_system,
         analyses,
     })
-}
-
-/// Which step to read: a folder number, the last saved step, a time (s), or
-/// the first saved step at which the slope fails.
-#[derive(Clone, Debug, PartialEq)]
-pub enum StepChoice {
-    Number(u32),
-    Last,
-    Time(f64),
-    /// The first saved step whose limit-equilibrium factor of safety is at
-    /// most 1: found by `map` against the model
-    /// ([`a3d_init::pipeline::failure`]); a reader given it refuses it.
-    Failure,
-}
-
-/// What a reader says of [`StepChoice::Failure`], which needs the model.
-pub const FAILURE_NEEDS_MODEL: &str = "step `failure` is the first saved step at which the slope's factor of safety falls to 1: `map` finds it against the model; here give a step number, last or time=<time>";
-
-impl std::str::FromStr for StepChoice {
-    type Err = String;
-    fn from_str(s: &str) -> Result<StepChoice, String> {
-        if s == "last" {
-            return Ok(StepChoice::Last);
-        }
-        if s == "failure" {
-            return Ok(StepChoice::Failure);
-        }
-        if let Some(t) = s.strip_prefix("time=") {
-            // NaN, infinities and overflowing numbers (`1e400`) are refused:
-            // no saved step is at such a time.
-            return match parse_time(t) {
-                Some(v) if v.is_finite() => Ok(StepChoice::Time(v)),
-                Some(_) => Err(format!(
-                    "`{s}`: the time must be a finite number of seconds"
-                )),
-                None => Err(format!(
-                    "`{s}`: expected time=<number>[s|min|h|d] (seconds without a unit)"
-                )),
-            };
-        }
-        s.parse().map(StepChoice::Number).map_err(|_| {
-            format!("`{s}`: expected a step number, last, time=<time>[s|min|h|d] or failure")
-        })
-    }
-}
-
-/// A time with an optional unit (`5616`, `5616s`, `93.6min`, `1.56h`, `0.065d`)
-/// in seconds.
-pub fn parse_time(text: &str) -> Option<f64> {
-    let t = text.trim();
-    if let Ok(seconds) = t.parse::<f64>() {
-        return Some(seconds);
-    }
-    let split = t
-        .find(|c: char| c.is_ascii_alphabetic() && c != 'e' && c != 'E')
-        .unwrap_or(t.len());
-    let (number, unit) = t.split_at(split);
-    let factor = match unit.trim() {
-        "" | "s" => 1.0,
-        "min" => 60.0,
-        "h" => 3600.0,
-        "d" => 86400.0,
-        _ => return None,
-    };
-    number.trim().parse::<f64>().ok().map(|v| v * factor)
 }
 
 /// Reads the nodes of one analysis step, with coordinates from the analysis mesh

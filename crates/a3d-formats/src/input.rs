@@ -6,7 +6,7 @@
 //! Every file opened here is also noted in each live [`ReadLog`], so that a
 //! command's outputs can be checked against everything it read, whatever
 //! reader read it and on whatever thread (the output guard in
-//! `pipeline::output` takes a `ReadLog`, not a list a command could forget to
+//! `pipeline::io::output` takes a `ReadLog`, not a list a command could forget to
 //! fill).
 //!
 //! What it leaves to the readers: checking declared counts against the bytes

@@ -8,6 +8,7 @@ pub use error::{FormatError, ParseError, Position};
 pub mod cps;
 pub mod cps_template;
 pub mod extent;
+pub mod fem;
 pub mod fem_csv;
 pub mod fem_vtu;
 pub mod gom;

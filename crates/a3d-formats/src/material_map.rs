@@ -122,6 +122,37 @@ impl FromStr for MaterialMap {
 }
 
 impl MaterialMap {
+    /// A map from (region, material) pairs, a front end's structured form:
+    /// names may hold `,` and `=`, and an entry's column is its 1-based place
+    /// in the list.
+    pub fn from_pairs<K: AsRef<str>, V: AsRef<str>>(
+        pairs: &[(K, V)],
+    ) -> Result<MaterialMap, MaterialMapError> {
+        let mut entries: Vec<MaterialMapEntry> = Vec::new();
+        for (k, (r, m)) in pairs.iter().enumerate() {
+            let (r, m) = (r.as_ref().trim(), m.as_ref().trim());
+            let column = k + 1;
+            if r.is_empty() || m.is_empty() {
+                return Err(err(
+                    column,
+                    format!("`{r}`: `{m}`: expected a region and a material, both given"),
+                ));
+            }
+            if entries.iter().any(|e| e.region == r) {
+                return Err(err(column, format!("region `{r}` is mapped twice")));
+            }
+            entries.push(MaterialMapEntry {
+                region: r.to_string(),
+                material: MaterialRef::parse(m),
+                column,
+            });
+        }
+        if entries.is_empty() {
+            return Err(err(1, "no region=material pair".into()));
+        }
+        Ok(MaterialMap { entries })
+    }
+
     /// Checks the map against the GOM `materials` and the FEM `regions`
     /// (`None` when the FEM file has no region column). Returns (region,
     /// material index) pairs in the map's order.

@@ -3,8 +3,8 @@
 //! Spec: `formats/vtu.md`. One `VTK_VERTEX` cell per point; the arrays are
 //! written in binary as raw little-endian appended data (`<AppendedData
 //! encoding="raw">`), which ParaView reads at disk speed. [`read`] reads these
-//! files back, and also the ASCII files of earlier versions; it understands the
-//! subset we write, not every VTU.
+//! files back, and also the ASCII files of earlier versions, through the FEM
+//! VTU reader's decoders (`fem_vtu`): any encoding, vertex cells only.
 
 use std::io::Write;
 use std::path::Path;
@@ -200,211 +200,46 @@ pub fn read(path: &Path) -> Result<VtuPoints, FormatError> {
     parse(path, &bytes)
 }
 
-/// One `<DataArray …>` tag: its attributes and where its data lie.
-struct Tag {
-    attrs: Vec<(String, String)>,
-    /// Byte range of the ASCII text between the tags (ASCII arrays).
-    text: Option<(usize, usize)>,
-    /// Byte offset of the tag (for error positions).
-    at: usize,
-}
-
-impl Tag {
-    fn attr(&self, name: &str) -> Option<&str> {
-        self.attrs
-            .iter()
-            .find(|(k, _)| k == name)
-            .map(|(_, v)| v.as_str())
-    }
-}
-
-/// Parses VTU bytes (see [`read`]).
+/// Parses VTU bytes (see [`read`]) with the FEM reader's XML and array
+/// decoders (`fem_vtu`): one VTU reader in the crate, whatever the encoding;
+/// the cells must be one vertex per point.
 pub fn parse(path: &Path, bytes: &[u8]) -> Result<VtuPoints, FormatError> {
-    // The XML part ends where the appended data start (after `_`).
-    let appended_tag = find(bytes, b"<AppendedData", 0);
-    let (xml_end, data_start) = match appended_tag {
-        Some(at) => {
-            let underscore = find(bytes, b"_", at)
-                .ok_or_else(|| err(path, bytes, at, "no `_` opening the appended data"))?;
-            (at, underscore + 1)
-        }
-        None => (bytes.len(), bytes.len()),
+    use crate::fem_vtu::{decode::values, xml};
+    let doc = xml::parse(path, bytes)?;
+    if doc.points.components != 3 {
+        return Err(ParseError::new(path, doc.points.at, "points need 3 components").into());
+    }
+    let coordinates = values(path, bytes, &doc, &doc.points, doc.n_points)?;
+    let vertex = doc.n_cells == doc.n_points && {
+        let types = values(path, bytes, &doc, &doc.types, doc.n_cells)?;
+        let offsets = values(path, bytes, &doc, &doc.offsets, doc.n_cells)?;
+        let connectivity = values(path, bytes, &doc, &doc.connectivity, doc.n_cells)?;
+        types.iter().all(|&v| v == 1.0)
+            && offsets
+                .iter()
+                .enumerate()
+                .all(|(i, &v)| v == (i + 1) as f64)
+            && connectivity.iter().enumerate().all(|(i, &v)| v == i as f64)
     };
-    let xml = &bytes[..xml_end];
-    if let Some(at) = appended_tag {
-        let head = String::from_utf8_lossy(&bytes[at..data_start]);
-        if !head.contains("encoding=\"raw\"") {
-            return Err(err(path, bytes, at, "only raw appended data are supported").into());
-        }
+    if !vertex {
+        let message = "cells are not one vertex per point";
+        return Err(ParseError::new(path, doc.types.at, message).into());
     }
-    let text = String::from_utf8_lossy(xml);
-    if !text.contains("header_type=\"UInt64\"") && appended_tag.is_some() {
-        return Err(err(path, bytes, 0, "expected header_type=\"UInt64\"").into());
-    }
-    let n_points: usize = attr_after(&text, "<Piece", "NumberOfPoints")
-        .and_then(|v| v.parse().ok())
-        .ok_or_else(|| err(path, bytes, 0, "no <Piece NumberOfPoints=…>"))?;
-    let mut tags = Vec::new();
-    let mut pos = 0;
-    while let Some(at) = text[pos..].find("<DataArray").map(|k| k + pos) {
-        let close = text[at..]
-            .find('>')
-            .map(|k| k + at)
-            .ok_or_else(|| err(path, bytes, at, "unclosed <DataArray"))?;
-        let inner = &text[at + "<DataArray".len()..close];
-        let self_closing = inner.ends_with('/');
-        let attrs = parse_attrs(inner.trim_end_matches('/'));
-        let data = if self_closing {
-            pos = close + 1;
-            None
-        } else {
-            let end = text[close..]
-                .find("</DataArray>")
-                .map(|k| k + close)
-                .ok_or_else(|| err(path, bytes, at, "no </DataArray>"))?;
-            pos = end;
-            Some((close + 1, end))
-        };
-        tags.push(Tag {
-            attrs,
-            text: data,
-            at,
+    let mut arrays = Vec::with_capacity(doc.point_data.len());
+    for tag in &doc.point_data {
+        arrays.push(PointArray {
+            name: tag.name.clone(),
+            components: tag.components,
+            values: values(path, bytes, &doc, tag, doc.n_points)?,
         });
     }
-    let points_at = text.find("<Points>");
-    let cells_at = text.find("<Cells>");
-    let mut out = VtuPoints {
-        points: Vec::new(),
-        arrays: Vec::new(),
-    };
-    for tag in &tags {
-        let ty = tag.attr("type").unwrap_or("");
-        let values: Vec<f64> = match (tag.attr("format"), tag.text) {
-            (Some("appended"), _) => {
-                let offset: usize = tag
-                    .attr("offset")
-                    .and_then(|v| v.parse().ok())
-                    .ok_or_else(|| err(path, bytes, tag.at, "appended array without offset"))?;
-                let start = data_start + offset;
-                let header = bytes
-                    .get(start..start + 8)
-                    .ok_or_else(|| err(path, bytes, tag.at, "offset past the end of the file"))?;
-                let len = u64::from_le_bytes(header.try_into().unwrap_or([0; 8])) as usize;
-                let body = bytes.get(start + 8..start + 8 + len).ok_or_else(|| {
-                    err(path, bytes, tag.at, "array runs past the end of the file")
-                })?;
-                decode(ty, body).ok_or_else(|| err(path, bytes, tag.at, "unknown array type"))?
-            }
-            (Some("ascii"), Some((s, e))) => text[s..e]
-                .split_ascii_whitespace()
-                .map(|t| t.parse::<f64>())
-                .collect::<Result<_, _>>()
-                .map_err(|_| err(path, bytes, tag.at, "expected numbers"))?,
-            _ => return Err(err(path, bytes, tag.at, "unsupported DataArray format").into()),
-        };
-        let components: usize = tag
-            .attr("NumberOfComponents")
-            .and_then(|v| v.parse().ok())
-            .unwrap_or(1);
-        if values.len() != n_points * components {
-            return Err(err(
-                path,
-                bytes,
-                tag.at,
-                &format!(
-                    "expected {} values ({n_points} points × {components}), found {}",
-                    n_points * components,
-                    values.len()
-                ),
-            )
-            .into());
-        }
-        let in_points =
-            points_at.is_some_and(|p| tag.at > p) && cells_at.is_none_or(|c| tag.at < c);
-        let in_cells = cells_at.is_some_and(|c| tag.at > c);
-        if in_points {
-            out.points = values.chunks(3).map(|c| [c[0], c[1], c[2]]).collect();
-        } else if in_cells {
-            let ok = match tag.attr("Name") {
-                Some("connectivity") => values.iter().enumerate().all(|(i, &v)| v == i as f64),
-                Some("offsets") => values.iter().enumerate().all(|(i, &v)| v == (i + 1) as f64),
-                Some("types") => values.iter().all(|&v| v == 1.0),
-                _ => true,
-            };
-            if !ok {
-                return Err(err(path, bytes, tag.at, "cells are not one vertex per point").into());
-            }
-        } else {
-            out.arrays.push(PointArray {
-                name: tag.attr("Name").unwrap_or("").to_string(),
-                components,
-                values,
-            });
-        }
-    }
-    if out.points.len() != n_points {
-        return Err(err(path, bytes, 0, "no <Points> array").into());
-    }
-    Ok(out)
-}
-
-fn decode(ty: &str, body: &[u8]) -> Option<Vec<f64>> {
-    match ty {
-        "Float64" => Some(
-            body.chunks_exact(8)
-                .map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
-                .collect(),
-        ),
-        "Int64" => Some(
-            body.chunks_exact(8)
-                .map(|c| i64::from_le_bytes(c.try_into().unwrap_or([0; 8])) as f64)
-                .collect(),
-        ),
-        "UInt8" => Some(body.iter().map(|&b| b as f64).collect()),
-        _ => None,
-    }
-}
-
-fn find(hay: &[u8], needle: &[u8], from: usize) -> Option<usize> {
-    hay.get(from..)?
-        .windows(needle.len())
-        .position(|w| w == needle)
-        .map(|k| k + from)
-}
-
-fn parse_attrs(s: &str) -> Vec<(String, String)> {
-    let mut out = Vec::new();
-    let mut rest = s;
-    while let Some(eq) = rest.find("=\"") {
-        let key = rest[..eq].trim().to_string();
-        let after = &rest[eq + 2..];
-        let Some(end) = after.find('"') else { break };
-        let value = after[..end]
-            .replace("&quot;", "\"")
-            .replace("&lt;", "<")
-            .replace("&amp;", "&");
-        out.push((key, value));
-        rest = &after[end + 1..];
-    }
-    out
-}
-
-fn attr_after(text: &str, tag: &str, name: &str) -> Option<String> {
-    let at = text.find(tag)?;
-    let close = text[at..].find('>')? + at;
-    parse_attrs(&text[at + tag.len()..close])
-        .into_iter()
-        .find(|(k, _)| k == name)
-        .map(|(_, v)| v)
-}
-
-fn err(path: &Path, bytes: &[u8], at: usize, message: &str) -> ParseError {
-    let head = String::from_utf8_lossy(&bytes[..at.min(bytes.len())]);
-    ParseError::new(
-        path,
-        super::error::Position::of_byte(&head, head.len()),
-        message,
-    )
+    Ok(VtuPoints {
+        points: coordinates
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect(),
+        arrays,
+    })
 }
 
 #[cfg(test)]

@@ -2,7 +2,7 @@
 //! `$$START_LOAD_ON_MATERIAL_POINTS_…`) and the CPS multipliers that scale
 //! them in time (`$$SOLID_TRACTION[_B]`, `$$LIQUID_PRESSURE[_B]`), as the
 //! Anura3D kernel reads them (`MeshInfo.FOR`, `ReadCalculationData.FOR`).
-//! Plain data; the runner ([`a3d_mpm::loads`]) turns them into forces.
+//! Plain data; the runner (`a3d_mpm::loads`) turns them into forces.
 
 /// Which phase a load block acts on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]

@@ -17,9 +17,10 @@
 //! `fast` (the allocation-free path for common rows). This file holds the
 //! report types and the entry points.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::error::FormatError;
+use crate::fem::FemReadReport;
 use a3d_model::FemNodes;
 
 mod dialect;
@@ -33,41 +34,8 @@ mod tests;
 
 pub use headers::{Field, normalise, synonym, unit_factor};
 pub use options::{
-    CsvOptions, SignConvention, UnitOverride, parse_columns_option, parse_units_option,
+    CsvOptions, columns_from_pairs, parse_columns_option, parse_units_option, units_from,
 };
-
-/// How one column was understood.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct ColumnReport {
-    pub header: String,
-    /// Field name, or "ignored".
-    pub understood_as: String,
-    pub unit: Option<String>,
-    pub factor: f64,
-    pub sign_flipped: bool,
-}
-
-/// What the reader did, for `inspect --fem` and `report.json`.
-#[derive(Clone, Debug, serde::Serialize)]
-pub struct FemReadReport {
-    pub path: PathBuf,
-    pub delimiter: String,
-    pub decimal_comma: bool,
-    pub bom: bool,
-    /// 1-based line of the header.
-    pub header_line: usize,
-    pub columns: Vec<ColumnReport>,
-    pub nodes: usize,
-    pub dim: usize,
-    pub sign: SignConvention,
-    /// False for a GeoStudio `node.csv` (coordinates live in the mesh PLY).
-    pub has_coordinates: bool,
-    pub warnings: Vec<String>,
-    /// What the VTU reader found (a `.vtu` or `.pvd`; the dialect fields
-    /// above are then empty).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub vtu: Option<crate::fem_vtu::VtuReport>,
-}
 
 /// Reads a node table. `path` names the file in errors.
 pub fn read_csv(

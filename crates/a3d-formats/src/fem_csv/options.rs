@@ -3,46 +3,7 @@
 //! command-line values.
 
 use super::headers::{Field, unit_factor};
-
-/// Sign convention of the source.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize, Default)]
-pub enum SignConvention {
-    /// Compression positive, pwp positive below the water table: every stress and
-    /// the pwp are negated.
-    #[default]
-    GeoStudio,
-    /// Already Anura3D's convention: kept.
-    TensionPositive,
-    /// OpenGeoSys: pore pressure positive in compression (negated), stresses
-    /// tension positive (kept).
-    Ogs,
-}
-
-impl SignConvention {
-    /// The factor the pore pressure of a file in this convention is
-    /// multiplied by (−1 or 1).
-    pub fn pwp_sign(self) -> f64 {
-        match self {
-            SignConvention::GeoStudio | SignConvention::Ogs => -1.0,
-            SignConvention::TensionPositive => 1.0,
-        }
-    }
-
-    /// The factor its stresses are multiplied by (−1 or 1).
-    pub fn stress_sign(self) -> f64 {
-        match self {
-            SignConvention::GeoStudio => -1.0,
-            SignConvention::TensionPositive | SignConvention::Ogs => 1.0,
-        }
-    }
-}
-
-/// Unit overrides (`--fem-units length=ft,pressure=psf`).
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct UnitOverride {
-    pub length: Option<String>,
-    pub pressure: Option<String>,
-}
+use crate::fem::{SignConvention, UnitOverride};
 
 /// Options of the reader.
 #[derive(Clone, Debug, Default)]
@@ -56,15 +17,32 @@ pub struct CsvOptions {
 /// Parses `x=X (m),y=Y,pwp=PWP` into a column mapping. A field given twice, or a
 /// header given to two fields, is an error.
 pub fn parse_columns_option(s: &str) -> Result<Vec<(Field, String)>, String> {
-    let columns = s
+    let pairs = s
         .split(',')
         .filter(|p| !p.trim().is_empty())
         .map(|pair| {
-            let (k, v) = pair.split_once('=').ok_or_else(|| format!("`{pair}`: expected field=header"))?;
-            let field = Field::from_name(k.trim()).ok_or_else(|| {
+            pair.split_once('=')
+                .map(|(k, v)| (k.trim(), v.trim()))
+                .ok_or_else(|| format!("`{pair}`: expected field=header"))
+        })
+        .collect::<Result<Vec<_>, String>>()?;
+    columns_from_pairs(&pairs)
+}
+
+/// A column mapping from (field, header) pairs (a front end's structured
+/// form: headers may hold `,` and `=`). A field given twice, or a header given
+/// to two fields, is an error.
+pub fn columns_from_pairs<K: AsRef<str>, V: AsRef<str>>(
+    pairs: &[(K, V)],
+) -> Result<Vec<(Field, String)>, String> {
+    let columns = pairs
+        .iter()
+        .map(|(k, v)| {
+            let k = k.as_ref();
+            let field = Field::from_name(k).ok_or_else(|| {
                 format!("`{k}`: unknown field (known: x y z node region pwp sxx syy szz sxy syz sxz esxx esyy eszz)")
             })?;
-            Ok((field, v.trim().to_string()))
+            Ok((field, v.as_ref().to_string()))
         })
         .collect::<Result<Vec<_>, String>>()?;
     check_columns_option(&columns)?;
@@ -95,17 +73,35 @@ pub(super) fn check_columns_option(columns: &[(Field, String)]) -> Result<(), St
 
 /// Parses `length=ft,pressure=psf`.
 pub fn parse_units_option(s: &str) -> Result<UnitOverride, String> {
-    let mut out = UnitOverride::default();
+    let mut length = None;
+    let mut pressure = None;
     for pair in s.split(',').filter(|p| !p.trim().is_empty()) {
         let (k, v) = pair
             .split_once('=')
             .ok_or_else(|| format!("`{pair}`: expected length=… or pressure=…"))?;
         match k.trim() {
-            "length" if unit_factor(v, true).is_some() => out.length = Some(v.trim().into()),
-            "pressure" if unit_factor(v, false).is_some() => out.pressure = Some(v.trim().into()),
-            "length" | "pressure" => return Err(format!("unknown unit `{v}` for {k}")),
+            "length" => length = Some(v.trim()),
+            "pressure" => pressure = Some(v.trim()),
             other => return Err(format!("`{other}`: expected length or pressure")),
         }
+    }
+    units_from(length, pressure)
+}
+
+/// Unit overrides from their parts; an unknown unit is an error.
+pub fn units_from(length: Option<&str>, pressure: Option<&str>) -> Result<UnitOverride, String> {
+    let mut out = UnitOverride::default();
+    if let Some(v) = length {
+        if unit_factor(v, true).is_none() {
+            return Err(format!("unknown unit `{v}` for length"));
+        }
+        out.length = Some(v.trim().into());
+    }
+    if let Some(v) = pressure {
+        if unit_factor(v, false).is_none() {
+            return Err(format!("unknown unit `{v}` for pressure"));
+        }
+        out.pressure = Some(v.trim().into());
     }
     Ok(out)
 }

@@ -11,9 +11,9 @@ use super::dialect::{Delimiter, sniff_delimiter, split_line};
 use super::headers::{Field, header_unit, normalise, strip_unit_suffix, synonym, unit_factor};
 use super::options::{CsvOptions, check_columns_option};
 use super::rows::{Rows, Schema, merge_rows, nth_line_start, parse_chunk, split_chunks};
-use super::{ColumnReport, FemReadReport};
 use crate::error::{FormatError, ParseError};
 use crate::extent::{far_outlier, first_coincident};
+use crate::fem::{ColumnReport, FemReadReport};
 use a3d_model::{FemNodes, Quantity};
 
 /// [`parse_csv`](super::parse_csv) with data-row chunks of about `chunk_bytes`
@@ -310,7 +310,7 @@ fn find_header(
                 header_idx + 1,
                 1,
                 format!(
-                    "the column mapping's {}={name}: no such header; headers are {}",
+                    "the column mapping names {}={name}: no such header; headers are {}",
                     field.name(),
                     headers
                         .iter()

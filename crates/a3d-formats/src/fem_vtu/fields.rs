@@ -15,7 +15,8 @@ use super::xml::{self, ArrayTag, VtuXml};
 use super::{ArrayInfo, VtuOptions, VtuReport};
 use crate::error::{FormatError, ParseError};
 use crate::extent::{far_outlier, first_coincident};
-use crate::fem_csv::{ColumnReport, FemReadReport, SignConvention, unit_factor};
+use crate::fem::{ColumnReport, FemReadReport, SignConvention};
+use crate::fem_csv::unit_factor;
 use a3d_model::{FemNodes, Quantity, StressComponent};
 
 /// The arrays of `xml` with where they are, for the report.

@@ -22,20 +22,22 @@
 use std::path::{Path, PathBuf};
 
 use super::error::FormatError;
-use super::fem_csv::{FemReadReport, SignConvention, UnitOverride};
-use super::gsz::StepChoice;
+use super::fem::StepChoice;
+use crate::fem::{FemReadReport, SignConvention, UnitOverride};
 use a3d_model::FemNodes;
 
 mod cells;
-mod decode;
+pub(crate) mod decode;
 mod fields;
 mod mesh;
 mod options;
 pub mod pvd;
-mod xml;
+pub(crate) mod xml;
 
 pub use cells::CellKind;
-pub use options::{Chi, Role, StressRule, parse_arrays_option, parse_stress_option};
+pub use options::{
+    Chi, Role, StressRule, arrays_from_pairs, parse_arrays_option, parse_stress_option,
+};
 
 /// How VTU results are read.
 #[derive(Clone, Debug, Default, PartialEq)]

@@ -81,21 +81,35 @@ pub enum StressRule {
 
 /// Parses `pwp=p,stress=sigma_total,saturation=S,region=mat` (array names).
 pub fn parse_arrays_option(s: &str) -> Result<Vec<(Role, String)>, String> {
+    let pairs = s
+        .split(',')
+        .filter(|p| !p.trim().is_empty())
+        .map(|pair| {
+            pair.split_once('=')
+                .map(|(k, v)| (k.trim(), v.trim()))
+                .ok_or_else(|| format!("`{pair}`: expected role=array"))
+        })
+        .collect::<Result<Vec<_>, String>>()?;
+    arrays_from_pairs(&pairs)
+}
+
+/// Array names by role from (role, array) pairs (a front end's structured
+/// form); a role given twice is an error.
+pub fn arrays_from_pairs<K: AsRef<str>, V: AsRef<str>>(
+    pairs: &[(K, V)],
+) -> Result<Vec<(Role, String)>, String> {
     let mut out: Vec<(Role, String)> = Vec::new();
-    for pair in s.split(',').filter(|p| !p.trim().is_empty()) {
-        let (k, v) = pair
-            .split_once('=')
-            .ok_or_else(|| format!("`{pair}`: expected role=array"))?;
+    for (k, v) in pairs {
+        let k = k.as_ref();
         let role = Role::ALL
             .into_iter()
-            .find(|r| r.name() == k.trim())
+            .find(|r| r.name() == k)
             .ok_or_else(|| {
                 format!(
-                    "`{}`: unknown role for a VTU array (known: pwp stress saturation displacement region)",
-                    k.trim()
+                    "`{k}`: unknown role for a VTU array (known: pwp stress saturation displacement region)"
                 )
             })?;
-        let name = v.trim().to_string();
+        let name = v.as_ref().to_string();
         if let Some((_, first)) = out.iter().find(|(r, _)| *r == role) {
             return Err(format!(
                 "{} is given twice (`{first}` and `{name}`)",

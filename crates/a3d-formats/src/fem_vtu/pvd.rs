@@ -7,7 +7,7 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::{FormatError, ParseError, Position};
-use crate::gsz::{self, StepChoice};
+use crate::fem::StepChoice;
 
 /// One output of the series.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
@@ -167,7 +167,7 @@ impl Series {
             file: self.outputs[k].file.clone(),
         };
         match *step {
-            StepChoice::Failure => Err(FormatError::file(pvd, gsz::FAILURE_NEEDS_MODEL)),
+            StepChoice::Failure => Err(FormatError::file(pvd, crate::fem::FAILURE_NEEDS_MODEL)),
             StepChoice::Last => Ok(chosen(n - 1)),
             StepChoice::Number(k) => {
                 let k = k as usize;

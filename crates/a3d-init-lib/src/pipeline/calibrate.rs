@@ -214,7 +214,7 @@ pub fn check(
 
 /// Writes the objective-against-h plot with the optimum marked (SVG).
 pub fn plot_curve(path: &std::path::Path, outcome: &Outcome) -> Result<(), PipelineError> {
-    use super::plot::{Series, line_chart};
+    use super::io::plot::{Series, line_chart};
     use plotters::style::RGBColor;
     let unit = if outcome.fields.len() == 1 {
         "kPa"
@@ -295,7 +295,7 @@ pub fn calibrate(
     out: &std::path::Path,
     force: bool,
 ) -> Result<(Calibrated, std::path::PathBuf), PipelineError> {
-    let reads = super::output::ReadLog::start();
+    let reads = super::io::output::ReadLog::start();
     let fem = super::fem::load(&options.fem)?;
     let files = crate::diagnose::file_list(&fem.paths);
     let fields = select_fields(&fem.nodes, &options.field, &files)?;
@@ -318,10 +318,10 @@ pub fn calibrate(
         }
         None => None,
     };
-    let dir = super::output::OutputDir::create(out, force, &reads, "calibrate")?;
+    let dir = super::io::output::OutputDir::create(out, force, &reads, "calibrate")?;
     plot_curve(&dir.path("calibration.svg"), &outcome)?;
     if let Some(c) = &check {
-        super::plot::scatter_1to1(
+        super::io::plot::scatter_1to1(
             &dir.path("check.svg"),
             &format!(
                 "Validation: {} predicted at the check nodes",

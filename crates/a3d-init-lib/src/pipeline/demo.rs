@@ -13,17 +13,19 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use super::PipelineError;
-use crate::formats::gsz::StepChoice;
+use crate::formats::fem::StepChoice;
 use crate::kernel::KernelKind;
 use crate::model::{MpState, Quantity};
+use crate::pipeline::check::start::{Start, StateSource};
 use crate::pipeline::check::{self, VerifyOptions};
 use crate::pipeline::fem::{FemOptions, LoadedFem};
-use crate::pipeline::fos_time::{self, FosTimeOptions, FosTimeReport, SeriesInput};
+use crate::pipeline::io::output::{Destination, OutputDir, ReadLog};
+use crate::pipeline::io::plot;
+use crate::pipeline::map::job::{self, MapJob};
 use crate::pipeline::map::{MapConfig, SmoothingLength, StressSource};
-use crate::pipeline::mapping::{self, MapJob};
-use crate::pipeline::output::{Destination, OutputDir, ReadLog};
-use crate::pipeline::start::{Start, StateSource};
-use crate::pipeline::{Project, calibrate, fos, plot};
+use crate::pipeline::stability::fos;
+use crate::pipeline::stability::fos_time::{self, FosTimeOptions, FosTimeReport, SeriesInput};
+use crate::pipeline::{Project, calibrate};
 
 /// What the demo is asked for.
 #[derive(Clone, Debug)]
@@ -329,7 +331,7 @@ fn verify_steps(
     };
     let geostatic = target.join("geostatic");
     let (_, geostatic_written) =
-        mapping::map(&geostatic_job, Destination::new(Some(&geostatic), true))?;
+        job::map(&geostatic_job, Destination::new(Some(&geostatic), true))?;
     let (geostatic_outcome, geostatic_verify) = check::verify(
         &StateSource::Folder(geostatic.clone()),
         &verify_short,
@@ -379,8 +381,7 @@ fn runout(
         ..job.clone()
     };
     let flume = target.join("flume");
-    let (flume_mapped, flume_written) =
-        mapping::map(&flume_job, Destination::new(Some(&flume), true))?;
+    let (flume_mapped, flume_written) = job::map(&flume_job, Destination::new(Some(&flume), true))?;
     say(DemoLine::Text(format!(
         "7 run-out    the same output mapped onto the paper's MPM model (fixtures/flume: {} MPs, {} elements of which {} empty) in {}",
         flume_mapped.project.points.len(),
@@ -493,9 +494,9 @@ pub fn demo(
         generate_cps: false,
         fem_vtu: false,
     };
-    let mapped = mapping::compute(&job)?;
+    let mapped = job::compute(&job)?;
     let out = OutputDir::create(&options.out, options.force, &reads, "demo")?;
-    let mut written = crate::pipeline::write::write_project(&mapped, &out.staging(), false)?;
+    let mut written = crate::pipeline::map::write::write_project(&mapped, &out.staging(), false)?;
     write_figures(&out, &mapped, &outcome, &curve, &series, &mut written)?;
     let target = out.commit()?;
     let pts = &mapped.project.points;

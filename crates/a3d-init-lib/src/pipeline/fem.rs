@@ -7,9 +7,10 @@
 use std::path::{Path, PathBuf};
 
 use super::PipelineError;
-use crate::formats::fem_csv::{self, CsvOptions, FemReadReport};
+use crate::formats::fem::FemReadReport;
+use crate::formats::fem::StepChoice;
+use crate::formats::fem_csv::{self, CsvOptions};
 use crate::formats::fem_vtu::{self, VtuOptions};
-use crate::formats::gsz::StepChoice;
 use crate::model::FemNodes;
 
 /// How FEM node files are read.
@@ -76,7 +77,7 @@ pub struct LoadedFem {
     /// The files read, in order.
     pub paths: Vec<PathBuf>,
     /// The sign convention the values were converted from.
-    pub sign: crate::formats::fem_csv::SignConvention,
+    pub sign: crate::formats::fem::SignConvention,
     /// Informational sentences (what was read, how rows were joined): not warnings.
     pub notes: Vec<String>,
 }
@@ -88,7 +89,7 @@ pub fn load(options: &FemOptions) -> Result<LoadedFem, PipelineError> {
     }
     if options.step == StepChoice::Failure {
         return Err(PipelineError::Option(
-            crate::formats::gsz::FAILURE_NEEDS_MODEL.into(),
+            crate::formats::fem::FAILURE_NEEDS_MODEL.into(),
         ));
     }
     let mut parts = Vec::new();

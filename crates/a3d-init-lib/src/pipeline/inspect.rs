@@ -10,13 +10,14 @@ use serde::Serialize;
 
 use super::PipelineError;
 use super::fem::{FemOptions, LoadedFem};
-use super::output::{ReadLog, write_new};
+use super::io::output::{ReadLog, write_new};
 use super::project::Project;
 use crate::diagnose::Extent;
 use crate::formats::cps::CpsDocument;
-use crate::formats::fem_csv::FemReadReport;
+use crate::formats::fem::FemReadReport;
+use crate::formats::fem::StepChoice;
 use crate::formats::fem_vtu;
-use crate::formats::gsz::{self, GszProject, StepChoice};
+use crate::formats::gsz::{self, GszProject};
 use crate::formats::project::{OutputNames, ProjectFiles};
 use crate::model::{FemNodes, Material};
 

@@ -1,35 +1,26 @@
-//! The pipeline as library calls: load an Anura3D project ([`Project::load`]),
-//! and rebuild the state Anura3D will hold from the files it reads
-//! ([`anura3d`]). The CLI turns arguments into these calls and prints; tests and
-//! benchmarks call them directly.
+//! The use cases as library calls, each in a folder of its own: [`map`]
+//! (FEM fields onto the MPs, written as an Anura3D project), [`check`]
+//! (`verify` and `run` on the built-in runner, from the state Anura3D will
+//! hold), [`stability`] (factors of safety, FS(t), the failure step),
+//! [`diff`], [`inspect`], [`calibrate`] and [`demo`]; what they share: the
+//! project ([`Project::load`]) and FEM ([`fem`]) loaders, the output guard
+//! and plots ([`io`]), and the settings messages name ([`setting`]). The CLI
+//! turns arguments into these calls and prints; tests and benchmarks call
+//! them directly.
 //!
 //! This module reads files (through [`crate::formats`]) but never prints.
 
-pub mod anura3d;
 pub mod calibrate;
 pub mod check;
 pub mod demo;
 pub mod diff;
-mod direct;
-pub mod failure;
 pub mod fem;
-pub mod fos;
-pub mod fos_time;
 pub mod inspect;
+pub mod io;
 pub mod map;
-pub mod mapping;
-pub mod output;
-pub mod plot;
 pub mod project;
-mod regions;
-pub mod report;
-pub mod runner;
-pub mod runout;
 pub mod setting;
-pub mod slope;
-pub mod start;
-pub mod verify;
-pub mod write;
+pub mod stability;
 
 pub use project::Project;
 

@@ -151,9 +151,9 @@ pub struct MapConfig {
     /// `fem.vtu`); without it they are freed once copied for the kernel (memory).
     pub keep_fem_fields: bool,
     /// How FS(t) runs when the FEM step is `failure`
-    /// ([`crate::pipeline::failure`]): FS(t)'s own defaults (Morgenstern–Price,
+    /// ([`crate::pipeline::stability::failure`]): FS(t)'s own defaults (Morgenstern–Price,
     /// 2,000 trial circles a time).
-    pub failure: crate::pipeline::slope::LeOptions,
+    pub failure: crate::pipeline::stability::slope::LeOptions,
 }
 
 impl Default for MapConfig {
@@ -168,7 +168,7 @@ impl Default for MapConfig {
             mixed_state: MixedState::Mean,
             equilibrium: EquilibriumOptions::default(),
             keep_fem_fields: true,
-            failure: crate::pipeline::fos_time::FosTimeOptions::default().le,
+            failure: crate::pipeline::stability::fos_time::FosTimeOptions::default().le,
         }
     }
 }

@@ -201,7 +201,7 @@ pub fn equilibrium_stress(
     }
     let settings = solve_settings(project, options);
     let outcome = equilibrium::solve(&project.model, &project.points, &pore, &laws, &settings)
-        .map_err(crate::pipeline::runner::runner_error)?;
+        .map_err(crate::pipeline::check::runner::runner_error)?;
     for (s, effective) in states.iter_mut().zip(&outcome.effective) {
         s.total = *effective;
         for k in 0..3 {
@@ -244,14 +244,14 @@ fn solve_settings(project: &Project, options: &EquilibriumOptions) -> Equilibriu
 /// The runner's out-of-balance force ratio of `states` at its first step
 /// (what `verify` judges first), under the CPS's gravity.
 fn first_step_ratio(project: &Project, states: &[MpState]) -> Result<f64, PipelineError> {
-    let settings = crate::pipeline::runner::with_cps(
+    let settings = crate::pipeline::check::runner::with_cps(
         crate::mpm::RunSettings::verify(),
         project.cps.as_ref(),
         None,
     );
     let mut simulation =
         crate::mpm::Simulation::new(&project.model, &project.points, states, &settings)
-            .map_err(crate::pipeline::runner::runner_error)?;
+            .map_err(crate::pipeline::check::runner::runner_error)?;
     Ok(simulation.step().residual_ratio)
 }
 
@@ -448,7 +448,7 @@ pub fn strength_factor(
         solves += 1;
         let outcome =
             equilibrium::solve(&project.model, &project.points, states, &reduced, &settings)
-                .map_err(crate::pipeline::runner::runner_error)?;
+                .map_err(crate::pipeline::check::runner::runner_error)?;
         Ok(outcome.equilibrium)
     };
     let (mut holds, mut fails) = (None, None);

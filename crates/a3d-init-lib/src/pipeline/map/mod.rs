@@ -1,7 +1,7 @@
 //! The mapping step as a library call: [`map`] takes a loaded [`Project`], the
 //! FEM nodes and a typed [`MapConfig`] and returns the state of every MP with
 //! its diagnostics and the report. Nothing is written here
-//! ([`super::write::write_project`] does that) and nothing is printed.
+//! ([`write::write_project`] does that) and nothing is printed.
 //!
 //! [`map`] composes stages that a caller can also run alone, one file each:
 //! 1. [`inputs`] checks the FEM against the model and decides the stress source;
@@ -32,20 +32,23 @@ pub mod config;
 pub mod equilibrium;
 pub mod inputs;
 pub mod interpolate;
+pub mod job;
 pub mod mixed;
 pub mod place;
 pub mod plausibility;
+mod regions;
 pub mod report;
 pub mod smoothing;
 pub mod stress;
+pub mod write;
 
-pub use super::report::{InputFile, MapReport, MaterialCount, Smoothing};
 pub use crate::formats::material_map::{MaterialMap, MaterialRef};
 pub use config::{
     EquilibriumOptions, MapConfig, MixedState, Outside, SmoothingLength, StressSource, UnknownName,
 };
 pub use interpolate::FemCloud;
 pub use place::Placement;
+pub use report::{InputFile, MapReport, MaterialCount, Smoothing};
 pub use smoothing::ChosenH;
 
 /// Everything `map` computes before writing.
@@ -78,7 +81,7 @@ pub fn map(
     if let Some(words) = project
         .cps
         .as_ref()
-        .and_then(super::runner::start_gravity_words)
+        .and_then(crate::pipeline::check::runner::start_gravity_words)
         && config.stress != StressSource::Zero
     {
         warnings.push(format!(

@@ -11,7 +11,7 @@ use crate::diagnose::Reach;
 use crate::formats::material_map::MaterialMap;
 use crate::kernel::mapper;
 use crate::pipeline::fem::LoadedFem;
-use crate::pipeline::regions::groups;
+use crate::pipeline::map::regions::groups;
 use crate::pipeline::{PipelineError, Project};
 
 /// Where the MPs are and which FEM nodes each may take.

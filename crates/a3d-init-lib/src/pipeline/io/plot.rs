@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use super::PipelineError;
+use crate::pipeline::PipelineError;
 use plotters::prelude::*;
 
 /// One series of a line chart.

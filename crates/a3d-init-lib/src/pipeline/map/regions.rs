@@ -3,10 +3,10 @@
 //! matching. MPs then take only nodes of their own material, so nothing is
 //! smoothed across a material boundary.
 
-use super::{PipelineError, Project};
 use crate::formats::material_map::MaterialMap;
 use crate::model::FemNodes;
 use crate::model::material::lookup;
+use crate::pipeline::{PipelineError, Project};
 
 macro_rules! input_err {
     ($($t:tt)*) => { PipelineError::Input(format!($($t)*)) };

@@ -5,11 +5,11 @@
 
 use std::path::{Path, PathBuf};
 
-use super::PipelineError;
-use super::output::{Destination, OutputDir};
-use super::runner::{self, history_plot, write_snapshot};
-use super::start::StateSource;
 use crate::mpm::{self, RunSettings};
+use crate::pipeline::PipelineError;
+use crate::pipeline::check::runner::{self, history_plot, write_snapshot};
+use crate::pipeline::check::start::StateSource;
+use crate::pipeline::io::output::{Destination, OutputDir};
 
 /// Local damping α of a run-out unless the caller gives one (the CPS's
 /// damping is for reaching equilibrium, not for run-out): light, so that the
@@ -157,7 +157,7 @@ pub fn run(
 /// (`$$OUTPUT_MATERIAL_POINTS`, by MP id, checked against the MP count),
 /// none without a CPS. An MP's id is Anura3D's running counter, its index
 /// plus one (`place`), as `mpm::run` numbers them back.
-fn monitored(project: &super::Project) -> Result<Vec<u32>, PipelineError> {
+fn monitored(project: &crate::pipeline::Project) -> Result<Vec<u32>, PipelineError> {
     let Some(cps) = project.cps.as_ref() else {
         return Ok(Vec::new());
     };
@@ -174,7 +174,7 @@ fn deformed_plot(path: &Path, time: f64, s: &mpm::Snapshot) -> Result<(), Pipeli
         .zip(&s.displacements)
         .map(|(x, u)| (x[0], x[1], (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt()))
         .collect();
-    super::plot::field_map(
+    crate::pipeline::io::plot::field_map(
         path,
         &format!("MPs at t = {time} s, coloured by displacement"),
         "|u| (m)",

@@ -3,7 +3,7 @@
 //! (seconds for the whole curve), and the first time it falls to 1.
 //!
 //! At each saved time the FEM nodes' pore pressure is interpolated with the
-//! kernel onto the section's raster ([`super::slope::raster_field`]; the
+//! kernel onto the section's raster ([`crate::pipeline::stability::slope::raster_field`]; the
 //! saturation from each material's retention curve, the unit weights from
 //! it), and the critical surface searched. Where the curve first crosses 1
 //! between two saved times t₀ and t₁, the time is bisected: the pore
@@ -23,19 +23,21 @@ use std::time::Instant;
 
 use plotters::style::RGBColor;
 
-use super::PipelineError;
-use super::fem::{FemOptions, LoadedFem};
-use super::map::{MapConfig, Outside, StressSource};
-use super::output::{Destination, OutputDir, ReadLog};
-use super::plot::{self, Series};
-use super::slope::{self as le, LeOptions, LeReport, Section};
-use super::{Project, runner};
 use crate::formats::cps::CpsDocument;
+use crate::formats::fem::StepChoice;
 use crate::formats::fem_csv::CsvOptions;
 use crate::formats::fem_vtu::{VtuOptions, pvd};
-use crate::formats::gsz::{self, StepChoice};
+use crate::formats::gsz::{self};
 use crate::model::Quantity;
 use crate::mpm::fos::strength_reduction;
+use crate::pipeline::PipelineError;
+use crate::pipeline::Project;
+use crate::pipeline::check::runner;
+use crate::pipeline::fem::{FemOptions, LoadedFem};
+use crate::pipeline::io::output::{Destination, OutputDir, ReadLog};
+use crate::pipeline::io::plot::{self, Series};
+use crate::pipeline::map::{MapConfig, Outside, StressSource};
+use crate::pipeline::stability::slope::{self as le, LeOptions, LeReport, Section};
 use crate::slope::series::first_crossing;
 
 /// Where the time series comes from.
@@ -101,7 +103,7 @@ impl FosTimeOptions {
                 "bisection tolerance {t}: expected a positive number of seconds"
             )));
         }
-        super::runner::check_damping(self.srm_damping)
+        crate::pipeline::check::runner::check_damping(self.srm_damping)
     }
 }
 
@@ -217,7 +219,7 @@ pub fn load_series(input: &SeriesInput) -> Result<Vec<(f64, LoadedFem)>, Pipelin
                     step: StepChoice::Number(step.number),
                     vtu: VtuOptions::default(),
                 };
-                series.push((time, super::fem::load(&options)?));
+                series.push((time, crate::pipeline::fem::load(&options)?));
             }
         }
         SeriesInput::Pvd { path, vtu } => {
@@ -226,7 +228,7 @@ pub fn load_series(input: &SeriesInput) -> Result<Vec<(f64, LoadedFem)>, Pipelin
                     vtu: vtu.clone(),
                     ..FemOptions::files(vec![output.file])
                 };
-                series.push((output.time, super::fem::load(&options)?));
+                series.push((output.time, crate::pipeline::fem::load(&options)?));
             }
         }
         SeriesInput::Tables {
@@ -244,7 +246,7 @@ pub fn load_series(input: &SeriesInput) -> Result<Vec<(f64, LoadedFem)>, Pipelin
                     step: StepChoice::Last,
                     vtu: vtu.clone(),
                 };
-                series.push((*time, super::fem::load(&options)?));
+                series.push((*time, crate::pipeline::fem::load(&options)?));
             }
         }
     }
@@ -539,11 +541,11 @@ fn srm_at(
         outside: Outside::Nearest,
         ..MapConfig::default()
     };
-    let mapped = super::map::map(again, fem, &config)?;
+    let mapped = crate::pipeline::map::map(again, fem, &config)?;
     // As `fos --method srm` runs it: the pore pressures held.
-    let mut settings = super::fos::FosOptions {
+    let mut settings = crate::pipeline::stability::fos::FosOptions {
         damping: options.srm_damping,
-        ..super::fos::FosOptions::srm()
+        ..crate::pipeline::stability::fos::FosOptions::srm()
     }
     .settings(project.cps.as_ref());
     settings.run = runner::with_project(settings.run, &mapped.project)?.0;

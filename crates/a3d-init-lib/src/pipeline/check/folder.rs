@@ -1,13 +1,14 @@
 //! `verify`'s judgement of a project folder, as library calls: what Anura3D
-//! will hold (rebuilt from the files it reads by [`super::anura3d`]), where
+//! will hold (rebuilt from the files it reads by [`crate::pipeline::check::anura3d`]), where
 //! a3d-init's own mps.csv disagrees with it, the 2D σ'zz defect and the
 //! MPM-MIXED collapse. The equilibrium run itself is [`crate::mpm`]'s.
 
 use std::path::PathBuf;
 
-use super::{PipelineError, Project, anura3d};
 use crate::formats::mps_table;
 use crate::model::{ComputationMethod, MaterialPoint, MpState};
+use crate::pipeline::check::anura3d;
+use crate::pipeline::{PipelineError, Project};
 
 const MAX_IDS: usize = 10;
 

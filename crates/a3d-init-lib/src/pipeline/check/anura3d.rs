@@ -24,7 +24,7 @@ use crate::formats::mapf::MapfTable;
 use crate::kernel::neighbours::NeighbourIndex;
 use crate::model::{Material, MaterialPoint, MpState};
 
-use super::{PipelineError, Project};
+use crate::pipeline::{PipelineError, Project};
 
 /// What Anura3D holds at t = 0, per MP, and how it got there.
 #[derive(Clone, Debug, PartialEq)]

@@ -36,8 +36,8 @@
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use super::PipelineError;
 pub use crate::formats::input::ReadLog;
+use crate::pipeline::PipelineError;
 
 /// Where a command writes its output folder, and whether an existing one may
 /// be replaced (an input is never replaced, whatever this says).

@@ -1,16 +1,16 @@
 //! The state a check starts from, for `verify`, `run` and `fos` alike: from a
 //! folder written by `map`, what Anura3D will hold at t = 0 (rebuilt from the
-//! GOM, CPS and MAPF it reads, [`super::verify::judge_folder`], with the
+//! GOM, CPS and MAPF it reads, [`crate::pipeline::check::folder::judge_folder`], with the
 //! MPM-MIXED collapse of its first step applied); or, from a model and a state
 //! table, the table as given. One loader, so that the three commands judge the
 //! same state.
 
 use std::path::{Path, PathBuf};
 
-use super::verify::{Judged, KernelCheck};
-use super::{PipelineError, Project};
 use crate::formats::mps_table;
 use crate::model::{MaterialPoint, MpState};
+use crate::pipeline::check::folder::{Judged, KernelCheck};
+use crate::pipeline::{PipelineError, Project};
 
 /// Where a mapped state comes from.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -48,7 +48,7 @@ impl Start {
         match source {
             StateSource::Folder(dir) => {
                 let project = Project::load(dir)?;
-                let judged = super::verify::judge_folder(&project)?;
+                let judged = crate::pipeline::check::folder::judge_folder(&project)?;
                 Ok(Start {
                     points: project.points.clone(),
                     home: project.files.dir.clone(),

@@ -1,17 +1,17 @@
 //! `map` as one library call: read the Anura3D project and the FEM files side
-//! by side, map ([`super::map::map`]) and write the ready-to-run project with
-//! its diagnostics ([`super::write::write_project`]) into an atomic, durable
-//! output folder ([`super::output`]).
+//! by side, map ([`crate::pipeline::map::map`]) and write the ready-to-run project with
+//! its diagnostics ([`crate::pipeline::map::write::write_project`]) into an atomic, durable
+//! output folder ([`crate::pipeline::io::output`]).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use super::PipelineError;
-use super::fem::FemOptions;
-use super::map::{MapConfig, Mapped};
-use super::output::{Destination, OutputDir, ReadLog};
-use super::project::Project;
-use crate::formats::gsz::StepChoice;
+use crate::formats::fem::StepChoice;
+use crate::pipeline::PipelineError;
+use crate::pipeline::fem::FemOptions;
+use crate::pipeline::io::output::{Destination, OutputDir, ReadLog};
+use crate::pipeline::map::{MapConfig, Mapped};
+use crate::pipeline::project::Project;
 
 /// Everything `map` needs.
 #[derive(Clone, Debug)]
@@ -27,7 +27,7 @@ pub struct MapJob {
     /// model's version (else a model without a CPS is refused).
     pub generate_cps: bool,
     /// Write `fem.vtu` whatever the FEM's size (otherwise only up to
-    /// [`super::write::FEM_VTU_AUTO_MAX`] nodes).
+    /// [`crate::pipeline::map::write::FEM_VTU_AUTO_MAX`] nodes).
     pub fem_vtu: bool,
 }
 
@@ -45,7 +45,7 @@ pub fn compute(job: &MapJob) -> Result<Mapped, PipelineError> {
         },
         || {
             let t = Instant::now();
-            super::fem::load(&job.fem).map(|f| (f, ms(t)))
+            crate::pipeline::fem::load(&job.fem).map(|f| (f, ms(t)))
         },
     );
     let (project, t_model) = project?;
@@ -65,7 +65,7 @@ fn check_cps(project: &Project, job: &MapJob) -> Result<(), PipelineError> {
 }
 
 /// `--step failure`: the model first, then FS(t) over the series on it, then
-/// the map of the first saved step with FS ≤ 1 ([`super::failure`]).
+/// the map of the first saved step with FS ≤ 1 ([`crate::pipeline::stability::failure`]).
 fn compute_at_failure(job: &MapJob) -> Result<Mapped, PipelineError> {
     let ms = |t: Instant| t.elapsed().as_secs_f64() * 1e3;
     let t = Instant::now();
@@ -73,7 +73,8 @@ fn compute_at_failure(job: &MapJob) -> Result<Mapped, PipelineError> {
     check_cps(&project, job)?;
     let t_model = ms(t);
     let t = Instant::now();
-    let (fem, failure) = super::failure::failure_step(&project, &job.fem, &job.config.failure)?;
+    let (fem, failure) =
+        crate::pipeline::stability::failure::failure_step(&project, &job.fem, &job.config.failure)?;
     let t_fem = ms(t);
     let mut mapped = map_loaded(
         job,
@@ -92,14 +93,15 @@ fn compute_at_failure(job: &MapJob) -> Result<Mapped, PipelineError> {
 fn map_loaded(
     job: &MapJob,
     project: Project,
-    fem: super::fem::LoadedFem,
+    fem: crate::pipeline::fem::LoadedFem,
     t_model: f64,
     (fem_step, t_fem): (&str, f64),
 ) -> Result<Mapped, PipelineError> {
     let mut config = job.config.clone();
     config.kernel = config.kernel.for_dim(project.n_dim());
-    config.keep_fem_fields = job.fem_vtu || fem.nodes.len() <= super::write::FEM_VTU_AUTO_MAX;
-    let mut mapped = super::map::map(project, fem, &config)?;
+    config.keep_fem_fields =
+        job.fem_vtu || fem.nodes.len() <= crate::pipeline::map::write::FEM_VTU_AUTO_MAX;
+    let mut mapped = crate::pipeline::map::map(project, fem, &config)?;
     mapped.report.timings_ms.splice(
         0..0,
         [
@@ -133,7 +135,7 @@ pub fn map(job: &MapJob, to: Destination<'_>) -> Result<(Mapped, Written), Pipel
     let files = &mapped.project.files;
     let target = to.or(|| default_out(&files.dir, &files.name));
     let dir = OutputDir::create(&target, to.replace, &reads, "map")?;
-    let files = super::write::write_project(&mapped, &dir.staging(), job.fem_vtu)?;
+    let files = crate::pipeline::map::write::write_project(&mapped, &dir.staging(), job.fem_vtu)?;
     let folder = dir.commit()?;
     Ok((mapped, Written { files, folder }))
 }

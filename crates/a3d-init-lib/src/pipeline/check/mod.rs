@@ -1,20 +1,31 @@
+//! Checking a mapped state on the built-in runner: `verify` (this file),
+//! `run` ([`runout`]), the state they start from ([`start`]: the MAPF read
+//! as the kernel reads it, [`anura3d`]; the folder's own judgement,
+//! [`folder`]) and what the runner commands share ([`runner`]).
+//!
 //! `verify` as a library call: load the state a check starts from
-//! ([`super::start`]), run the built-in explicit solver under gravity
+//! ([`crate::pipeline::check::start`]), run the built-in explicit solver under gravity
 //! ([`crate::mpm::verify`]) with settings from the project's CPS, name every
 //! cause of a negative verdict separately, and write `verify.json`,
 //! `start.csv`, `mps_start.vtu` and, after a run, `verify_history.svg` and
 //! `mps_end.vtu`.
 
+pub mod anura3d;
+pub mod folder;
+pub mod runner;
+pub mod runout;
+pub mod start;
+
 use std::path::PathBuf;
 
-use super::PipelineError;
-use super::output::{Destination, OutputDir};
-use super::runner::{self, history_plot, write_snapshot};
-use super::start::{Start, StateSource};
-use super::verify::KernelCheck;
 use crate::formats::mps_table;
 use crate::model::MpState;
 use crate::mpm::{self, RunSettings};
+use crate::pipeline::PipelineError;
+use crate::pipeline::check::folder::KernelCheck;
+use crate::pipeline::check::start::{Start, StateSource};
+use crate::pipeline::io::output::{Destination, OutputDir};
+use runner::{history_plot, write_snapshot};
 
 /// How `verify` runs.
 #[derive(Clone, Debug, PartialEq)]

@@ -6,9 +6,9 @@
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use super::PipelineError;
-use super::map::Mapped;
 use crate::formats::{mapf, mps_table, vtu};
+use crate::pipeline::PipelineError;
+use crate::pipeline::map::Mapped;
 
 /// A folder files are written into.
 struct Folder<'a>(&'a Path);
@@ -27,7 +27,7 @@ impl Folder<'_> {
         let io =
             |e: std::io::Error| PipelineError::Output(format!("writing {}: {e}", path.display()));
         // Large tables bypass the page cache (see `direct`); whole pages only.
-        let file = super::direct::DirectFile::create(&path).map_err(io)?;
+        let file = crate::pipeline::io::direct::DirectFile::create(&path).map_err(io)?;
         let mut w = BufWriter::with_capacity(1 << 16, file);
         fill(&mut w).map_err(io)?;
         w.into_inner()
@@ -95,7 +95,7 @@ pub fn write_project(
     // ready-to-run project never carries a water level Anura3D would refuse,
     // and anything in its place that is not a regular file is an error, not
     // left out.
-    let hhbf = super::runner::hhbf_path(project);
+    let hhbf = crate::pipeline::check::runner::hhbf_path(project);
     if std::fs::symlink_metadata(&hhbf).is_ok() {
         let text = crate::formats::input::read_text(&hhbf)?;
         crate::formats::hhbf::parse(&hhbf, &text)?;

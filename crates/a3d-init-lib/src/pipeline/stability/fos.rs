@@ -1,6 +1,6 @@
 //! `fos` as a library call: the factor of safety of the state `verify` judges
-//! ([`super::start`]: for a map folder, the state Anura3D will hold), by limit
-//! equilibrium ([`super::slope`], the default: Morgenstern–Price, the seed
+//! ([`crate::pipeline::check::start`]: for a map folder, the state Anura3D will hold), by limit
+//! equilibrium ([`crate::pipeline::stability::slope`], the default: Morgenstern–Price, the seed
 //! paper's method) or by strength reduction on the built-in runner
 //! ([`crate::mpm::fos`], `FosMethod::Srm`), pore pressures frozen. Where both
 //! run (strength reduction always runs the default limit equilibrium beside
@@ -20,16 +20,16 @@ use std::path::{Path, PathBuf};
 
 use plotters::style::RGBColor;
 
-use super::PipelineError;
-use super::output::{Destination, OutputDir, ReadLog};
-use super::plot::{self, Series};
-use super::runner;
-use super::slope::{LeOptions, LeReport};
-use super::start::{Start, StateSource};
 use crate::formats::cps::CpsDocument;
 use crate::formats::vtu;
 use crate::model::{AnuraModel, MaterialPoint, MpState};
 use crate::mpm::fos::{FosOutcome, FosReport, FosSettings, strength_reduction};
+use crate::pipeline::PipelineError;
+use crate::pipeline::check::runner;
+use crate::pipeline::check::start::{Start, StateSource};
+use crate::pipeline::io::output::{Destination, OutputDir, ReadLog};
+use crate::pipeline::io::plot::{self, Series};
+use crate::pipeline::stability::slope::{LeOptions, LeReport};
 use crate::slope::{Interslice, Method};
 
 /// Which factor of safety.
@@ -139,7 +139,7 @@ pub struct Comparison {
     /// The largest strength factor at which the implicit equilibrium solve
     /// still finds rest with the same pore pressures held; `None`
     /// where the solve does not take the model.
-    pub equilibrium_solve: Option<super::map::equilibrium::StrengthFactor>,
+    pub equilibrium_solve: Option<crate::pipeline::map::equilibrium::StrengthFactor>,
     /// Why there is no `equilibrium_solve`.
     pub equilibrium_solve_skipped: Option<String>,
     pub note: String,
@@ -246,7 +246,7 @@ pub fn write(
         .map_err(|e| PipelineError::Output(format!("fos.json: {e}")))?;
     dir.write("fos.json", |w| w.write_all(text.as_bytes()))?;
     if let Some(le) = &analysis.limit_equilibrium {
-        super::slope::write_surface_plot(
+        crate::pipeline::stability::slope::write_surface_plot(
             &dir.path("fos_surface.svg"),
             &format!(
                 "Critical slip surface: {} FS = {:.3} ({})",
@@ -410,8 +410,13 @@ pub fn analyse_state(
         .map_or(crate::model::DEFAULT_GRAVITY, CpsDocument::gravity);
     let le_options = options.le_options();
     let run_srm = options.method == FosMethod::Srm || options.with_srm;
-    let le =
-        super::slope::analyse_state(&project.model, gravity, &start.points, states, &le_options);
+    let le = crate::pipeline::stability::slope::analyse_state(
+        &project.model,
+        gravity,
+        &start.points,
+        states,
+        &le_options,
+    );
     let (limit_equilibrium, skipped) = match (le, options.method) {
         (Ok(r), _) => (Some(r), None),
         // Beside strength reduction, limit equilibrium is a comparison only.
@@ -455,7 +460,7 @@ fn compare(
     le: &LeReport,
     srm: &FosReport,
 ) -> Comparison {
-    let davis = super::slope::davis_factor(
+    let davis = crate::pipeline::stability::slope::davis_factor(
         &start.project.model,
         gravity,
         &start.points,
@@ -467,12 +472,12 @@ fn compare(
     .ok();
     let project = &start.project;
     let (equilibrium_solve, equilibrium_solve_skipped) =
-        match super::map::equilibrium::unsupported(project) {
+        match crate::pipeline::map::equilibrium::unsupported(project) {
             Some(why) => (None, Some(why)),
-            None => match super::map::equilibrium::strength_factor(
+            None => match crate::pipeline::map::equilibrium::strength_factor(
                 project,
                 states,
-                &super::map::equilibrium::EquilibriumOptions::default(),
+                &crate::pipeline::map::equilibrium::EquilibriumOptions::default(),
             ) {
                 Ok(f) => (Some(f), None),
                 Err(e) => (None, Some(e.to_string())),

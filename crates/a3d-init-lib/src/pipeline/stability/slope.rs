@@ -12,11 +12,11 @@ use std::path::Path;
 
 use plotters::style::RGBColor;
 
-use super::PipelineError;
-use super::plot;
 use crate::kernel::KernelKind;
 use crate::kernel::mapper;
 use crate::model::{AnuraModel, Dimension, Material, MaterialPoint, MpState};
+use crate::pipeline::PipelineError;
+use crate::pipeline::io::plot;
 use crate::slope::{
     self, Domain, Method, Problem, Raster, RasterSettings, Scattered, SearchSettings,
     SlopeMaterial, Strength, Suction,

@@ -1,15 +1,15 @@
 //! `--step failure`: the hand-off at the failure time as one step. FS(t) by
 //! limit equilibrium over every saved step of a `.gsz` analysis or every
-//! output of a `.pvd` series ([`super::fos_time::fos_over_time`]), and the
+//! output of a `.pvd` series ([`crate::pipeline::stability::fos_time::fos_over_time`]), and the
 //! first saved step whose factor is at most 1: the state `map` then maps.
 //! The report names the time, the factor, the method and the bisected
 //! crossing; a series that never fails is an error.
 
-use super::PipelineError;
-use super::fem::{FemOptions, FemReader, LoadedFem, reader_for};
-use super::fos_time::{self, FosTimeOptions, SeriesInput};
-use super::project::Project;
-use super::slope::LeOptions;
+use crate::pipeline::PipelineError;
+use crate::pipeline::fem::{FemOptions, FemReader, LoadedFem, reader_for};
+use crate::pipeline::project::Project;
+use crate::pipeline::stability::fos_time::{self, FosTimeOptions, SeriesInput};
+use crate::pipeline::stability::slope::LeOptions;
 
 /// The saved step `--step failure` chose, and why.
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]

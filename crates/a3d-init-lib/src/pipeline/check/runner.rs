@@ -6,13 +6,13 @@ use std::path::{Path, PathBuf};
 
 use plotters::style::RGBColor;
 
-use super::PipelineError;
-use super::output::{Destination, OutputDir, ReadLog};
-use super::plot::{self, Series};
-use super::start::{Start, StateSource};
 use crate::formats::cps::CpsDocument;
 use crate::formats::vtu;
 use crate::mpm::{self, RunSettings};
+use crate::pipeline::PipelineError;
+use crate::pipeline::check::start::{Start, StateSource};
+use crate::pipeline::io::output::{Destination, OutputDir, ReadLog};
+use crate::pipeline::io::plot::{self, Series};
 
 /// Local damping α when neither the caller nor the CPS gives one.
 pub const DEFAULT_DAMPING: f64 = 0.75;
@@ -55,7 +55,9 @@ pub fn with_cps(
 /// The seepage face and infiltration the project's CPS switches on
 /// (`$$APPLY_SEEPAGE_FACE 1`, `$$APPLY_INFILTRATION 1`) over its GOM's
 /// areas, and notes on what the CPS asks for and the GOM lacks.
-pub fn hydraulic(project: &super::Project) -> (mpm::seepage::HydraulicBoundaries, Vec<String>) {
+pub fn hydraulic(
+    project: &crate::pipeline::Project,
+) -> (mpm::seepage::HydraulicBoundaries, Vec<String>) {
     let mut notes = Vec::new();
     let Some(cps) = project.cps.as_ref() else {
         return (Default::default(), notes);
@@ -89,7 +91,7 @@ pub fn hydraulic(project: &super::Project) -> (mpm::seepage::HydraulicBoundaries
 /// on what the runner does not apply.
 pub fn with_project(
     mut s: RunSettings,
-    project: &super::Project,
+    project: &crate::pipeline::Project,
 ) -> Result<(RunSettings, Vec<String>), PipelineError> {
     let (hydraulic, mut notes) = hydraulic(project);
     s.hydraulic = hydraulic;
@@ -107,7 +109,7 @@ pub fn with_project(
 /// `$$BOUNDARY_HYDRAULIC_HEAD_AREA`; a missing or bad file is an error, a
 /// missing area a note).
 pub fn loads(
-    project: &super::Project,
+    project: &crate::pipeline::Project,
 ) -> Result<(crate::model::loads::ProjectLoads, Vec<String>), PipelineError> {
     let mut notes = Vec::new();
     let Some(cps) = project.cps.as_ref() else {
@@ -188,7 +190,7 @@ pub fn start_gravity_words(cps: &CpsDocument) -> Option<String> {
 }
 
 /// `<project>.HHBF` beside the project's files, where Anura3D looks for it.
-pub fn hhbf_path(project: &super::Project) -> PathBuf {
+pub fn hhbf_path(project: &crate::pipeline::Project) -> PathBuf {
     project
         .files
         .dir
