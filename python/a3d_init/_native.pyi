@@ -15,28 +15,8 @@ _Path = Union[str, PathLike[str]]
 
 __version__: str
 
-class A3dInitError(Exception):
-    """Any a3d-init error; ``kind`` says which: ``input_file``,
-    ``option_value``, ``model``, ``numerical`` or ``output``."""
-
-    kind: str
-
-class InputFileError(A3dInitError):
-    """An input file is missing, unreadable or malformed; the message is
-    positioned (``path:line:col: …``)."""
-
-class OptionValueError(A3dInitError):
-    """An option's value cannot be used."""
-
-class ModelError(A3dInitError):
-    """The model has something this step does not support."""
-
-class NumericalError(A3dInitError):
-    """A numerical failure."""
-
-class OutputError(A3dInitError):
-    """An output cannot or may not be written (exists, is or holds an input,
-    a write or sync failed)."""
+# The exceptions are raised from ``a3d_init._errors`` (one hierarchy: option
+# errors are ValueErrors, file errors OSErrors), by the library's kind.
 
 def interpolate(
     nodes: npt.NDArray[np.float64],
@@ -66,8 +46,8 @@ def calibrate(
 
 def read_fem(
     fem: Sequence[_Path],
-    columns: Optional[str] = None,
-    fem_units: Optional[str] = None,
+    columns: Optional[List[Tuple[str, str]]] = None,
+    fem_units: Tuple[Optional[str], Optional[str]] = (None, None),
     fem_sign: Optional[str] = None,
     fem_mesh: Optional[_Path] = None,
     analysis: Optional[str] = None,
@@ -85,25 +65,28 @@ def map(
     model: _Path,
     out: Optional[_Path] = None,
     force: bool = False,
-    h: Optional[str] = None,
+    h: Optional[float] = None,
+    calibrate_h: bool = False,
     kernel: str = "cubic",
     seed: int = 1,
     stress: str = "auto",
     outside: str = "error",
     min_shepard: float = 0.02,
-    material_map: Optional[str] = None,
+    material_map: Optional[List[Tuple[str, str]]] = None,
     mixed_state: str = "mean",
     generate_cps: bool = False,
     fem_vtu: bool = False,
-    columns: Optional[str] = None,
-    fem_units: Optional[str] = None,
+    columns: Optional[List[Tuple[str, str]]] = None,
+    fem_units: Tuple[Optional[str], Optional[str]] = (None, None),
     fem_sign: Optional[str] = None,
     fem_mesh: Optional[_Path] = None,
     analysis: Optional[str] = None,
     step: str = "last",
     k0_consistent: bool = True,
 ) -> Tuple[str, str, List[str], Dict[str, npt.NDArray[Any]]]:
-    """``a3d-init map``: (report JSON, folder, files written, state columns)."""
+    """``map`` (``h`` in metres or None, ``calibrate_h`` for leave-one-out;
+    ``columns`` and ``material_map`` as pairs; ``step`` as the library reads
+    it): (report JSON, folder, files written, state columns)."""
 
 def verify(
     folder: Optional[_Path] = None,
@@ -115,7 +98,7 @@ def verify(
     force: bool = False,
     drained: bool = False,
 ) -> Tuple[str, str]:
-    """``a3d-init verify``: (verify.json text, folder written)."""
+    """``verify``: (verify.json text, folder written)."""
 
 def fos(
     folder: Optional[_Path] = None,
@@ -130,5 +113,5 @@ def fos(
     force: bool = False,
     drained: bool = False,
 ) -> Tuple[str, str]:
-    """``a3d-init fos`` (``method``: ``"srm"``, strength reduction, or a method
+    """``fos`` (``method``: ``"srm"``, strength reduction, or a method
     of slices such as ``"morgenstern-price"``): (fos.json text, folder written)."""

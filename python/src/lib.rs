@@ -12,92 +12,94 @@ use numpy::ndarray::Array2;
 use numpy::{
     IntoPyArray, PyArray1, PyArray2, PyReadonlyArray1, PyReadonlyArray2, PyUntypedArrayMethods,
 };
-use pyo3::create_exception;
-use pyo3::exceptions::{PyException, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 
-use a3d_init::formats::fem_csv::{self, CsvOptions, SignConvention};
+use a3d_init::formats::fem_csv::{self, CsvOptions};
+
+use a3d_init::formats::fem::SignConvention;
 use a3d_init::formats::fem_vtu::{self, StressRule, VtuOptions};
-use a3d_init::formats::material_map::MaterialMapError;
+use a3d_init::formats::material_map::{MaterialMap, MaterialMapError};
 use a3d_init::kernel::KernelKind;
 use a3d_init::kernel::loo::Norm;
 use a3d_init::kernel::mapper::{self, MapSettings, NodeCloud, OutsidePolicy};
 use a3d_init::pipeline::check::VerifyOptions;
+use a3d_init::pipeline::check::start::StateSource;
 use a3d_init::pipeline::fem::FemOptions;
-use a3d_init::pipeline::fos::{FosMethod, FosOptions};
+use a3d_init::pipeline::io::output::Destination;
+use a3d_init::pipeline::map::job::MapJob;
 use a3d_init::pipeline::map::{EquilibriumOptions, MapConfig, SmoothingLength, UnknownName};
-use a3d_init::pipeline::mapping::MapJob;
-use a3d_init::pipeline::output::Destination;
-use a3d_init::pipeline::start::StateSource;
+use a3d_init::pipeline::setting::{Setting, spell_settings};
+use a3d_init::pipeline::stability::fos::{FosMethod, FosOptions};
 use a3d_init::pipeline::{self, ErrorKind, PipelineError};
 use a3d_init::slope::Method;
 
-create_exception!(
-    _native,
-    A3dInitError,
-    PyException,
-    "Any a3d-init error; `kind` says which."
-);
-create_exception!(
-    _native,
-    InputFileError,
-    A3dInitError,
-    "An input file is missing, unreadable or malformed (the message is positioned: path:line:col)."
-);
-create_exception!(
-    _native,
-    OptionValueError,
-    A3dInitError,
-    "An option's value cannot be used."
-);
-create_exception!(
-    _native,
-    ModelError,
-    A3dInitError,
-    "The model has something this step does not support."
-);
-create_exception!(
-    _native,
-    NumericalError,
-    A3dInitError,
-    "A numerical failure."
-);
-create_exception!(
-    _native,
-    OutputError,
-    A3dInitError,
-    "An output cannot or may not be written."
-);
-
-/// The library's error as the exception of its kind, with `kind` set.
-fn py_err(e: PipelineError) -> PyErr {
-    let message = e.to_string();
-    let (err, kind) = match e.kind() {
-        ErrorKind::InputFile => (InputFileError::new_err(message), "input_file"),
-        ErrorKind::OptionValue => (OptionValueError::new_err(message), "option_value"),
-        ErrorKind::Model => (ModelError::new_err(message), "model"),
-        ErrorKind::Numerical => (NumericalError::new_err(message), "numerical"),
-        ErrorKind::Output => (OutputError::new_err(message), "output"),
-        _ => (A3dInitError::new_err(message), "other"),
-    };
-    Python::attach(|py| {
-        let _ = err.value(py).setattr("kind", kind);
-    });
-    err
+/// The Python spelling of each setting the library's messages name: the
+/// keyword argument.
+fn keyword(setting: Setting) -> &'static str {
+    match setting {
+        Setting::Columns => "columns=",
+        Setting::FemUnits => "fem_units=",
+        Setting::FemSign => "fem_sign=",
+        Setting::FemMesh => "fem_mesh=",
+        Setting::Analysis => "analysis=",
+        Setting::GeneratedCps => "generate_cps=True",
+        Setting::Replace => "force=True",
+        Setting::SmoothingLength => "h=",
+        Setting::Outside => "outside=",
+        Setting::StressSource => "stress=",
+        Setting::MixedState => "mixed_state=",
+    }
 }
 
-fn option_err(message: String) -> PyErr {
-    py_err(PipelineError::Option(message))
+/// An exception of the package's hierarchy (`a3d_init/_errors.py`: option
+/// errors are `ValueError`s, file errors `OSError`s), by the library's kind,
+/// its message with the keyword of each setting it names.
+fn raise(kind: &str, message: &str) -> PyErr {
+    let message = spell_settings(message, keyword);
+    Python::attach(|py| {
+        let made = py
+            .import("a3d_init._errors")
+            .and_then(|errors| errors.getattr("BY_KIND"))
+            .and_then(|by_kind| by_kind.get_item(kind))
+            .and_then(|class| class.call1((message.clone(),)));
+        match made {
+            Ok(exception) => PyErr::from_value(exception),
+            Err(e) => e,
+        }
+    })
+}
+
+/// The library's error as the exception of its kind.
+fn py_err(e: PipelineError) -> PyErr {
+    let kind = match e.kind() {
+        ErrorKind::InputFile => "input_file",
+        ErrorKind::OptionValue => "option_value",
+        ErrorKind::Model => "model",
+        ErrorKind::Numerical => "numerical",
+        ErrorKind::Output => "output",
+        _ => "other",
+    };
+    raise(kind, &e.to_string())
+}
+
+/// An internal failure (`A3dInitError`).
+fn internal(message: impl Into<String>) -> PyErr {
+    raise("other", &message.into())
+}
+
+/// An argument whose value cannot be used (`OptionValueError`, a `ValueError`).
+fn option_err(message: impl Into<String>) -> PyErr {
+    py_err(PipelineError::Option(message.into()))
 }
 
 fn json<T: serde::Serialize>(value: &T) -> PyResult<String> {
-    serde_json::to_string(value).map_err(|e| A3dInitError::new_err(e.to_string()))
+    serde_json::to_string(value).map_err(|e| internal(e.to_string()))
 }
 
 fn kernel_kind(name: &str) -> PyResult<KernelKind> {
     KernelKind::parse(name, 2).ok_or_else(|| {
-        PyValueError::new_err(format!(
+        option_err(format!(
             "kernel: expected 'cubic', 'gaussian' or 'wendland', got {name:?}"
         ))
     })
@@ -108,7 +110,7 @@ fn outside_policy(name: &str) -> PyResult<OutsidePolicy> {
         "error" => Ok(OutsidePolicy::Error),
         "nearest" => Ok(OutsidePolicy::Nearest),
         "skip" => Ok(OutsidePolicy::Skip),
-        _ => Err(PyValueError::new_err(format!(
+        _ => Err(option_err(format!(
             "outside: expected 'error', 'nearest' or 'skip', got {name:?}"
         ))),
     }
@@ -118,8 +120,8 @@ fn outside_policy(name: &str) -> PyResult<OutsidePolicy> {
 #[allow(clippy::too_many_arguments)]
 fn fem_options(
     fem: Vec<PathBuf>,
-    columns: Option<&str>,
-    fem_units: Option<&str>,
+    columns: Option<Vec<(String, String)>>,
+    fem_units: (Option<String>, Option<String>),
     fem_sign: Option<&str>,
     fem_mesh: Option<PathBuf>,
     analysis: Option<String>,
@@ -128,22 +130,18 @@ fn fem_options(
     // `columns` names table headers, or VTU arrays by role when every file is a .vtu/.pvd.
     let all_vtu = fem.iter().all(|p| fem_vtu::is_vtk_path(p));
     let (columns, arrays) = match columns {
-        Some(s) if all_vtu => (
+        Some(pairs) if all_vtu => (
             Vec::new(),
-            fem_vtu::parse_arrays_option(s).map_err(|e| option_err(format!("columns: {e}")))?,
+            fem_vtu::arrays_from_pairs(&pairs).map_err(|e| option_err(format!("columns: {e}")))?,
         ),
-        Some(s) => (
-            fem_csv::parse_columns_option(s).map_err(|e| option_err(format!("columns: {e}")))?,
+        Some(pairs) => (
+            fem_csv::columns_from_pairs(&pairs).map_err(|e| option_err(format!("columns: {e}")))?,
             Vec::new(),
         ),
         None => (Vec::new(), Vec::new()),
     };
-    let units = match fem_units {
-        Some(s) => {
-            fem_csv::parse_units_option(s).map_err(|e| option_err(format!("fem_units: {e}")))?
-        }
-        None => Default::default(),
-    };
+    let units = fem_csv::units_from(fem_units.0.as_deref(), fem_units.1.as_deref())
+        .map_err(|e| option_err(format!("fem_units: {e}")))?;
     // None: GeoStudio's for tables and .gsz, OpenGeoSys's for .vtu/.pvd.
     let sign = match fem_sign {
         None => None,
@@ -151,7 +149,7 @@ fn fem_options(
         Some("tension-positive" | "tension_positive") => Some(SignConvention::TensionPositive),
         Some("ogs") => Some(SignConvention::Ogs),
         Some(other) => {
-            return Err(PyValueError::new_err(format!(
+            return Err(option_err(format!(
                 "fem_sign: expected 'geostudio', 'tension-positive' or 'ogs', got {other:?}"
             )));
         }
@@ -180,7 +178,7 @@ fn positions(name: &str, a: &PyReadonlyArray2<'_, f64>) -> PyResult<(Vec<[f64; 3
     let shape = a.shape();
     let dim = shape[1];
     if dim != 2 && dim != 3 {
-        return Err(PyValueError::new_err(format!(
+        return Err(option_err(format!(
             "{name}: expected shape (n, 2) or (n, 3), got {shape:?}"
         )));
     }
@@ -229,20 +227,20 @@ fn interpolate<'py>(
     let (node_xyz, dim) = positions("nodes", &nodes)?;
     let (point_xyz, point_dim) = positions("points", &points)?;
     if point_dim != dim {
-        return Err(PyValueError::new_err(format!(
+        return Err(option_err(format!(
             "points: {point_dim} columns, but nodes have {dim}"
         )));
     }
     let n_fields = values.shape()[1];
     if values.shape()[0] != node_xyz.len() {
-        return Err(PyValueError::new_err(format!(
+        return Err(option_err(format!(
             "values: {} rows, but nodes has {}",
             values.shape()[0],
             node_xyz.len()
         )));
     }
     if !(h.is_finite() && h > 0.0) {
-        return Err(PyValueError::new_err(format!(
+        return Err(option_err(format!(
             "h: expected a positive number of metres, got {h}"
         )));
     }
@@ -254,7 +252,7 @@ fn interpolate<'py>(
      -> PyResult<Option<Vec<u32>>> {
         let Some(a) = a else { return Ok(None) };
         if a.len() != n {
-            return Err(PyValueError::new_err(format!(
+            return Err(option_err(format!(
                 "{name}: {} entries, expected {n}",
                 a.len()
             )));
@@ -264,7 +262,7 @@ fn interpolate<'py>(
     let node_group = groups("node_regions", &node_regions, node_xyz.len())?;
     let point_group = groups("point_regions", &point_regions, point_xyz.len())?;
     if node_group.is_some() != point_group.is_some() {
-        return Err(PyValueError::new_err(
+        return Err(option_err(
             "node_regions and point_regions: give both or neither",
         ));
     }
@@ -291,7 +289,7 @@ fn interpolate<'py>(
     let result = result.map_err(|e| py_err(PipelineError::Numerical(e.to_string())))?;
     let m = point_xyz.len();
     let mapped = Array2::from_shape_vec((m, n_fields), result.values)
-        .map_err(|e| A3dInitError::new_err(e.to_string()))?;
+        .map_err(|e| internal(e.to_string()))?;
     Ok((
         mapped.into_pyarray(py),
         result.shepard.into_pyarray(py),
@@ -314,7 +312,7 @@ fn calibrate<'py>(
 ) -> PyResult<(f64, String)> {
     let (xyz, dim) = positions("nodes", &nodes)?;
     if values.shape()[0] != xyz.len() {
-        return Err(PyValueError::new_err(format!(
+        return Err(option_err(format!(
             "values: {} rows, but nodes has {}",
             values.shape()[0],
             xyz.len()
@@ -323,7 +321,7 @@ fn calibrate<'py>(
     let n_fields = values.shape()[1];
     let names = fields.unwrap_or_else(|| (0..n_fields).map(|k| format!("field{k}")).collect());
     if names.len() != n_fields {
-        return Err(PyValueError::new_err(format!(
+        return Err(option_err(format!(
             "fields: {} names for {n_fields} columns of values",
             names.len()
         )));
@@ -333,7 +331,7 @@ fn calibrate<'py>(
         "l2" => Norm::L2,
         "relative" => Norm::Relative,
         _ => {
-            return Err(PyValueError::new_err(format!(
+            return Err(option_err(format!(
                 "norm: expected 'l1', 'l2' or 'relative', got {norm:?}"
             )));
         }
@@ -351,13 +349,13 @@ fn calibrate<'py>(
 /// Reads FEM node files as `map` does: (positions (n, 3), dim, ids, regions,
 /// fields {name: values}, read reports as JSON, notes).
 #[pyfunction]
-#[pyo3(signature = (fem, columns=None, fem_units=None, fem_sign=None, fem_mesh=None, analysis=None, step="last"))]
+#[pyo3(signature = (fem, columns=None, fem_units=(None, None), fem_sign=None, fem_mesh=None, analysis=None, step="last"))]
 #[allow(clippy::too_many_arguments)]
 fn read_fem<'py>(
     py: Python<'py>,
     fem: Vec<PathBuf>,
-    columns: Option<&str>,
-    fem_units: Option<&str>,
+    columns: Option<Vec<(String, String)>>,
+    fem_units: (Option<String>, Option<String>),
     fem_sign: Option<&str>,
     fem_mesh: Option<PathBuf>,
     analysis: Option<String>,
@@ -371,8 +369,7 @@ fn read_fem<'py>(
     let out = PyDict::new(py);
     let n = nodes.len();
     let flat: Vec<f64> = nodes.positions.iter().flatten().copied().collect();
-    let xyz =
-        Array2::from_shape_vec((n, 3), flat).map_err(|e| A3dInitError::new_err(e.to_string()))?;
+    let xyz = Array2::from_shape_vec((n, 3), flat).map_err(|e| internal(e.to_string()))?;
     out.set_item("positions", xyz.into_pyarray(py))?;
     out.set_item("dim", nodes.dim)?;
     out.set_item("ids", nodes.ids.into_pyarray(py))?;
@@ -419,7 +416,7 @@ fn column_of<'py, T, U: numpy::Element>(
 /// `map`: reads, maps and writes the project. Returns (report as JSON, the
 /// folder written, the files written, the mapped state's columns).
 #[pyfunction]
-#[pyo3(signature = (fem, model, out=None, force=false, h=None, kernel="cubic", seed=1, stress="auto", outside="error", min_shepard=0.02, material_map=None, mixed_state="mean", generate_cps=false, fem_vtu=false, columns=None, fem_units=None, fem_sign=None, fem_mesh=None, analysis=None, step="last", k0_consistent=true))]
+#[pyo3(signature = (fem, model, out=None, force=false, h=None, calibrate_h=false, kernel="cubic", seed=1, stress="auto", outside="error", min_shepard=0.02, material_map=None, mixed_state="mean", generate_cps=false, fem_vtu=false, columns=None, fem_units=(None, None), fem_sign=None, fem_mesh=None, analysis=None, step="last", k0_consistent=true))]
 #[allow(clippy::too_many_arguments, clippy::type_complexity)]
 fn map<'py>(
     py: Python<'py>,
@@ -427,38 +424,36 @@ fn map<'py>(
     model: PathBuf,
     out: Option<PathBuf>,
     force: bool,
-    h: Option<&str>,
+    h: Option<f64>,
+    calibrate_h: bool,
     kernel: &str,
     seed: u64,
     stress: &str,
     outside: &str,
     min_shepard: f64,
-    material_map: Option<&str>,
+    material_map: Option<Vec<(String, String)>>,
     mixed_state: &str,
     generate_cps: bool,
     fem_vtu: bool,
-    columns: Option<&str>,
-    fem_units: Option<&str>,
+    columns: Option<Vec<(String, String)>>,
+    fem_units: (Option<String>, Option<String>),
     fem_sign: Option<&str>,
     fem_mesh: Option<PathBuf>,
     analysis: Option<String>,
     step: &str,
     k0_consistent: bool,
 ) -> PyResult<(String, PathBuf, Vec<String>, Bound<'py, PyDict>)> {
-    let h = match h {
-        None => SmoothingLength::SpacingRule,
-        Some("auto") => SmoothingLength::Calibrate { seed },
-        Some(text) => match text.parse::<f64>() {
-            Ok(v) if v > 0.0 && v.is_finite() => SmoothingLength::Metres(v),
-            _ => {
-                return Err(PyValueError::new_err(format!(
-                    "h: expected a positive number of metres or 'auto', got {text:?}"
-                )));
-            }
-        },
+    let h = match (h, calibrate_h) {
+        (_, true) => SmoothingLength::Calibrate { seed },
+        (None, false) => SmoothingLength::SpacingRule,
+        (Some(v), false) if v > 0.0 && v.is_finite() => SmoothingLength::Metres(v),
+        (Some(v), false) => {
+            return Err(option_err(format!(
+                "h: expected a positive number of metres, 'auto' or None, got {v:?}"
+            )));
+        }
     };
-    let parse =
-        |what: &str, e: &dyn std::fmt::Display| PyValueError::new_err(format!("{what}: {e}"));
+    let parse = |what: &str, e: &dyn std::fmt::Display| option_err(format!("{what}: {e}"));
     let config = MapConfig {
         kernel: kernel_kind(kernel)?,
         h,
@@ -470,7 +465,7 @@ fn map<'py>(
             .parse()
             .map_err(|e: UnknownName| parse("stress", &e))?,
         material_map: material_map
-            .map(str::parse)
+            .map(|pairs| MaterialMap::from_pairs(&pairs))
             .transpose()
             .map_err(|e: MaterialMapError| parse("material_map", &e))?,
         mixed_state: mixed_state
@@ -491,14 +486,14 @@ fn map<'py>(
         fem_vtu,
     };
     let (mapped, written) = py
-        .detach(|| pipeline::mapping::map(&job, Destination::new(out.as_deref(), force)))
+        .detach(|| pipeline::map::job::map(&job, Destination::new(out.as_deref(), force)))
         .map_err(py_err)?;
     let states = &mapped.states;
     let state = PyDict::new(py);
     let n = states.len();
     let tensor = |f: &dyn Fn(&a3d_init::model::MpState) -> [f64; 6]| -> PyResult<Array2<f64>> {
         let flat: Vec<f64> = states.iter().flat_map(f).collect();
-        Array2::from_shape_vec((n, 6), flat).map_err(|e| A3dInitError::new_err(e.to_string()))
+        Array2::from_shape_vec((n, 6), flat).map_err(|e| internal(e.to_string()))
     };
     state.set_item("pwp", column_of(py, states, |s| s.pwp))?;
     state.set_item("total_stress", tensor(&|s| s.total)?.into_pyarray(py))?;
@@ -525,7 +520,7 @@ fn source(
     match (folder, model, state) {
         (Some(dir), None, None) => Ok(StateSource::Folder(dir)),
         (None, Some(model), Some(state)) => Ok(StateSource::Table { model, state }),
-        _ => Err(PyValueError::new_err(
+        _ => Err(option_err(
             "give a folder written by map, or model= and state= (an mps.csv)",
         )),
     }
@@ -571,7 +566,7 @@ fn fos_method(name: &str) -> PyResult<FosMethod> {
         .map(FosMethod::Le)
         .ok_or_else(|| {
             let names: Vec<&str> = Method::ALL.iter().map(|m| m.name()).collect();
-            PyValueError::new_err(format!(
+            option_err(format!(
                 "method: expected one of {} or 'srm', got {name:?}",
                 names.join(", ")
             ))
@@ -609,21 +604,20 @@ fn fos(
         ..FosOptions::default()
     };
     let (analysis, written) = py
-        .detach(|| pipeline::fos::fos(&source, &options, Destination::new(out.as_deref(), force)))
+        .detach(|| {
+            pipeline::stability::fos::fos(
+                &source,
+                &options,
+                Destination::new(out.as_deref(), force),
+            )
+        })
         .map_err(py_err)?;
-    let report = pipeline::fos::json(&analysis).map_err(py_err)?;
+    let report = pipeline::stability::fos::json(&analysis).map_err(py_err)?;
     Ok((json(&report)?, written))
 }
 
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    let py = m.py();
-    m.add("A3dInitError", py.get_type::<A3dInitError>())?;
-    m.add("InputFileError", py.get_type::<InputFileError>())?;
-    m.add("OptionValueError", py.get_type::<OptionValueError>())?;
-    m.add("ModelError", py.get_type::<ModelError>())?;
-    m.add("NumericalError", py.get_type::<NumericalError>())?;
-    m.add("OutputError", py.get_type::<OutputError>())?;
     m.add_function(wrap_pyfunction!(interpolate, m)?)?;
     m.add_function(wrap_pyfunction!(calibrate, m)?)?;
     m.add_function(wrap_pyfunction!(read_fem, m)?)?;

@@ -86,14 +86,14 @@ def test_map_at_the_failure_step_of_a_series(tmp_path):
     # #39: FS(t) over the OpenGeoSys series on the model, then the first
     # output with FS <= 1 (1.26 h on the shipped rain) is mapped.
     rain = SLOPE / "ogs" / "results" / "rain.pvd"
-    mapped = a3d_init.map(rain, SLOPE, tmp_path / "f", step="failure", material_map="mat0=silty_sand", stress="geostatic")
+    mapped = a3d_init.map(rain, SLOPE, tmp_path / "f", step="failure", material_map={"mat0": "silty_sand"}, stress="geostatic")
     failure = mapped["failure"]
     assert failure["method"] == "morgenstern-price"
     assert failure["factor"] <= 1.0 < failure["before"][1]
     assert failure["time"] == 4536.0
     assert any("step failure" in n for n in mapped["notes"])
-    # A single table is no series (an option error; #40 plans its ValueError base).
-    with pytest.raises(a3d_init.OptionValueError, match="time series"):
+    # A single table is no series: an option error, which is a ValueError.
+    with pytest.raises(ValueError, match="time series"):
         a3d_init.map(SAND, SLOPE, tmp_path / "x", step="failure")
 
 
@@ -172,14 +172,14 @@ def test_read_fem_reads_an_ogs_series_in_its_own_signs_and_units():
     # fixtures/slope/ogs: OGS writes Pa, suction negative; step 0 is Table 1's
     # initial saturation 0.31, a uniform suction through van Genuchten (#26).
     rain = SLOPE / "ogs/results/rain.pvd"
-    fem = a3d_init.read_fem(rain, step="0")
+    fem = a3d_init.read_fem(rain, step=0)
     alpha, n, s_r = 0.51, 2.73, 0.1
     m = 1 - 1 / n
     suction = (((0.31 - s_r) / (1 - s_r)) ** (-1 / m) - 1) ** (1 / n) / alpha
     assert fem["dim"] == 2
     assert np.allclose(fem["fields"]["pwp"], suction, rtol=1e-9)
     with pytest.raises(a3d_init.A3dInitError, match=r"between step 35 at t = 5580 s \(1.55 h\)"):
-        a3d_init.read_fem(rain, step="time=1.56h")
+        a3d_init.read_fem(rain, step=a3d_init.Time.hours(1.56))
     with pytest.raises(ValueError, match="fem_sign"):
         a3d_init.read_fem(rain, fem_sign="upside-down")
 
@@ -232,7 +232,6 @@ def test_bad_input_raises_the_positioned_message(tmp_path):
     [
         ({"nodes": np.zeros((5, 2), dtype=np.float32)}, "nodes"),
         ({"nodes": np.zeros((5, 4))}, "nodes"),
-        ({"nodes": [[0.0, 0.0]] * 5}, "nodes"),
         ({"values": np.zeros(4)}, "values"),
         ({"values": np.zeros(5, dtype=np.int64)}, "values"),
         ({"points": np.zeros((3, 3))}, "points"),
@@ -291,3 +290,53 @@ def test_nothing_reaches_the_terminal_unless_logging_is_configured(tmp_path, cap
     a3d_init.verify(tmp_path / "out", max_steps=50)
     out, err = capfd.readouterr()
     assert out == "" and err == "", (out, err)
+
+
+def test_a_list_for_an_array_is_a_type_error():
+    args = {"nodes": [[0.0, 0.0]] * 5, "values": np.zeros(5), "points": np.zeros((3, 2)), "h": 0.1}
+    with pytest.raises(TypeError, match="^nodes"):
+        a3d_init.interpolate(**args)
+
+
+def test_one_exception_hierarchy():
+    # Option errors are ValueErrors, file errors OSErrors, all A3dInitErrors.
+    assert issubclass(a3d_init.OptionValueError, ValueError)
+    assert issubclass(a3d_init.InputFileError, OSError)
+    assert issubclass(a3d_init.OutputError, OSError)
+    for cls in (a3d_init.OptionValueError, a3d_init.InputFileError, a3d_init.OutputError,
+                a3d_init.ModelError, a3d_init.NumericalError):
+        assert issubclass(cls, a3d_init.A3dInitError)
+
+
+def test_wrong_types_raise_type_error_and_wrong_values_value_error(tmp_path):
+    with pytest.raises(TypeError, match="^kernel"):
+        a3d_init.map(SAND, SLOPE, tmp_path / "x", kernel=3)
+    with pytest.raises(TypeError, match="^force"):
+        a3d_init.map(SAND, SLOPE, tmp_path / "x", force="yes")
+    with pytest.raises(TypeError, match="^columns: expected a dict"):
+        a3d_init.map(SAND, SLOPE, tmp_path / "x", columns="pwp=PWP")
+    with pytest.raises(TypeError, match="^h"):
+        a3d_init.map(SAND, SLOPE, tmp_path / "x", h=[0.05])
+    with pytest.raises(TypeError, match="^step"):
+        a3d_init.read_fem(SAND, step=1.5)
+    with pytest.raises(a3d_init.OptionValueError, match="^kernel: expected one of"):
+        a3d_init.map(SAND, SLOPE, tmp_path / "x", kernel="quintic")
+    with pytest.raises(ValueError, match="^fem_units"):
+        a3d_init.read_fem(SAND, fem_units={"length": "furlong"})
+    with pytest.raises(ValueError, match="^fem_units"):
+        a3d_init.read_fem(SAND, fem_units={"depth": "m"})
+    assert not (tmp_path / "x").exists()
+
+
+def test_structured_columns_carry_headers_with_commas(tmp_path):
+    # A header holding ',' and '=' cannot pass through a `field=header,…`
+    # string; the dict carries it whole.
+    fem = tmp_path / "fem.csv"
+    fem.write_text('X (m),Y (m),"Pressure, pore = u (kPa)"\n0,0,9.81\n1,0,9.81\n0,1,0\n1,1,0\n')
+    read = a3d_init.read_fem(fem, columns={"pwp": "Pressure, pore = u (kPa)"})
+    # GeoStudio signs: positive below the water table becomes negative.
+    assert np.allclose(read["fields"]["pwp"], [-9.81, -9.81, 0.0, 0.0])
+    assert a3d_init.read_fem(fem, fem_units={"pressure": "Pa"}, columns={"pwp": "Pressure, pore = u (kPa)"})["dim"] == 2
+    # A header that is not there: the library's message, naming the keyword.
+    with pytest.raises(a3d_init.InputFileError, match=r"the column mapping \(columns=\) names pwp=nope: no such header"):
+        a3d_init.read_fem(fem, columns={"pwp": "nope"})
