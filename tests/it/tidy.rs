@@ -282,3 +282,140 @@ fn heavy_and_front_end_crates_stay_where_they_are_used() {
     binary.sort();
     assert_eq!(binary, ["a3d-init-lib", "anyhow", "clap", "indicatif"]);
 }
+
+/// The files of one source folder by module path (`lib.rs`, `main.rs` and
+/// `mod.rs` stand for their folder's module).
+fn modules_of(src: &Path) -> Vec<(Vec<String>, PathBuf)> {
+    let mut files = Vec::new();
+    rust_files(src, &mut files);
+    files
+        .into_iter()
+        .map(|file| {
+            let rel = file.strip_prefix(src).unwrap().with_extension("");
+            let mut parts: Vec<String> = rel
+                .components()
+                .map(|c| c.as_os_str().to_string_lossy().into_owned())
+                .collect();
+            if matches!(
+                parts.last().map(String::as_str),
+                Some("lib" | "main" | "mod")
+            ) {
+                parts.pop();
+            }
+            (parts, file)
+        })
+        .collect()
+}
+
+/// The modules a file's code names through `crate::…` or `super::…` paths
+/// (comments and the inline test module left out), resolved to the longest
+/// module path that is a file.
+fn named_modules(
+    module: &[String],
+    text: &str,
+    modules: &[(Vec<String>, PathBuf)],
+) -> Vec<Vec<String>> {
+    let code = text.split("#[cfg(test)]\nmod tests").next().unwrap_or(text);
+    let code: String = code
+        .lines()
+        .map(|l| l.split("//").next().unwrap_or(""))
+        .collect::<Vec<_>>()
+        .join("\n");
+    let ident = |c: char| c.is_ascii_alphanumeric() || c == '_';
+    let mut out = Vec::new();
+    for start in ["crate::", "super::"] {
+        for (at, _) in code.match_indices(start) {
+            if code[..at]
+                .chars()
+                .next_back()
+                .is_some_and(|c| ident(c) || c == ':')
+            {
+                continue;
+            }
+            let rest = &code[at..];
+            let end = rest
+                .find(|c: char| !(ident(c) || c == ':'))
+                .unwrap_or(rest.len());
+            let mut segments: Vec<&str> =
+                rest[..end].split("::").filter(|s| !s.is_empty()).collect();
+            let mut path: Vec<String> = if segments[0] == "crate" {
+                segments.remove(0);
+                Vec::new()
+            } else {
+                let mut base = module.to_vec();
+                while segments.first() == Some(&"super") {
+                    segments.remove(0);
+                    base.pop();
+                }
+                base
+            };
+            path.extend(segments.iter().map(|s| s.to_string()));
+            let target = (0..=path.len())
+                .rev()
+                .map(|k| &path[..k])
+                .find(|prefix| modules.iter().any(|(m, _)| m == prefix))
+                .map(<[String]>::to_vec);
+            if let Some(target) = target
+                && target != module
+            {
+                out.push(target);
+            }
+        }
+    }
+    out
+}
+
+/// No file imports its own caller: two files of a crate never name each
+/// other (a shared type goes to a file both import).
+#[test]
+fn no_two_files_import_each_other() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut sources = vec![root.join("src")];
+    for krate in std::fs::read_dir(root.join("crates")).unwrap() {
+        sources.push(krate.unwrap().path().join("src"));
+    }
+    let mut circles = Vec::new();
+    for src in sources {
+        let modules = modules_of(&src);
+        let mut edges = std::collections::BTreeSet::new();
+        for (module, file) in &modules {
+            let text = std::fs::read_to_string(file).unwrap();
+            for target in named_modules(module, &text, &modules) {
+                edges.insert((module.clone(), target));
+            }
+        }
+        for (a, b) in &edges {
+            if a < b && edges.contains(&(b.clone(), a.clone())) {
+                circles.push(format!(
+                    "{}: {} <-> {}",
+                    src.display(),
+                    a.join("::"),
+                    b.join("::")
+                ));
+            }
+        }
+    }
+    assert!(
+        circles.is_empty(),
+        "files importing each other: {circles:#?}"
+    );
+}
+
+#[test]
+fn a_mutual_import_is_seen() {
+    let modules = vec![
+        (vec!["step".to_string()], PathBuf::from("step.rs")),
+        (
+            vec!["liquid_grid".to_string()],
+            PathBuf::from("liquid_grid.rs"),
+        ),
+    ];
+    let step = named_modules(&modules[0].0, "use super::liquid_grid::Grid;", &modules);
+    let grid = named_modules(
+        &modules[1].0,
+        "use crate::step::Particle; // crate::nothing",
+        &modules,
+    );
+    assert_eq!(step, [vec!["liquid_grid".to_string()]]);
+    assert_eq!(grid, [vec!["step".to_string()]]);
+}

@@ -8,99 +8,16 @@ use std::time::Instant;
 use rand::{RngExt, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
+use crate::{BenchArgs, SearchArg};
+
 use a3d_init::formats::gom::GomDocument;
 use a3d_init::formats::gom::write::model_to_text;
 use a3d_init::kernel::KernelKind;
 use a3d_init::kernel::mapper::{self, MapSettings, NodeCloud, OutsidePolicy};
 use a3d_testkit::generate::{self, MaterialSpec};
 
-#[derive(Debug, clap::Args)]
-pub struct BenchArgs {
-    /// What to measure.
-    #[arg(value_enum)]
-    pub what: BenchWhat,
-    /// Spatial dimension for `map` (2 or 3).
-    #[arg(long, default_value_t = 3)]
-    pub dim: usize,
-    /// FEM nodes (`map`).
-    #[arg(long, default_value_t = 1_000_000)]
-    pub nodes: usize,
-    /// Query points / MPs (`map`).
-    #[arg(long, default_value_t = 1_000_000)]
-    pub points: usize,
-    /// Mean number of nodes inside the kernel support (`map`).
-    #[arg(long, default_value_t = 50.0)]
-    pub neighbours: f64,
-    /// Elements of the generated GOM (`gom`).
-    #[arg(long, default_value_t = 1_000_000)]
-    pub elements: usize,
-    /// Neighbour search for `map`: the cell grid (default) or the k-d tree reference.
-    #[arg(long, value_enum, default_value_t = SearchArg::Grid)]
-    pub search: SearchArg,
-    /// Folder for the generated case and the output of `e2e` (default: a
-    /// temporary folder, removed afterwards); for `fos`, the slope's model
-    /// folder with its `sand-nodes.csv` (default `fixtures/slope`).
-    #[arg(long)]
-    pub dir: Option<std::path::PathBuf>,
-    /// Write `fem.vtu` in `e2e` too.
-    #[arg(long)]
-    pub fem_vtu: bool,
-    /// Repetitions; the best is reported.
-    #[arg(long, default_value_t = 3)]
-    pub repeat: usize,
-}
-
-#[derive(Debug, Clone, Copy, clap::ValueEnum)]
-pub enum SearchArg {
-    Grid,
-    Kdtree,
-}
-
-#[derive(Debug, Clone, Copy, clap::ValueEnum)]
-pub enum BenchWhat {
-    /// Kernel mapping throughput (queries/s), cubic kernel, uniform random clouds.
-    Map,
-    /// GOM parsing throughput (MB/s) on a generated TRI3 model.
-    Gom,
-    /// Leave-one-out objective at one h and a full calibration (`--nodes`, 2D hydrostatic field).
-    Loo,
-    /// The whole `map` on a generated 3D case (`--nodes` random FEM nodes with
-    /// pwp and six stresses in a 100 m cube, a TET mesh with about `--points`
-    /// MPs, h giving `--neighbours` nodes in reach), phase by phase.
-    E2e,
-    /// FEM CSV reading throughput (MB/s) on a generated 3D table of `--nodes` rows
-    /// (x, y, z, pwp and six stresses, shortest round-trip decimals).
-    Csv,
-    /// The equilibrium solve (`map --stress equilibrium`) on a generated dry
-    /// Mohr–Coulomb slope of about `--points` MPs (`--dim 2`: TRI3, 3 MPs per
-    /// element; `--dim 3`: tetrahedral_old, 4 MPs per element): assembly,
-    /// factorisation, elastic solve, plastic iterations, peak memory.
-    Equilibrium,
-    /// Limit equilibrium on the shipped slope (`--dir`, default
-    /// `fixtures/slope`): one Morgenstern–Price factor with the default
-    /// search, and FS(t) over 40 generated node tables.
-    Fos,
-    /// The explicit runner on a generated saturated column of about
-    /// `--points` MPs: particle-steps/s drained and two-phase coupled, and
-    /// the time step of each.
-    Runner,
-}
-
-pub fn run(args: BenchArgs) -> anyhow::Result<()> {
-    match args.what {
-        BenchWhat::Map => map(&args),
-        BenchWhat::Loo => loo(&args),
-        BenchWhat::E2e => e2e(&args),
-        BenchWhat::Equilibrium => equilibrium(&args),
-        BenchWhat::Fos => crate::bench_fos::fos(&args),
-        BenchWhat::Runner => crate::bench_runner::runner(&args),
-        BenchWhat::Csv => csv(&args),
-        BenchWhat::Gom => gom(&args),
-    }
-}
-
 /// `bench map`: kernel mapping throughput on uniform random clouds.
-fn map(args: &BenchArgs) -> anyhow::Result<()> {
+pub fn map(args: &BenchArgs) -> anyhow::Result<()> {
     let threads = rayon::current_num_threads();
     let mut rng = ChaCha8Rng::seed_from_u64(1);
     let dim = args.dim.clamp(2, 3);
@@ -170,7 +87,7 @@ fn map(args: &BenchArgs) -> anyhow::Result<()> {
 }
 
 /// `bench loo`: the leave-one-out objective and a full calibration.
-fn loo(args: &BenchArgs) -> anyhow::Result<()> {
+pub fn loo(args: &BenchArgs) -> anyhow::Result<()> {
     let threads = rayon::current_num_threads();
     let mut rng = ChaCha8Rng::seed_from_u64(2);
     let nodes: Vec<[f64; 3]> = (0..args.nodes)
@@ -216,7 +133,7 @@ fn loo(args: &BenchArgs) -> anyhow::Result<()> {
 }
 
 /// `bench csv`: FEM CSV reading throughput.
-fn csv(args: &BenchArgs) -> anyhow::Result<()> {
+pub fn csv(args: &BenchArgs) -> anyhow::Result<()> {
     let threads = rayon::current_num_threads();
     let text = generated_fem_csv(args.nodes, 3);
     let mb = text.len() as f64 / 1e6;
@@ -241,7 +158,7 @@ fn csv(args: &BenchArgs) -> anyhow::Result<()> {
 }
 
 /// `bench gom`: GOM parsing throughput.
-fn gom(args: &BenchArgs) -> anyhow::Result<()> {
+pub fn gom(args: &BenchArgs) -> anyhow::Result<()> {
     let threads = rayon::current_num_threads();
     let nx = ((args.elements as f64 / 2.0).sqrt().round() as usize).max(1);
     let ny = (args.elements / (2 * nx)).max(1);
@@ -293,7 +210,7 @@ pub fn generated_fem_csv(n: usize, seed: u64) -> String {
 
 /// `bench e2e`: generates the case, runs `map` as the command does, prints the
 /// phases.
-fn e2e(args: &BenchArgs) -> anyhow::Result<()> {
+pub fn e2e(args: &BenchArgs) -> anyhow::Result<()> {
     use a3d_init::pipeline::fem::FemOptions;
     use a3d_init::pipeline::io::output::{OutputDir, ReadLog};
     use a3d_init::pipeline::map::job::{self, MapJob};
@@ -412,7 +329,7 @@ fn say_peak_rss() {
 /// `bench equilibrium`: a dry Mohr–Coulomb slope (φ′ = 30°, c′ = 5 kPa; 100 m
 /// wide, crest 40 m high, toe 25 m, the face over the middle 30 m: 27°) of
 /// about `--points` MPs, solved as `map --stress equilibrium` solves it.
-fn equilibrium(args: &BenchArgs) -> anyhow::Result<()> {
+pub fn equilibrium(args: &BenchArgs) -> anyhow::Result<()> {
     use a3d_init::mpm::equilibrium::{self, EquilibriumSettings};
     use a3d_init::mpm::{Elasticity, ReturnMap, SolidModel};
     let threads = rayon::current_num_threads();

@@ -11,7 +11,7 @@ use std::time::Instant;
 
 use anyhow::Context;
 
-use crate::bench::BenchArgs;
+use crate::BenchArgs;
 use a3d_init::formats::fem_csv::CsvOptions;
 use a3d_init::pipeline::Project;
 use a3d_init::pipeline::fem::{self, FemOptions};

@@ -8,7 +8,7 @@
 
 use std::time::Instant;
 
-use crate::bench::BenchArgs;
+use crate::BenchArgs;
 use a3d_init::model::{ComputationMethod, MpState};
 use a3d_init::mpm::{RunSettings, Simulation};
 use a3d_testkit::generate;

@@ -77,7 +77,7 @@ pub struct FemReadReport {
     /// What the VTU reader found (a `.vtu` or `.pvd`; the dialect fields
     /// above are then empty).
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub vtu: Option<crate::fem_vtu::VtuReport>,
+    pub vtu: Option<VtuReport>,
 }
 
 /// Which step to read: a folder number, the last saved step, a time (s), or
@@ -143,4 +143,55 @@ pub fn parse_time(text: &str) -> Option<f64> {
         _ => return None,
     };
     number.trim().parse::<f64>().ok().map(|v| v * factor)
+}
+
+/// One array of the file, as `inspect` and the report list it.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct ArrayInfo {
+    pub name: String,
+    /// `point` or `cell`.
+    pub location: &'static str,
+    pub components: usize,
+    /// VTK's type name (`Float64`, …).
+    pub scalar: &'static str,
+    /// What a3d-init took it for (`pwp`, `stress`, …), or `not used`.
+    pub used_as: String,
+}
+
+/// What the VTU reader found and did, in the FEM report.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct VtuReport {
+    /// The `.vtu` read (the PVD's step file for a time series).
+    pub file: PathBuf,
+    /// The time series and the step taken from it, when read through a `.pvd`.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub series: Option<SeriesStep>,
+    /// How the arrays are encoded.
+    pub encoding: String,
+    /// Cell types and their counts.
+    pub cells: Vec<(String, usize)>,
+    /// `MaterialIDs` values and their cell counts.
+    pub materials: Vec<(i64, usize)>,
+    pub arrays: Vec<ArrayInfo>,
+    /// The units taken for lengths and pressures, and whether they were assumed.
+    pub units: String,
+    /// The stress rule applied (effective → total), when a stress array was read.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stress_rule: Option<String>,
+    /// What was derived or left out (Taylor–Hood, interface nodes, …).
+    pub notes: Vec<String>,
+}
+
+/// The output taken from a `.pvd` time series.
+#[derive(Clone, Debug, PartialEq, serde::Serialize)]
+pub struct SeriesStep {
+    /// The `.pvd`.
+    pub pvd: PathBuf,
+    /// 0-based place in the series.
+    pub step: usize,
+    /// Outputs in the series.
+    pub steps: usize,
+    /// Time in s.
+    pub time: f64,
+    pub file: PathBuf,
 }

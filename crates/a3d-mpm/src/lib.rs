@@ -28,6 +28,7 @@
 //! mapping kernels.
 
 mod b_matrix;
+pub mod elasticity;
 pub mod equilibrium;
 pub mod fos;
 pub mod grid;
@@ -45,10 +46,11 @@ pub mod seepage;
 mod simulation;
 pub mod step;
 
+pub use elasticity::Elasticity;
 pub use equilibrium::{EquilibriumOutcome, EquilibriumSettings};
 pub use fos::{FosError, FosOutcome, FosReport, FosSettings, strength_reduction};
 pub use liquid::Formulation;
-pub use material::{Elasticity, SolidModel};
+pub use material::SolidModel;
 pub use mohr_coulomb::{MohrCoulomb, ReturnKind, ReturnMap};
 pub use run::{
     ElementScore, MAX_RUN_STEPS, MonitoredPoint, REST_FRACTION, Reason, Rest, RunOutput, RunReport,

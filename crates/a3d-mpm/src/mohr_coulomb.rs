@@ -15,7 +15,7 @@
 // Numerical kernels index several small arrays with one loop counter.
 #![allow(clippy::needless_range_loop)]
 
-use super::material::Elasticity;
+use super::elasticity::Elasticity;
 use super::principal::*;
 
 /// Which part of the yield surface a stress update ended on.

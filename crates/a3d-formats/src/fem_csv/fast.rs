@@ -4,7 +4,7 @@
 //! [`slow_row`](super::rows::slow_row).
 
 use super::dialect::{Delimiter, parse_number};
-use super::rows::{Rows, Schema};
+use super::schema::{Rows, Schema};
 
 /// `line.trim().is_empty()` without decoding ASCII.
 pub(super) fn is_blank(line: &str) -> bool {

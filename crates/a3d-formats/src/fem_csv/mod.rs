@@ -28,6 +28,7 @@ mod fast;
 mod headers;
 mod options;
 mod rows;
+mod schema;
 mod table;
 #[cfg(test)]
 mod tests;

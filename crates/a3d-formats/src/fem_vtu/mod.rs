@@ -19,10 +19,11 @@
 //! signs, stress), `pvd` (time series and the choice of a step). This file
 //! holds the options, the report and the entry points.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::error::FormatError;
 use super::fem::StepChoice;
+pub use crate::fem::{ArrayInfo, VtuReport};
 use crate::fem::{FemReadReport, SignConvention, UnitOverride};
 use a3d_model::FemNodes;
 
@@ -51,43 +52,6 @@ pub struct VtuOptions {
     pub sign: Option<SignConvention>,
     /// Whether the stress array is effective or total.
     pub stress: StressRule,
-}
-
-/// One array of the file, as `inspect` and the report list it.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct ArrayInfo {
-    pub name: String,
-    /// `point` or `cell`.
-    pub location: &'static str,
-    pub components: usize,
-    /// VTK's type name (`Float64`, …).
-    pub scalar: &'static str,
-    /// What a3d-init took it for (`pwp`, `stress`, …), or `not used`.
-    pub used_as: String,
-}
-
-/// What the VTU reader found and did, in the FEM report.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct VtuReport {
-    /// The `.vtu` read (the PVD's step file for a time series).
-    pub file: PathBuf,
-    /// The time series and the step taken from it, when read through a `.pvd`.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub series: Option<pvd::Chosen>,
-    /// How the arrays are encoded.
-    pub encoding: String,
-    /// Cell types and their counts.
-    pub cells: Vec<(String, usize)>,
-    /// `MaterialIDs` values and their cell counts.
-    pub materials: Vec<(i64, usize)>,
-    pub arrays: Vec<ArrayInfo>,
-    /// The units taken for lengths and pressures, and whether they were assumed.
-    pub units: String,
-    /// The stress rule applied (effective → total), when a stress array was read.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub stress_rule: Option<String>,
-    /// What was derived or left out (Taylor–Hood, interface nodes, …).
-    pub notes: Vec<String>,
 }
 
 /// True for the extensions this reader takes (`.vtu`, `.pvd`).

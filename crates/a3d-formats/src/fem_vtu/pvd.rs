@@ -4,6 +4,7 @@
 //! the last, or by its time with a unit (`time=1.56h`); a time between two
 //! outputs is an error naming both: a3d-init never interpolates in time.
 
+use crate::fem::SeriesStep;
 use std::path::{Path, PathBuf};
 
 use crate::error::{FormatError, ParseError, Position};
@@ -22,20 +23,6 @@ pub struct Output {
 #[derive(Clone, Debug, PartialEq, serde::Serialize)]
 pub struct Series {
     pub outputs: Vec<Output>,
-}
-
-/// The output taken from a series.
-#[derive(Clone, Debug, PartialEq, serde::Serialize)]
-pub struct Chosen {
-    /// The `.pvd`.
-    pub pvd: PathBuf,
-    /// 0-based place in the series.
-    pub step: usize,
-    /// Outputs in the series.
-    pub steps: usize,
-    /// Time in s.
-    pub time: f64,
-    pub file: PathBuf,
 }
 
 /// `5616 s (1.56 h)`: a time for messages.
@@ -157,9 +144,9 @@ pub fn parse(path: &Path, text: &str) -> Result<Series, FormatError> {
 impl Series {
     /// The output `step` names; a time between outputs is an error naming the
     /// nearest before and after.
-    pub fn choose(&self, pvd: &Path, step: &StepChoice) -> Result<Chosen, FormatError> {
+    pub fn choose(&self, pvd: &Path, step: &StepChoice) -> Result<SeriesStep, FormatError> {
         let n = self.outputs.len();
-        let chosen = |k: usize| Chosen {
+        let chosen = |k: usize| SeriesStep {
             pvd: pvd.to_path_buf(),
             step: k,
             steps: n,
