@@ -45,7 +45,7 @@ pub struct FosArgs {
     #[arg(long, conflicts_with = "coupled")]
     pub drained: bool,
     /// Strength reduction: let two-phase coupled and undrained-effective
-    /// materials run with their water ([`a3d_init::mpm::liquid`]) instead of
+    /// materials run with their water (docs/two-phase.md) instead of
     /// holding the pore pressures (not with `--zero-pwp`: a dry slope has
     /// no water to run).
     #[arg(long, conflicts_with = "zero_pwp")]

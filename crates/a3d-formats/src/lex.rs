@@ -1,6 +1,7 @@
 //! nom helpers shared by the Anura3D text readers: Fortran list-directed data
 //! lines (tokens separated by blanks, tabs or commas; reals may use a `D`
-//! exponent) and the `### Anura3D_<version> ###` header.
+//! exponent) and the `### Anura3D_<version> ###` header; and the
+//! `key=value,…` splitting of option values.
 //!
 //! Parsers here work on one line at a time and report the 0-based byte offset of
 //! the offending token so the caller can build a `path:line:col` error.
@@ -210,6 +211,19 @@ pub fn header_version(line: &str) -> Option<&str> {
         Ok(("", v)) if VERSIONS.contains(&v) => Some(v),
         _ => None,
     }
+}
+
+/// Splits an option value `key=value,key=value` into trimmed pairs (empty
+/// pairs skipped); `expected` names the form in the error (`field=header`).
+pub fn key_value_pairs<'a>(s: &'a str, expected: &str) -> Result<Vec<(&'a str, &'a str)>, String> {
+    s.split(',')
+        .filter(|p| !p.trim().is_empty())
+        .map(|pair| {
+            pair.split_once('=')
+                .map(|(k, v)| (k.trim(), v.trim()))
+                .ok_or_else(|| format!("`{pair}`: expected {expected}"))
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -86,7 +86,7 @@ impl FromStr for MaterialMap {
 
     /// Reads `region=material,…`; empty pairs (`a=1,,b=2`) are skipped.
     fn from_str(spec: &str) -> Result<MaterialMap, MaterialMapError> {
-        let mut entries: Vec<MaterialMapEntry> = Vec::new();
+        let mut entries = Vec::new();
         let mut offset = 0;
         for pair in spec.split(',') {
             let column = spec[..offset].chars().count() + 1;
@@ -105,19 +105,9 @@ impl FromStr for MaterialMap {
                     format!("`{pair}`: expected region=material, with both sides given"),
                 ));
             }
-            if entries.iter().any(|e| e.region == r) {
-                return Err(err(column, format!("region `{r}` is mapped twice")));
-            }
-            entries.push(MaterialMapEntry {
-                region: r.to_string(),
-                material: MaterialRef::parse(m),
-                column,
-            });
+            entries.push((r, m, column));
         }
-        if entries.is_empty() {
-            return Err(err(1, "no region=material pair".into()));
-        }
-        Ok(MaterialMap { entries })
+        MaterialMap::from_entries(entries)
     }
 }
 
@@ -128,16 +118,25 @@ impl MaterialMap {
     pub fn from_pairs<K: AsRef<str>, V: AsRef<str>>(
         pairs: &[(K, V)],
     ) -> Result<MaterialMap, MaterialMapError> {
-        let mut entries: Vec<MaterialMapEntry> = Vec::new();
+        let mut entries = Vec::with_capacity(pairs.len());
         for (k, (r, m)) in pairs.iter().enumerate() {
             let (r, m) = (r.as_ref().trim(), m.as_ref().trim());
-            let column = k + 1;
             if r.is_empty() || m.is_empty() {
                 return Err(err(
-                    column,
+                    k + 1,
                     format!("`{r}`: `{m}`: expected a region and a material, both given"),
                 ));
             }
+            entries.push((r, m, k + 1));
+        }
+        MaterialMap::from_entries(entries)
+    }
+
+    /// The map of (region, material, column) entries: a region mapped twice,
+    /// or none at all, is an error.
+    fn from_entries(given: Vec<(&str, &str, usize)>) -> Result<MaterialMap, MaterialMapError> {
+        let mut entries: Vec<MaterialMapEntry> = Vec::with_capacity(given.len());
+        for (r, m, column) in given {
             if entries.iter().any(|e| e.region == r) {
                 return Err(err(column, format!("region `{r}` is mapped twice")));
             }

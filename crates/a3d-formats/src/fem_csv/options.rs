@@ -17,15 +17,7 @@ pub struct CsvOptions {
 /// Parses `x=X (m),y=Y,pwp=PWP` into a column mapping. A field given twice, or a
 /// header given to two fields, is an error.
 pub fn parse_columns_option(s: &str) -> Result<Vec<(Field, String)>, String> {
-    let pairs = s
-        .split(',')
-        .filter(|p| !p.trim().is_empty())
-        .map(|pair| {
-            pair.split_once('=')
-                .map(|(k, v)| (k.trim(), v.trim()))
-                .ok_or_else(|| format!("`{pair}`: expected field=header"))
-        })
-        .collect::<Result<Vec<_>, String>>()?;
+    let pairs = crate::lex::key_value_pairs(s, "field=header")?;
     columns_from_pairs(&pairs)
 }
 

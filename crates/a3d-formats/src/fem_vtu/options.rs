@@ -81,15 +81,7 @@ pub enum StressRule {
 
 /// Parses `pwp=p,stress=sigma_total,saturation=S,region=mat` (array names).
 pub fn parse_arrays_option(s: &str) -> Result<Vec<(Role, String)>, String> {
-    let pairs = s
-        .split(',')
-        .filter(|p| !p.trim().is_empty())
-        .map(|pair| {
-            pair.split_once('=')
-                .map(|(k, v)| (k.trim(), v.trim()))
-                .ok_or_else(|| format!("`{pair}`: expected role=array"))
-        })
-        .collect::<Result<Vec<_>, String>>()?;
+    let pairs = crate::lex::key_value_pairs(s, "role=array")?;
     arrays_from_pairs(&pairs)
 }
 

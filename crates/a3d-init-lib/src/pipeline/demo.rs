@@ -82,10 +82,12 @@ pub struct DemoReport {
     pub seconds: f64,
 }
 
-/// The shipped slope fixture: beside the sources, else under the current
-/// folder.
+/// The shipped slope fixture: in the repository the sources were built from
+/// (two folders above this crate's), else under the current folder.
 fn fixture_dir() -> Result<PathBuf, PipelineError> {
-    let built_in = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/slope");
+    let crate_dir = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let repository = crate_dir.parent().and_then(Path::parent).unwrap_or(crate_dir);
+    let built_in = repository.join("fixtures/slope");
     for dir in [built_in, PathBuf::from("fixtures/slope")] {
         if dir.join("slope.GOM").exists() {
             return Ok(dir);
