@@ -86,7 +86,10 @@ pub struct DemoReport {
 /// (two folders above this crate's), else under the current folder.
 fn fixture_dir() -> Result<PathBuf, PipelineError> {
     let crate_dir = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let repository = crate_dir.parent().and_then(Path::parent).unwrap_or(crate_dir);
+    let repository = crate_dir
+        .parent()
+        .and_then(Path::parent)
+        .unwrap_or(crate_dir);
     let built_in = repository.join("fixtures/slope");
     for dir in [built_in, PathBuf::from("fixtures/slope")] {
         if dir.join("slope.GOM").exists() {
