@@ -29,9 +29,7 @@ from __future__ import annotations
 import json
 import logging
 import os
-from typing import Any, Dict, Iterable, Mapping, Optional, Sequence, Tuple, Union
-
-from ._options import Literal
+from typing import Any, Dict, Iterable, Literal, Mapping, Optional, Sequence, Tuple, Union, get_args
 
 import numpy as np
 
@@ -186,13 +184,14 @@ def inspect(model: PathLike) -> Model:
     return Model(json.loads(summary), points)
 
 
-_KERNELS = ("cubic", "gaussian", "wendland")
-_OUTSIDE = ("error", "nearest", "skip")
-_STRESS = ("auto", "fem", "geostatic", "equilibrium", "zero")
-_MIXED = ("mean", "per-mp")
-_SIGNS = ("geostudio", "tension-positive", "ogs")
-_METHODS = ("srm", "morgenstern-price", "spencer", "bishop", "janbu", "ordinary")
-_NORMS = ("l1", "l2", "relative")
+# The values each choice takes: the Literal types' own (one list per choice).
+_KERNELS = get_args(Kernel)
+_OUTSIDE = get_args(Outside)
+_STRESS = get_args(StressSource)
+_MIXED = get_args(MixedState)
+_SIGNS = get_args(FemSign)
+_METHODS = get_args(FosMethod)
+_NORMS = get_args(Norm)
 
 
 def _fem_arguments(
