@@ -57,13 +57,21 @@ fn no_stub_macros_in_the_library() {
 
 /// The program's sources: the binary's `src/` and every crate's `src/`.
 fn source_files() -> Vec<PathBuf> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut files = Vec::new();
-    rust_files(&root.join("src"), &mut files);
-    for krate in std::fs::read_dir(root.join("crates")).unwrap() {
-        rust_files(&krate.unwrap().path().join("src"), &mut files);
+    for src in source_roots() {
+        rust_files(&src, &mut files);
     }
     files
+}
+
+/// The `src/` folders: the binary's and every crate's.
+fn source_roots() -> Vec<PathBuf> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut roots = vec![root.join("src")];
+    for krate in std::fs::read_dir(root.join("crates")).unwrap() {
+        roots.push(krate.unwrap().path().join("src"));
+    }
+    roots
 }
 
 /// The modules `tests/it/main.rs` declares, in order.
@@ -369,13 +377,8 @@ fn named_modules(
 /// other (a shared type goes to a file both import).
 #[test]
 fn no_two_files_import_each_other() {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut sources = vec![root.join("src")];
-    for krate in std::fs::read_dir(root.join("crates")).unwrap() {
-        sources.push(krate.unwrap().path().join("src"));
-    }
     let mut circles = Vec::new();
-    for src in sources {
+    for src in source_roots() {
         let modules = modules_of(&src);
         let mut edges = std::collections::BTreeSet::new();
         for (module, file) in &modules {
