@@ -62,6 +62,8 @@ def test_map_writes_what_the_cli_writes(tmp_path, caplog):
     with pytest.raises(a3d_init.OutputError) as e:
         a3d_init.map(fem=SAND, model=SLOPE, out=out)
     assert e.value.kind == "output" and "exists" in str(e.value)
+    # The library names the setting; the binding spells it as the keyword.
+    assert "replacing an output (force=True)" in str(e.value), str(e.value)
     a3d_init.map(SAND, SLOPE, out, force=True)
     # The binary, same inputs: the same bytes.
     cli_out = tmp_path / "cli"

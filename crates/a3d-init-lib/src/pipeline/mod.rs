@@ -56,8 +56,9 @@ pub enum PipelineError {
     /// a sync failed).
     #[error("{0}")]
     Output(String),
-    /// An output that exists, and replacing it was not allowed (`force`).
-    #[error("{} exists; replacing it needs `force`", .0.display())]
+    /// An output that exists, and replacing it was not asked for
+    /// ([`setting::Setting::Replace`]).
+    #[error("{} exists, and replacing an output was not asked for", .0.display())]
     Exists(std::path::PathBuf),
 }
 
