@@ -67,13 +67,10 @@ pub(super) fn check_columns_option(columns: &[(Field, String)]) -> Result<(), St
 pub fn parse_units_option(s: &str) -> Result<UnitOverride, String> {
     let mut length = None;
     let mut pressure = None;
-    for pair in s.split(',').filter(|p| !p.trim().is_empty()) {
-        let (k, v) = pair
-            .split_once('=')
-            .ok_or_else(|| format!("`{pair}`: expected length=… or pressure=…"))?;
-        match k.trim() {
-            "length" => length = Some(v.trim()),
-            "pressure" => pressure = Some(v.trim()),
+    for (k, v) in crate::lex::key_value_pairs(s, "length=… or pressure=…")? {
+        match k {
+            "length" => length = Some(v),
+            "pressure" => pressure = Some(v),
             other => return Err(format!("`{other}`: expected length or pressure")),
         }
     }
