@@ -105,6 +105,11 @@ fn file_name(reader: &str) -> &'static str {
         "fem-vtu" => "result.vtu",
         "fem-pvd" => "series.pvd",
         "hhbf" => "example.HHBF",
+        "cbgeo-json" => "mpm.json",
+        "cbgeo-mesh" => "mesh.txt",
+        "cbgeo-particles" => "particles.txt",
+        "cbgeo-stresses" => "particles-stresses.txt",
+        "cbgeo-pore-pressures" => "particles-pore-pressures.txt",
         other => panic!("unknown reader `{other}`"),
     }
 }
@@ -132,6 +137,20 @@ fn read(reader: &str, path: &Path) -> Result<(), String> {
                 .map_err(|x| e(&x))
         }
         "ply" => ply::read_ply_mesh(path).map(drop).map_err(|x| e(&x)),
+        "cbgeo-json" => a3d_init::formats::cbgeo::read(path)
+            .map(drop)
+            .map_err(|x| e(&x)),
+        "cbgeo-mesh" | "cbgeo-particles" | "cbgeo-stresses" | "cbgeo-pore-pressures" => {
+            use a3d_init::formats::cbgeo::text;
+            let t = std::fs::read_to_string(path).unwrap();
+            match reader {
+                "cbgeo-mesh" => text::read_mesh(path, &t, 2, 4).map(drop),
+                "cbgeo-particles" => text::read_particles(path, &t, 2).map(drop),
+                "cbgeo-stresses" => text::read_stresses(path, &t).map(drop),
+                _ => text::read_id_values(path, &t).map(drop),
+            }
+            .map_err(|x| e(&x))
+        }
         "hhbf" => a3d_init::formats::hhbf::read(path)
             .map(drop)
             .map_err(|x| e(&x)),
@@ -188,6 +207,13 @@ fn every_rule_example_of_every_format_page_holds() {
             }
             let dir = tmp.path().join(format!("{name}-{k}"));
             std::fs::create_dir_all(&dir).unwrap();
+            // A run file reads the files beside it: the base's folder comes along.
+            if let (Some(base), "cbgeo-json") = (&rule.base, rule.reader.as_str()) {
+                for f in std::fs::read_dir(fixture(base).parent().unwrap()).unwrap() {
+                    let f = f.unwrap().path();
+                    std::fs::copy(&f, dir.join(f.file_name().unwrap())).unwrap();
+                }
+            }
             let path = dir.join(file_name(&rule.reader));
             std::fs::write(&path, &bytes).unwrap();
             let got = read(&rule.reader, &path);

@@ -9,6 +9,7 @@ mod common;
 mod anura3d_documents;
 mod axisymmetric;
 mod calibrate;
+mod cbgeo;
 mod cli;
 mod demo;
 mod diff;

@@ -21,6 +21,8 @@
 // Numerical kernels index several small arrays with one loop counter.
 #![allow(clippy::needless_range_loop)]
 
+pub mod cbgeo;
+mod cbgeo_quadrature;
 pub mod place;
 mod quad4;
 pub mod simplex;

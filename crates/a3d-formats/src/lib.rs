@@ -5,6 +5,7 @@
 pub mod error;
 
 pub use error::{FormatError, ParseError, Position};
+pub mod cbgeo;
 pub mod cps;
 pub mod cps_template;
 pub mod extent;

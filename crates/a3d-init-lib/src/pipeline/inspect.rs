@@ -13,7 +13,6 @@ use super::fem::{FemOptions, LoadedFem};
 use super::io::output::{ReadLog, write_new};
 use super::project::Project;
 use crate::diagnose::Extent;
-use crate::formats::cps::CpsDocument;
 use crate::formats::fem::FemReadReport;
 use crate::formats::fem::StepChoice;
 use crate::formats::fem_vtu;
@@ -76,10 +75,7 @@ pub struct ProjectSummary {
 impl ProjectSummary {
     /// The summary of a loaded project.
     pub fn of(p: &Project) -> ProjectSummary {
-        let g = p
-            .cps
-            .as_ref()
-            .map_or(crate::model::DEFAULT_GRAVITY, CpsDocument::gravity);
+        let g = p.gravity();
         let mesh = &p.model.mesh;
         ProjectSummary {
             files: p.files.clone(),

@@ -11,6 +11,7 @@
 //! This module reads files (through [`crate::formats`]) but never prints.
 
 pub mod calibrate;
+pub mod cbgeo;
 pub mod check;
 pub mod demo;
 pub mod diff;

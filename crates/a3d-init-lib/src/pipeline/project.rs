@@ -21,8 +21,12 @@ pub struct Project {
     pub info: GomInfo,
     /// The CPS `$$COMPUTATION_METHOD` (MPM-MIXED when there is no CPS).
     pub method: ComputationMethod,
-    /// The MPs Anura3D creates, in its order.
+    /// The MPs Anura3D creates, in its order (for a CB-Geo model: its
+    /// particles, in its order).
     pub points: Vec<MaterialPoint>,
+    /// A CB-Geo model instead of an Anura3D one (`map --mpm mpm.json`): the
+    /// model as read; `files.gom` is then its run file and there is no CPS.
+    pub cbgeo: Option<Box<crate::pipeline::cbgeo::CbGeoTarget>>,
 }
 
 impl Project {
@@ -43,6 +47,9 @@ impl Project {
     /// Reads a project (a GOM, CPS, GiD `-2.dat` or folder) and places its MPs
     /// for its computation method; errors are positioned.
     pub fn load(path: &Path) -> Result<Project, PipelineError> {
+        if crate::formats::cbgeo::is_run_file(path) {
+            return crate::pipeline::cbgeo::load(path);
+        }
         let files = project::discover(path)?;
         let gom = GomDocument::read(&files.gom)?;
         let cps = files.cps.as_deref().map(CpsDocument::read).transpose()?;
@@ -107,7 +114,18 @@ impl Project {
             info,
             method,
             points,
+            cbgeo: None,
         })
+    }
+
+    /// The gravitational acceleration along −y (m/s²): the CPS's (the
+    /// default without one), or a CB-Geo run file's.
+    pub fn gravity(&self) -> f64 {
+        match (&self.cbgeo, &self.cps) {
+            (Some(cb), _) => -cb.model.gravity[1],
+            (None, Some(cps)) => cps.gravity(),
+            (None, None) => crate::model::DEFAULT_GRAVITY,
+        }
     }
 
     /// Dimension count (2 or 3).

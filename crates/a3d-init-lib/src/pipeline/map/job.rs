@@ -56,7 +56,7 @@ pub fn compute(job: &MapJob) -> Result<Mapped, PipelineError> {
 
 /// A model without a CPS is refused unless the job writes a default one.
 fn check_cps(project: &Project, job: &MapJob) -> Result<(), PipelineError> {
-    if project.files.cps.is_none() && !job.generate_cps {
+    if project.files.cps.is_none() && !job.generate_cps && project.cbgeo.is_none() {
         return Err(PipelineError::Input(
             crate::formats::project::missing_cps_message(&project.files),
         ));

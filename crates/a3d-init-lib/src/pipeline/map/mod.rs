@@ -155,7 +155,9 @@ pub fn map(
     let mut assumed = stress::assumed_defaults(&project, source, &quantities);
     notes.extend(assumed.iter().map(stress::default_note));
     warnings.extend(stress.warnings);
-    notes.push(report::mapf_note(dim).into());
+    if project.cbgeo.is_none() {
+        notes.push(report::mapf_note(dim).into());
+    }
 
     let null_points = interpolate::null_points(&result);
     warnings.extend(interpolate::null_point_warning(null_points, config.outside));

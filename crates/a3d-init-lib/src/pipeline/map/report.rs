@@ -134,6 +134,11 @@ pub struct MapReport {
     /// method; left out of report.json for every other step.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub failure: Option<crate::pipeline::stability::failure::FailureStep>,
+    /// A CB-Geo model: the branch, the files written, units, signs, the
+    /// stress each particle gets and the particle order; left out of
+    /// report.json for an Anura3D model.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cbgeo: Option<crate::pipeline::cbgeo::write::CbGeoReport>,
     pub notes: Vec<String>,
     pub warnings: Vec<String>,
     pub timings_ms: Vec<(String, f64)>,
@@ -145,15 +150,18 @@ pub struct MapReport {
 pub struct Hashing(std::thread::JoinHandle<Result<Vec<InputFile>, PipelineError>>);
 
 impl Hashing {
-    /// Starts hashing the GOM, the CPS and the FEM files.
+    /// Starts hashing the model's files (GOM and CPS, or a CB-Geo run file
+    /// and the files it names) and the FEM files.
     pub fn start(project: &Project, fem: &LoadedFem) -> Hashing {
-        Hashing(describe_in_background(
-            std::iter::once(&project.files.gom)
-                .chain(&project.files.cps)
-                .chain(&fem.paths)
-                .cloned()
-                .collect(),
-        ))
+        let mut paths = vec![project.files.gom.clone()];
+        paths.extend(project.files.cps.iter().cloned());
+        if let Some(t) = &project.cbgeo {
+            // The files a CB-Geo run file names (mesh, particles, sets, …).
+            let m = &t.model;
+            paths.extend(m.referenced.iter().map(|r| m.dir.join(&r.name)));
+        }
+        paths.extend(fem.paths.iter().cloned());
+        Hashing(describe_in_background(paths))
     }
 
     /// Waits for the hashes.
@@ -268,6 +276,11 @@ pub fn build_report(r: ReportInputs<'_>) -> MapReport {
         assumed_defaults: r.assumed_defaults,
         equilibrium: r.equilibrium,
         failure: None,
+        cbgeo: r
+            .project
+            .cbgeo
+            .as_ref()
+            .map(|t| crate::pipeline::cbgeo::write::report(t)),
         notes: r.notes,
         warnings: r.warnings,
         timings_ms: r.timings_ms,

@@ -5,7 +5,6 @@
 //! MPs the kernel skipped get a zero state. The physics is in [`crate::state`].
 
 use super::{FemCloud, StressSource};
-use crate::formats::cps::CpsDocument;
 use crate::kernel::mapper::{MapSettings, OutsidePolicy, PointStatus};
 use crate::model::{MpState, Quantity, StressComponent};
 use crate::pipeline::{PipelineError, Project};
@@ -23,10 +22,7 @@ pub struct DerivedStress {
 
 /// Gravity (m/s²): the CPS's, or Anura3D's default without a CPS.
 pub fn gravity(project: &Project) -> f64 {
-    project
-        .cps
-        .as_ref()
-        .map_or(crate::model::DEFAULT_GRAVITY, CpsDocument::gravity)
+    project.gravity()
 }
 
 /// True when the stress `source` `fem` on a 2D `project` lacks σzz among the
@@ -204,7 +200,7 @@ pub fn geostatic_stress(
             geostatic::geostatic_tensor(sigma_v[i], k0, states[i].pwp, states[i].saturation);
     }
     Ok(vec![format!(
-        "total stress from the overburden of the GOM materials along the vertical (g = {g} m/s²; γ per element, averaged over 4–5 points inside it: saturated below the water table, from the retention curve or dry above), σh = K0·σ'v + S·p with each material's K0"
+        "total stress from the overburden of the model's materials along the vertical (g = {g} m/s²; γ per element, averaged over 4–5 points inside it: saturated below the water table, from the retention curve or dry above), σh = K0·σ'v + S·p with each material's K0"
     )])
 }
 

@@ -11,14 +11,17 @@ use crate::pipeline::PipelineError;
 use crate::pipeline::map::Mapped;
 
 /// A folder files are written into.
-struct Folder<'a>(&'a Path);
+pub struct Folder<'a>(pub &'a Path);
 
 impl Folder<'_> {
-    fn path(&self, name: &str) -> PathBuf {
+    /// The path of `name` in the folder.
+    pub fn path(&self, name: &str) -> PathBuf {
         self.0.join(name)
     }
 
-    fn write(
+    /// Writes `name` through `fill` (buffered, page-cache-bypassing for
+    /// large tables).
+    pub fn write(
         &self,
         name: &str,
         fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
@@ -37,8 +40,15 @@ impl Folder<'_> {
         Ok(())
     }
 
-    fn copy(&self, from: &Path, name: &str) -> Result<(), PipelineError> {
-        std::fs::copy(from, self.path(name))
+    /// Copies `from` byte for byte to `name` (whose folders are created).
+    pub fn copy(&self, from: &Path, name: &str) -> Result<(), PipelineError> {
+        let to = self.path(name);
+        if let Some(parent) = to.parent() {
+            std::fs::create_dir_all(parent).map_err(|e| {
+                PipelineError::Output(format!("creating {}: {e}", parent.display()))
+            })?;
+        }
+        std::fs::copy(from, to)
             .map_err(|e| PipelineError::Output(format!("copying {}: {e}", from.display())))?;
         Ok(())
     }
@@ -56,6 +66,17 @@ pub fn write_project(
     fem_vtu: bool,
 ) -> Result<Vec<String>, PipelineError> {
     let out = Folder(dir);
+    let mut written = match &mapped.project.cbgeo {
+        Some(cb) => crate::pipeline::cbgeo::write::write_model(mapped, cb, &out)?,
+        None => write_anura3d(mapped, &out)?,
+    };
+    write_diagnostics(mapped, &out, fem_vtu, &mut written)?;
+    Ok(written)
+}
+
+/// The ready-to-run Anura3D files: GOM, CPS (with OPD and HHBF where they
+/// belong) and the MAPF.
+fn write_anura3d(mapped: &Mapped, out: &Folder<'_>) -> Result<Vec<String>, PipelineError> {
     let project = &mapped.project;
     let name = &project.files.name;
     let dim = project.model.mesh.dimension.n_dim();
@@ -114,6 +135,18 @@ pub fn write_project(
         )
     })?;
     written.push(mapf_name);
+    Ok(written)
+}
+
+/// The diagnostics beside the model's files: `mps.csv`, `mps.vtu`,
+/// `fem.vtu` (small FEMs, or when asked) and `report.json`.
+fn write_diagnostics(
+    mapped: &Mapped,
+    out: &Folder<'_>,
+    fem_vtu: bool,
+    written: &mut Vec<String>,
+) -> Result<(), PipelineError> {
+    let project = &mapped.project;
     out.write("mps.csv", |w| {
         mps_table::write_states(w, &project.points, &mapped.states, &mapped.diagnostics)
     })?;
@@ -162,5 +195,5 @@ pub fn write_project(
         .map_err(|e| PipelineError::Output(format!("report.json: {e}")))?;
     out.write("report.json", |w| w.write_all(json.as_bytes()))?;
     written.push("report.json".into());
-    Ok(written)
+    Ok(())
 }

@@ -404,10 +404,7 @@ pub fn analyse_state(
 ) -> Result<FosAnalysis, PipelineError> {
     runner::check_damping(options.damping)?;
     let project = &start.project;
-    let gravity = project
-        .cps
-        .as_ref()
-        .map_or(crate::model::DEFAULT_GRAVITY, CpsDocument::gravity);
+    let gravity = project.gravity();
     let le_options = options.le_options();
     let run_srm = options.method == FosMethod::Srm || options.with_srm;
     let le = crate::pipeline::stability::slope::analyse_state(

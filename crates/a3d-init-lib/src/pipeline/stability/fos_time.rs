@@ -23,7 +23,6 @@ use std::time::Instant;
 
 use plotters::style::RGBColor;
 
-use crate::formats::cps::CpsDocument;
 use crate::formats::fem::StepChoice;
 use crate::formats::fem_csv::CsvOptions;
 use crate::formats::fem_vtu::{VtuOptions, pvd};
@@ -341,10 +340,7 @@ fn point(time: f64, kind: &'static str, r: &LeReport) -> CurvePoint {
 /// The section of `project` with every element saturated (the unit weights
 /// then follow each field's pore pressures).
 fn series_section(project: &Project) -> Result<Section, PipelineError> {
-    let gravity = project
-        .cps
-        .as_ref()
-        .map_or(crate::model::DEFAULT_GRAVITY, CpsDocument::gravity);
+    let gravity = project.gravity();
     le::build_section(
         &project.model,
         gravity,

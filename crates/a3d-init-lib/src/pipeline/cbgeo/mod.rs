@@ -1,0 +1,350 @@
+//! A CB-Geo mpm model as a [`Project`]: its particles placed as CB-Geo places
+//! them (`"file"` coordinates in file order; `"gauss"` points by
+//! [`crate::element::cbgeo`]), each in its cell, with its material and
+//! volume, and its materials and gravity in a3d-init's units, so that one
+//! mapping serves Anura3D and CB-Geo. The writer is [`write`].
+//!
+//! What is translated, and how:
+//! - particle ids: CB-Geo counts from 0 over all generators in order; the
+//!   MP id is that + 1;
+//! - volumes: CB-Geo's default, the cell's measure shared equally among the
+//!   particles in it;
+//! - materials: `density` (kg/m³), `porosity`, `youngs_modulus` and
+//!   `cohesion` (Pa → kPa), `poisson_ratio`, `friction` and `dilation`
+//!   (degrees), `tension_cutoff` (Pa → kPa). A single-phase material is dry
+//!   (its `density` is the bulk density; stresses are total); the solid of a
+//!   two-phase generator is a saturated, coupled material with the liquid's
+//!   density.
+//! - K0 (for `--stress geostatic`; CB-Geo has none): ν/(1 − ν) for an
+//!   elastic material (the state its own gravity loading reaches under
+//!   lateral restraint), Jaky's 1 − sin φ for Mohr–Coulomb;
+//! - gravity: `external_loading_conditions.gravity`, which must point along
+//!   −y (or be zero).
+
+use std::path::Path;
+
+use crate::element::cbgeo::{CbGeoCell, gauss_points};
+use crate::formats::cbgeo::{self, CbGeoModel, Particles};
+use crate::formats::gom::GomInfo;
+use crate::formats::project::ProjectFiles;
+use crate::model::{
+    AnuraModel, ComputationMethod, Dimension, ElementType, Material, MaterialPoint, Mesh,
+};
+use crate::pipeline::{PipelineError, Project};
+
+pub mod write;
+
+/// A CB-Geo model behind a [`Project`]: the model as read, and which
+/// particles are two-phase (in particle order).
+#[derive(Clone, Debug)]
+pub struct CbGeoTarget {
+    pub model: CbGeoModel,
+    pub two_phase: Vec<bool>,
+}
+
+/// Loads the CB-Geo model of the run file `path` and places its particles.
+pub fn load(path: &Path) -> Result<Project, PipelineError> {
+    let cb = cbgeo::read(path)?;
+    let element_type = match cb.cell {
+        CbGeoCell::Quad4 => ElementType::Quad4,
+        CbGeoCell::Tri3 => ElementType::Tri3,
+        CbGeoCell::Hex8 => {
+            return Err(PipelineError::Input(format!(
+                "{}: ED3H8 cells: a3d-init maps CB-Geo models in 2D (ED2Q4, ED2T3) so far",
+                path.display()
+            )));
+        }
+    };
+    if cb.gravity[0] != 0.0 || cb.gravity[1] > 0.0 {
+        return Err(PipelineError::Input(format!(
+            "{}: gravity ({}, {}) m/s²: a3d-init's stresses take gravity along −y (x horizontal, y up)",
+            path.display(),
+            cb.gravity[0],
+            cb.gravity[1]
+        )));
+    }
+    let materials = materials(&cb);
+    let mesh = Mesh {
+        dimension: Dimension::PlaneStrain,
+        element_type,
+        nodes: cb.mesh.nodes.clone(),
+        connectivity: cb.mesh.cells.iter().flatten().copied().collect(),
+    };
+    let (points, two_phase) = particles(&cb, &mesh)?;
+    let n_cells = cb.mesh.cells.len();
+    let mut element_material = vec![0u32; n_cells];
+    let mut counts = vec![(0u32, 0u32); n_cells];
+    for p in &points {
+        let e = p.element as usize;
+        element_material[e] = p.material;
+        counts[e].0 += 1;
+    }
+    let name = path
+        .file_stem()
+        .map_or_else(|| "mpm".into(), |s| s.to_string_lossy().into_owned());
+    let files = ProjectFiles {
+        name,
+        dir: cb.dir.clone(),
+        gom: path.to_path_buf(),
+        cps: None,
+        cps_version: None,
+        opd: None,
+        stage: None,
+        notes: vec![format!(
+            "CB-Geo model for {}: {}",
+            cb.branch.name(),
+            cb.branch_because
+        )],
+        warnings: Vec::new(),
+    };
+    let model = AnuraModel {
+        solid_fixity: vec![[false; 3]; mesh.nodes.len()],
+        liquid_fixity: vec![[false; 3]; mesh.nodes.len()],
+        mesh,
+        materials,
+        element_material,
+        mp_counts: counts,
+        damping: None,
+    };
+    Ok(Project {
+        files,
+        gom_version: String::new(),
+        cps: None,
+        model,
+        info: GomInfo::default(),
+        method: ComputationMethod::MpmMp,
+        points,
+        cbgeo: Some(Box::new(CbGeoTarget {
+            model: cb,
+            two_phase,
+        })),
+    })
+}
+
+/// The model's materials in a3d-init's terms, in run-file order (index =
+/// position + 1).
+fn materials(cb: &CbGeoModel) -> Vec<Material> {
+    cb.materials
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            let two_phase_solid = cb
+                .generators
+                .iter()
+                .find(|g| g.two_phase() && g.material_ids.first() == Some(&m.id));
+            let kind = if two_phase_solid.is_some() {
+                "saturated_material_coupled"
+            } else {
+                "dry_material"
+            };
+            let name = m
+                .name
+                .clone()
+                .unwrap_or_else(|| format!("material {}", m.id));
+            let mut mat = Material::new(i as u32 + 1, name, kind);
+            let kpa = |v: f64| v / 1000.0;
+            mat.model = Some(
+                if m.kind.starts_with("LinearElastic") {
+                    "linear_elasticity"
+                } else if m.kind.starts_with("MohrCoulomb") {
+                    "mohr_coulomb"
+                } else {
+                    m.kind.as_str()
+                }
+                .to_string(),
+            );
+            mat.density_solid = m.number("density");
+            mat.porosity = if two_phase_solid.is_some() {
+                m.number("porosity")
+            } else {
+                None
+            };
+            mat.density_liquid = two_phase_solid
+                .and_then(|g| g.material_ids.get(1))
+                .and_then(|id| cb.material(*id))
+                .and_then(|w| w.number("density"));
+            mat.young_modulus = m.number("youngs_modulus").map(kpa);
+            mat.poisson_ratio = m.number("poisson_ratio");
+            mat.friction_angle = m.number("friction");
+            mat.dilatancy_angle = m.number("dilation");
+            mat.cohesion = m.number("cohesion").map(kpa);
+            mat.tensile_strength = m.number("tension_cutoff").map(kpa);
+            // CB-Geo holds no K0: the at-rest value its own gravity loading
+            // gives under lateral restraint (ν/(1 − ν), elastic), or Jaky's
+            // 1 − sin φ for a frictional material.
+            mat.k0 = match (mat.friction_angle, mat.poisson_ratio) {
+                (Some(phi), _) if mat.model.as_deref() == Some("mohr_coulomb") => {
+                    Some(1.0 - phi.to_radians().sin())
+                }
+                (_, Some(nu)) if nu < 1.0 => Some(nu / (1.0 - nu)),
+                _ => None,
+            };
+            mat.properties = m
+                .numbers
+                .iter()
+                .map(|(k, v)| (k.clone(), v.to_string()))
+                .collect();
+            mat
+        })
+        .collect()
+}
+
+/// Every particle in CB-Geo's order (its cell, material and volume), and
+/// whether each is two-phase.
+fn particles(
+    cb: &CbGeoModel,
+    mesh: &Mesh,
+) -> Result<(Vec<MaterialPoint>, Vec<bool>), PipelineError> {
+    let index_of = |id: u32| {
+        cb.materials
+            .iter()
+            .position(|m| m.id == id)
+            .map_or(0, |i| i as u32 + 1)
+    };
+    let corners = |c: usize| -> Vec<[f64; 3]> {
+        cb.mesh.cells[c]
+            .iter()
+            .map(|&n| cb.mesh.nodes[n as usize])
+            .collect()
+    };
+    let locator = Locator::new(mesh);
+    let mut points: Vec<MaterialPoint> = Vec::new();
+    let mut two_phase = Vec::new();
+    for g in &cb.generators {
+        let material = index_of(g.material_ids[0]);
+        match &g.particles {
+            Particles::Gauss { per_dir, cset_id } => {
+                let cells: Vec<usize> = if *cset_id == -1 {
+                    (0..cb.mesh.cells.len()).collect()
+                } else {
+                    cb.cell_sets
+                        .iter()
+                        .find(|(id, _)| id == cset_id)
+                        .map(|(_, s)| s.iter().map(|&c| c as usize).collect())
+                        .unwrap_or_default()
+                };
+                for c in cells {
+                    for (k, x) in gauss_points(cb.cell, *per_dir, &corners(c))
+                        .into_iter()
+                        .enumerate()
+                    {
+                        points.push(MaterialPoint {
+                            id: points.len() as u32 + 1,
+                            element: c as u32,
+                            material,
+                            local: k as u32 + 1,
+                            position: x,
+                            volume: 0.0,
+                        });
+                    }
+                }
+            }
+            Particles::File { path, coordinates } => {
+                for (i, x) in coordinates.iter().enumerate() {
+                    let c = locator.find(mesh, *x).ok_or_else(|| {
+                        PipelineError::Input(format!(
+                            "{}: particle {i} at ({}, {}) lies in no cell of the mesh: CB-Geo drops it, and the stresses file would no longer match its particles",
+                            path.display(),
+                            x[0],
+                            x[1]
+                        ))
+                    })?;
+                    points.push(MaterialPoint {
+                        id: points.len() as u32 + 1,
+                        element: c as u32,
+                        material,
+                        local: 0,
+                        position: *x,
+                        volume: 0.0,
+                    });
+                }
+            }
+        }
+        two_phase.resize(points.len(), g.two_phase());
+    }
+    if points.len() > u32::MAX as usize - 1 {
+        return Err(PipelineError::Input(
+            "more particles than a3d-init numbers".into(),
+        ));
+    }
+    // CB-Geo's default volume: the cell's measure over its particle count.
+    let mut per_cell = vec![0u32; cb.mesh.cells.len()];
+    for p in &points {
+        per_cell[p.element as usize] += 1;
+    }
+    let mut local = vec![0u32; cb.mesh.cells.len()];
+    for p in &mut points {
+        let c = p.element as usize;
+        p.volume = cb.cell.measure(&corners(c)) / f64::from(per_cell[c]);
+        if p.local == 0 {
+            local[c] += 1;
+            p.local = local[c];
+        }
+    }
+    Ok((points, two_phase))
+}
+
+/// Finding the cell that holds a point: a uniform grid of the cells'
+/// bounding boxes, then the element's own containment test.
+struct Locator {
+    lo: [f64; 2],
+    size: f64,
+    dims: [usize; 2],
+    buckets: Vec<Vec<u32>>,
+}
+
+impl Locator {
+    fn new(mesh: &Mesh) -> Locator {
+        let (lo, hi) = mesh.bounding_box();
+        let n = mesh.n_elements().max(1);
+        let area = ((hi[0] - lo[0]) * (hi[1] - lo[1])).max(f64::MIN_POSITIVE);
+        let size = (area / n as f64).sqrt().max(1e-12);
+        let dims = [
+            (((hi[0] - lo[0]) / size) as usize + 1).min(1 << 12),
+            (((hi[1] - lo[1]) / size) as usize + 1).min(1 << 12),
+        ];
+        let size = ((hi[0] - lo[0]) / dims[0] as f64)
+            .max((hi[1] - lo[1]) / dims[1] as f64)
+            .max(1e-12);
+        let mut buckets = vec![Vec::new(); dims[0] * dims[1]];
+        for e in 0..mesh.n_elements() {
+            let (mut a, mut b) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            for &n in mesh.element_nodes(e) {
+                for k in 0..2 {
+                    a[k] = a[k].min(mesh.nodes[n as usize][k]);
+                    b[k] = b[k].max(mesh.nodes[n as usize][k]);
+                }
+            }
+            let cell = |v: f64, k: usize| {
+                (((v - lo[k]) / size).floor().max(0.0) as usize).min(dims[k] - 1)
+            };
+            for i in cell(a[0], 0)..=cell(b[0], 0) {
+                for j in cell(a[1], 1)..=cell(b[1], 1) {
+                    buckets[j * dims[0] + i].push(e as u32);
+                }
+            }
+        }
+        Locator {
+            lo: [lo[0], lo[1]],
+            size,
+            dims,
+            buckets,
+        }
+    }
+
+    /// The first cell (mesh order) that holds `x`, on its boundary included.
+    fn find(&self, mesh: &Mesh, x: [f64; 3]) -> Option<usize> {
+        let at = |k: usize| {
+            let v = ((x[k] - self.lo[k]) / self.size).floor();
+            (v >= -1.0 && v <= self.dims[k] as f64)
+                .then(|| (v.max(0.0) as usize).min(self.dims[k] - 1))
+        };
+        let (i, j) = (at(0)?, at(1)?);
+        let element = crate::element::mesh_element(mesh.element_type);
+        self.buckets[j * self.dims[0] + i]
+            .iter()
+            .map(|&e| e as usize)
+            .filter(|&e| element.contains(mesh, e, x, 1e-9))
+            .min()
+    }
+}
