@@ -1,7 +1,7 @@
-// Generated from CB-Geo mpm's `include/elements/{2d,3d}/*_quadrature.tcc` (develop
-// 53fcb76; the geomechanics/mpm fork 4044dbe has the same tables): each
-// expression evaluated in IEEE double as the C++ does, written so that the
-// literal reads back to the same bits. Local coordinates, in CB-Geo's point order.
+//! Generated from CB-Geo mpm's `include/elements/{2d,3d}/*_quadrature.tcc` (develop
+//! 53fcb76; the geomechanics/mpm fork 4044dbe has the same tables): each
+//! expression evaluated in IEEE double as the C++ does, written so that the
+//! literal reads back to the same bits. Local coordinates, in CB-Geo's point order.
 
 /// `QQ1`: 1 point(s) of the quadrilateral, CB-Geo's `QuadrilateralQuadrature<2, 1>`.
 pub const QQ1: [[f64; 2]; 1] = [[0.0, 0.0]];

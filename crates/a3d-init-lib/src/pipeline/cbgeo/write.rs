@@ -18,8 +18,8 @@ use super::CbGeoTarget;
 use crate::formats::cbgeo::{self, Branch};
 use crate::model::MpState;
 use crate::pipeline::PipelineError;
+use crate::pipeline::io::folder::Folder;
 use crate::pipeline::map::Mapped;
-use crate::pipeline::map::write::Folder;
 
 /// What the CB-Geo files hold, for report.json.
 #[derive(Clone, Debug, Serialize)]

@@ -3,56 +3,12 @@
 //! exact-point mode) and the diagnostics (`mps.csv`, `mps.vtu`, `fem.vtu`,
 //! `report.json`) into a folder the caller prepared (the CLI's staging folder).
 
-use std::io::{BufWriter, Write};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use crate::formats::{mapf, mps_table, vtu};
 use crate::pipeline::PipelineError;
+use crate::pipeline::io::folder::Folder;
 use crate::pipeline::map::Mapped;
-
-/// A folder files are written into.
-pub struct Folder<'a>(pub &'a Path);
-
-impl Folder<'_> {
-    /// The path of `name` in the folder.
-    pub fn path(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-
-    /// Writes `name` through `fill` (buffered, page-cache-bypassing for
-    /// large tables).
-    pub fn write(
-        &self,
-        name: &str,
-        fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
-    ) -> Result<(), PipelineError> {
-        let path = self.path(name);
-        let io =
-            |e: std::io::Error| PipelineError::Output(format!("writing {}: {e}", path.display()));
-        // Large tables bypass the page cache (see `direct`); whole pages only.
-        let file = crate::pipeline::io::direct::DirectFile::create(&path).map_err(io)?;
-        let mut w = BufWriter::with_capacity(1 << 16, file);
-        fill(&mut w).map_err(io)?;
-        w.into_inner()
-            .map_err(|e| io(e.into_error()))?
-            .finish()
-            .map_err(io)?;
-        Ok(())
-    }
-
-    /// Copies `from` byte for byte to `name` (whose folders are created).
-    pub fn copy(&self, from: &Path, name: &str) -> Result<(), PipelineError> {
-        let to = self.path(name);
-        if let Some(parent) = to.parent() {
-            std::fs::create_dir_all(parent).map_err(|e| {
-                PipelineError::Output(format!("creating {}: {e}", parent.display()))
-            })?;
-        }
-        std::fs::copy(from, to)
-            .map_err(|e| PipelineError::Output(format!("copying {}: {e}", from.display())))?;
-        Ok(())
-    }
-}
 
 /// FEMs up to this many nodes get a `fem.vtu` without `--fem-vtu`.
 pub const FEM_VTU_AUTO_MAX: usize = 200_000;
