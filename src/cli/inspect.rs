@@ -7,7 +7,7 @@ use std::path::PathBuf;
 
 use a3d_init::formats::fem_vtu::{self, VtuReport};
 use a3d_init::pipeline::inspect::{
-    self, FemSummary, GszStep, GszSummary, ProjectSummary, VtuSummary,
+    self, CbGeoSummary, FemSummary, GszStep, GszSummary, ProjectSummary, VtuSummary,
 };
 
 #[derive(Debug, clap::Args)]
@@ -93,6 +93,50 @@ fn print_summary(out: &mut impl Write, s: &ProjectSummary) -> std::io::Result<()
     for note in &s.files.notes {
         writeln!(out, "  {note}")?;
     }
+    if let Some(cb) = &s.cbgeo {
+        print_cbgeo(out, cb)?;
+    } else {
+        print_anura3d_files(out, s)?;
+    }
+    print_model(out, s)
+}
+
+/// The CB-Geo lines of `inspect`: branch, cells, analysis, generators, sets, files.
+fn print_cbgeo(out: &mut impl Write, cb: &CbGeoSummary) -> std::io::Result<()> {
+    writeln!(out, "CB-Geo     {}", cb.branch.name())?;
+    writeln!(
+        out,
+        "analysis   {} ({} cells), gravity ({}, {}, {}) m/s²",
+        if cb.analysis.is_empty() {
+            "-"
+        } else {
+            &cb.analysis
+        },
+        cb.cell_type,
+        cb.gravity[0],
+        cb.gravity[1],
+        cb.gravity[2]
+    )?;
+    for g in &cb.generators {
+        writeln!(out, "generator  {g}")?;
+    }
+    if cb.two_phase_particles > 0 {
+        writeln!(out, "two-phase  {} particles", cb.two_phase_particles)?;
+    }
+    if !cb.cell_sets.is_empty() {
+        let sets: Vec<String> = cb
+            .cell_sets
+            .iter()
+            .map(|(id, n)| format!("{id} ({n} cells)"))
+            .collect();
+        writeln!(out, "cell sets  {}", sets.join(", "))?;
+    }
+    writeln!(out, "stresses   {:?}", cb.stresses_key)?;
+    writeln!(out, "files      {}", cb.files.join(", "))
+}
+
+/// The Anura3D lines of `inspect`: versions and the names `map` writes.
+fn print_anura3d_files(out: &mut impl Write, s: &ProjectSummary) -> std::io::Result<()> {
     writeln!(
         out,
         "version    GOM {}{}",
@@ -115,7 +159,11 @@ fn print_summary(out: &mut impl Write, s: &ProjectSummary) -> std::io::Result<()
             .map(|o| format!(", {o}"))
             .unwrap_or_default(),
         names.reason
-    )?;
+    )
+}
+
+/// The model's lines of `inspect`, for either target.
+fn print_model(out: &mut impl Write, s: &ProjectSummary) -> std::io::Result<()> {
     writeln!(out, "dimension  {} ({})", s.dimension, s.element_type)?;
     writeln!(
         out,

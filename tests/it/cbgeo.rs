@@ -512,3 +512,68 @@ fn bad_cbgeo_inputs_are_refused_with_their_place_and_exit_2() {
         tmp.path().join("ok").to_str().unwrap(),
     ]);
 }
+
+#[test]
+fn inspect_and_diff_read_cbgeo_projects() {
+    let model = fixture("cbgeo/consolidation/mpm.json");
+    let text = run_ok(&["inspect", model.to_str().unwrap()]);
+    crate::common::assert_contains(
+        &text,
+        &[
+            "CB-Geo     geomechanics/mpm (the two-phase fork)",
+            "generator  file ",
+            "600 P2D2PHASE particles (ids 0..599), material ids [0, 1]",
+            "two-phase  600 particles",
+            "MPs        600",
+            "saturated_material_coupled / linear_elasticity: 150 elements, 600 MPs",
+        ],
+    );
+    let json: serde_json::Value = serde_json::from_str(&run_ok(&[
+        "inspect",
+        fixture("cbgeo/column/mpm.json").to_str().unwrap(),
+        "--json",
+    ]))
+    .unwrap();
+    assert_eq!(json["material_points"], 160);
+    assert_eq!(json["cbgeo"]["branch"], "Develop");
+    assert_eq!(json["cbgeo"]["cell_type"], "ED2Q4");
+
+    // Two maps of one model with different h: the run files and the model's
+    // files are equal, the particle stresses and pore pressures are not.
+    let tmp = tempfile::tempdir().unwrap();
+    let fem = fixture("cbgeo/consolidation/fem-state.csv");
+    let (a, b) = (tmp.path().join("a"), tmp.path().join("b"));
+    for (out, h) in [(&a, "0.01"), (&b, "0.012")] {
+        let (code, text) = run_map(&model, &fem, out, &["--stress", "fem", "--h", h]);
+        assert_eq!(code, 0, "{text}");
+    }
+    let (code, text) = crate::common::run(&["diff", a.to_str().unwrap(), b.to_str().unwrap()]);
+    assert_eq!(code, 1, "{text}");
+    crate::common::assert_contains(
+        &text,
+        &[
+            "mpm.json (json): equal",
+            "mesh.txt (cbgeo-file): equal",
+            "particle.txt (cbgeo-file): equal",
+            "particles-stresses.txt (cbgeo-stresses):",
+            "particles-pore-pressures.txt (cbgeo-pore-pressures):",
+        ],
+    );
+    assert!(text.contains("≠") && text.contains("syy:"), "{text}");
+    let (code, text) = crate::common::run(&["diff", a.to_str().unwrap(), a.to_str().unwrap()]);
+    assert_eq!(code, 0, "{text}");
+    // A run file against the model's: the two initial-state members differ.
+    let (code, text) = crate::common::run(&[
+        "diff",
+        a.join("mpm.json").to_str().unwrap(),
+        model.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1, "{text}");
+    crate::common::assert_contains(
+        &text,
+        &[
+            "mesh.particles_pore_pressures.location: \"particles-pore-pressures.txt\" → \"particle-pore-pressure.txt\"",
+            "mesh.particles_stresses: only in the first",
+        ],
+    );
+}

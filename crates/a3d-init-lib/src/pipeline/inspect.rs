@@ -70,6 +70,91 @@ pub struct ProjectSummary {
     pub bounding_box: ([f64; 3], [f64; 3]),
     pub materials: Vec<MaterialSummary>,
     pub warnings: Vec<String>,
+    /// A CB-Geo model: what CB-Geo reads beyond the mesh and materials; left
+    /// out of the JSON for an Anura3D project.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cbgeo: Option<CbGeoSummary>,
+}
+
+/// What `inspect` shows of a CB-Geo model beyond the common summary.
+#[derive(Clone, Debug, Serialize)]
+pub struct CbGeoSummary {
+    /// The branch its run file is for, and why.
+    pub branch: crate::formats::cbgeo::Branch,
+    pub branch_because: String,
+    pub cell_type: &'static str,
+    pub analysis: String,
+    /// m/s², x y z.
+    pub gravity: [f64; 3],
+    /// Per generator: `file <name>` or `gauss <n> per direction in cell set <k>`,
+    /// its particle type, CB-Geo material ids and particle count.
+    pub generators: Vec<String>,
+    pub two_phase_particles: usize,
+    /// Cell sets: (id, cells).
+    pub cell_sets: Vec<(i64, usize)>,
+    /// The initial stresses the run file names today.
+    pub stresses_key: crate::formats::cbgeo::StressKey,
+    /// Every file the run file names.
+    pub files: Vec<String>,
+}
+
+impl CbGeoSummary {
+    /// The summary of a CB-Geo model as loaded.
+    pub fn of(t: &crate::pipeline::cbgeo::CbGeoTarget) -> CbGeoSummary {
+        use crate::formats::cbgeo::Particles;
+        let m = &t.model;
+        let mut first = 0;
+        let generators = m
+            .generators
+            .iter()
+            .map(|g| {
+                let n = match &g.particles {
+                    Particles::File { coordinates, .. } => coordinates.len(),
+                    Particles::Gauss { per_dir, cset_id } => {
+                        let cells = if *cset_id == -1 {
+                            m.mesh.cells.len()
+                        } else {
+                            m.cell_sets
+                                .iter()
+                                .find(|(id, _)| id == cset_id)
+                                .map_or(0, |(_, s)| s.len())
+                        };
+                        cells * m.cell.points_per_cell(*per_dir)
+                    }
+                };
+                let what = match &g.particles {
+                    Particles::File { path, .. } => format!("file {}", path.display()),
+                    Particles::Gauss { per_dir, cset_id } => {
+                        format!("gauss {per_dir} per direction in cell set {cset_id}")
+                    }
+                };
+                let line = format!(
+                    "{what}: {n} {} particles (ids {first}..{}), material ids {:?}",
+                    if g.particle_type.is_empty() {
+                        "?"
+                    } else {
+                        &g.particle_type
+                    },
+                    first + n.saturating_sub(1),
+                    g.material_ids
+                );
+                first += n;
+                line
+            })
+            .collect();
+        CbGeoSummary {
+            branch: m.branch,
+            branch_because: m.branch_because.clone(),
+            cell_type: m.cell.name(),
+            analysis: m.analysis_type.clone(),
+            gravity: m.gravity,
+            generators,
+            two_phase_particles: t.two_phase.iter().filter(|&&b| b).count(),
+            cell_sets: m.cell_sets.iter().map(|(id, s)| (*id, s.len())).collect(),
+            stresses_key: m.stresses_key.clone(),
+            files: m.referenced.iter().map(|r| r.name.clone()).collect(),
+        }
+    }
 }
 
 impl ProjectSummary {
@@ -104,6 +189,7 @@ impl ProjectSummary {
                 .map(|m| MaterialSummary::of(m, p, g))
                 .collect(),
             warnings: p.info.warnings.clone(),
+            cbgeo: p.cbgeo.as_deref().map(CbGeoSummary::of),
         }
     }
 }

@@ -122,7 +122,8 @@ impl Project {
     /// default without one), or a CB-Geo run file's.
     pub fn gravity(&self) -> f64 {
         match (&self.cbgeo, &self.cps) {
-            (Some(cb), _) => -cb.model.gravity[1],
+            // + 0.0: no −0 printed for a model without gravity.
+            (Some(cb), _) => -cb.model.gravity[1] + 0.0,
             (None, Some(cps)) => cps.gravity(),
             (None, None) => crate::model::DEFAULT_GRAVITY,
         }
