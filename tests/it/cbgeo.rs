@@ -577,3 +577,60 @@ fn inspect_and_diff_read_cbgeo_projects() {
         ],
     );
 }
+
+#[test]
+fn develop_places_triangle_particles_as_a3d_init_does() {
+    let Some(cb) = cbgeo_or_skip("develop_places_triangle_particles") else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("column-t3");
+    map_column(&out, &fixture("cbgeo/column-t3/mpm.json"));
+    run_cbgeo(&cb.develop, &out, 1, 1, |t| t);
+    let got = read_back(&cb, &out, 0);
+    assert_eq!(got.len(), 240, "3 points in each of 80 triangles");
+    assert_holds(&out, &got, false);
+}
+
+#[test]
+fn verify_checks_what_cbgeo_will_hold_on_triangles_and_refuses_quadrilaterals_clearly() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("column-t3");
+    map_column(&out, &fixture("cbgeo/column-t3/mpm.json"));
+    let text = crate::common::verify_ok(&out);
+    crate::common::assert_contains(&text, &["240 MPs on 80 elements", "IN EQUILIBRIUM"]);
+    // What verify runs is what CB-Geo reads: without the stresses file's
+    // values the same column is far from rest.
+    let zero = tmp.path().join("zero");
+    copy_dir(&out, &zero);
+    std::fs::write(
+        zero.join("particles-stresses.txt"),
+        format!("240\n{}", "0\t0\t0\t0\t0\t0\n".repeat(240)),
+    )
+    .unwrap();
+    let (_, text) = crate::common::run(&["verify", zero.to_str().unwrap()]);
+    assert!(text.contains("NOT IN EQUILIBRIUM"), "{text}");
+    // A stresses file CB-Geo would ignore (a row missing) is refused.
+    let short = tmp.path().join("short");
+    copy_dir(&out, &short);
+    std::fs::write(
+        short.join("particles-stresses.txt"),
+        format!("240\n{}", "0\t0\t0\t0\t0\t0\n".repeat(239)),
+    )
+    .unwrap();
+    let (code, text) = crate::common::run(&["verify", short.to_str().unwrap()]);
+    assert_eq!(code, 2, "{text}");
+    assert!(
+        text.contains("declares 240 particles but has 239 stress lines"),
+        "{text}"
+    );
+    // The runner has no quadrilaterals: a clear refusal, exit 2.
+    let quads = tmp.path().join("column");
+    map_column(&quads, &fixture("cbgeo/column/mpm.json"));
+    let (code, text) = crate::common::run(&["verify", quads.to_str().unwrap()]);
+    assert_eq!(code, 2, "{text}");
+    assert!(
+        text.contains("does not support 2D-plane_strain with quadrilateral_4-noded"),
+        "{text}"
+    );
+}

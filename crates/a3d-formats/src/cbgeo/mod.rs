@@ -106,9 +106,11 @@ pub enum StressKey {
     Absent,
     /// develop's form: the file name.
     Name(String),
-    /// the fork's form: an object with a `"type"`.
+    /// the fork's form: an object with a `"type"` (and, for `"file"`, a
+    /// `"location"`).
     Object {
         kind: String,
+        location: Option<String>,
     },
 }
 
@@ -126,6 +128,12 @@ pub struct CbGeoModel {
     pub mesh: text::MeshText,
     /// `entity_sets`' cell sets: (id, cell indices) in file order.
     pub cell_sets: Vec<(i64, Vec<u64>)>,
+    /// `entity_sets`' node sets: (id, node indices) in file order.
+    pub node_sets: Vec<(i64, Vec<u64>)>,
+    /// `mesh.boundary_conditions.velocity_constraints`: (node set, direction,
+    /// velocity m/s); the direction counts `Tdim` per phase (the fork's
+    /// liquid: `dir − Tdim`), node set −1 is every node.
+    pub velocity_constraints: Vec<(i64, u32, f64)>,
     pub entity_sets_path: Option<PathBuf>,
     pub generators: Vec<Generator>,
     pub materials: Vec<CbMaterial>,
@@ -134,6 +142,8 @@ pub struct CbGeoModel {
     pub analysis_type: String,
     pub stresses_key: StressKey,
     pub has_pore_pressures_key: bool,
+    /// The `"location"` of a `"file"` pore-pressure key.
+    pub pore_pressures_file: Option<String>,
     pub branch: Branch,
     /// Why [`CbGeoModel::branch`] was chosen, as a sentence.
     pub branch_because: String,
@@ -143,6 +153,15 @@ pub struct CbGeoModel {
 }
 
 impl CbGeoModel {
+    /// The stresses file the run file names (either form), if any.
+    pub fn stresses_file(&self) -> Option<&str> {
+        match &self.stresses_key {
+            StressKey::Name(n) => Some(n),
+            StressKey::Object { kind, location } if kind == "file" => location.as_deref(),
+            _ => None,
+        }
+    }
+
     /// 2 or 3.
     pub fn n_dim(&self) -> usize {
         self.cell.n_dim()
@@ -198,13 +217,16 @@ pub fn read(json_path: &Path) -> Result<CbGeoModel, FormatError> {
     let mesh_path = file_in(&mesh_name, mesh_obj.range.start)?;
     let mesh_text = read_text(&mesh_path)?;
     let mesh = text::read_mesh(&mesh_path, &mesh_text, dim, cell.n_nodes())?;
-    let (cell_sets, entity_sets_path) = match r.string(mesh_obj, "entity_sets")? {
+    let (cell_sets, node_sets, entity_sets_path) = match r.string(mesh_obj, "entity_sets")? {
         Some(name) => {
             let path = file_in(&name, mesh_obj.range.start)?;
-            (read_cell_sets(&path, mesh.cells.len())?, Some(path))
+            let cells = read_sets(&path, "cell_sets", mesh.cells.len())?;
+            let nodes = read_sets(&path, "node_sets", mesh.nodes.len())?;
+            (cells, nodes, Some(path))
         }
-        None => (Vec::new(), None),
+        None => (Vec::new(), Vec::new(), None),
     };
+    let velocity_constraints = velocity_constraints(&r, mesh_obj, dim, &node_sets)?;
     let materials = read_materials(&r, &root)?;
     let generators = read_generators(&r, &root, &dir, dim, &materials, &cell_sets)?;
     let gravity = gravity(&r, &root, dim)?;
@@ -220,6 +242,7 @@ pub fn read(json_path: &Path) -> Result<CbGeoModel, FormatError> {
         Some(Value::StringLit(s)) => StressKey::Name(s.value.to_string()),
         Some(Value::Object(o)) => StressKey::Object {
             kind: r.string(o, "type")?.unwrap_or_default(),
+            location: r.string(o, "location")?,
         },
         Some(v) => {
             return Err(r
@@ -231,6 +254,12 @@ pub fn read(json_path: &Path) -> Result<CbGeoModel, FormatError> {
         }
     };
     let has_pore_pressures_key = mesh_obj.get("particles_pore_pressures").is_some();
+    let pore_pressures_file = match mesh_obj.get("particles_pore_pressures").map(|p| &p.value) {
+        Some(Value::Object(o)) if r.string(o, "type")?.as_deref() == Some("file") => {
+            r.string(o, "location")?
+        }
+        _ => None,
+    };
     let mut model = CbGeoModel {
         json_path: json_path.to_path_buf(),
         dir,
@@ -239,6 +268,8 @@ pub fn read(json_path: &Path) -> Result<CbGeoModel, FormatError> {
         mesh_path,
         mesh,
         cell_sets,
+        node_sets,
+        velocity_constraints,
         entity_sets_path,
         generators,
         materials,
@@ -246,6 +277,7 @@ pub fn read(json_path: &Path) -> Result<CbGeoModel, FormatError> {
         analysis_type,
         stresses_key,
         has_pore_pressures_key,
+        pore_pressures_file,
         branch: Branch::Develop,
         branch_because: String::new(),
         referenced: Vec::new(),
@@ -452,42 +484,94 @@ fn gravity(r: &json::Reader<'_>, root: &Object<'_>, dim: usize) -> Result<[f64; 
     Ok(g)
 }
 
-/// `entity_sets.json`'s `"cell_sets"`: `[{"id": k, "set": [cells…]}, …]`.
-fn read_cell_sets(path: &Path, n_cells: usize) -> Result<Vec<(i64, Vec<u64>)>, FormatError> {
+/// `mesh.boundary_conditions.velocity_constraints`: `[{"nset_id": k, "dir":
+/// d, "velocity": v}, …]`, each set known (or −1) and each direction below
+/// `Tdim` × 2 phases.
+fn velocity_constraints(
+    r: &json::Reader<'_>,
+    mesh: &Object<'_>,
+    dim: usize,
+    node_sets: &[(i64, Vec<u64>)],
+) -> Result<Vec<(i64, u32, f64)>, ParseError> {
+    let Some(bc) = mesh.get("boundary_conditions") else {
+        return Ok(Vec::new());
+    };
+    let Value::Object(bc) = &bc.value else {
+        return Err(r.error(
+            bc.value.start(),
+            "\"boundary_conditions\" must be an object",
+        ));
+    };
+    let Some(list) = r.array(bc, "velocity_constraints")? else {
+        return Ok(Vec::new());
+    };
+    let mut out = Vec::new();
+    for v in &list.elements {
+        let Value::Object(o) = v else {
+            return Err(r.error(v.start(), "a velocity constraint must be an object"));
+        };
+        let set = r
+            .int(o, "nset_id")?
+            .ok_or_else(|| r.error(o.range.start, "a velocity constraint has no \"nset_id\""))?;
+        if set != -1 && !node_sets.iter().any(|(id, _)| *id == set) {
+            return Err(r.error(
+                o.range.start,
+                format!("\"nset_id\" {set}: the entity sets have no such node set"),
+            ));
+        }
+        let dir = r
+            .uint(o, "dir")?
+            .ok_or_else(|| r.error(o.range.start, "a velocity constraint has no \"dir\""))?;
+        if dir as usize >= 2 * dim {
+            return Err(r.error(
+                o.range.start,
+                format!(
+                    "\"dir\" {dir}: directions run from 0 to {} ({dim} per phase)",
+                    2 * dim - 1
+                ),
+            ));
+        }
+        let velocity = r.number(o, "velocity")?.unwrap_or(0.0);
+        out.push((set, dir, velocity));
+    }
+    Ok(out)
+}
+
+/// One kind of set of `entity_sets.json` (`"cell_sets"`, `"node_sets"`):
+/// `[{"id": k, "set": [indices…]}, …]`, each index below `n`.
+fn read_sets(path: &Path, kind: &str, n: usize) -> Result<Vec<(i64, Vec<u64>)>, FormatError> {
     let text = read_text(path)?;
     let root = json::parse(path, &text)?;
     let r = json::Reader { path, text: &text };
     let mut out = Vec::new();
-    let Some(list) = r.array(&root, "cell_sets")? else {
+    let Some(list) = r.array(&root, kind)? else {
         return Ok(out);
     };
+    let what = if kind == "cell_sets" { "cell" } else { "node" };
     for v in &list.elements {
         let Value::Object(o) = v else {
-            return Err(r.error(v.start(), "a cell set must be an object").into());
+            return Err(r
+                .error(v.start(), format!("a {what} set must be an object"))
+                .into());
         };
         let id = r
             .int(o, "id")?
-            .ok_or_else(|| r.error(o.range.start, "a cell set has no \"id\""))?;
+            .ok_or_else(|| r.error(o.range.start, format!("a {what} set has no \"id\"")))?;
         let set = r
             .array(o, "set")?
-            .ok_or_else(|| r.error(o.range.start, format!("cell set {id} has no \"set\"")))?;
-        let mut cells = Vec::with_capacity(set.elements.len());
+            .ok_or_else(|| r.error(o.range.start, format!("{what} set {id} has no \"set\"")))?;
+        let mut members = Vec::with_capacity(set.elements.len());
         for c in &set.elements {
-            let k = r.int_value(c, "a cell index")?;
-            if k < 0 || k as usize >= n_cells {
-                return Err(r
-                    .error(
-                        c.start(),
-                        format!(
-                            "cell set {id}: cell {k} is not in the mesh (0 to {})",
-                            n_cells.saturating_sub(1)
-                        ),
-                    )
-                    .into());
+            let k = r.int_value(c, &format!("a {what} index"))?;
+            if k < 0 || k as usize >= n {
+                let last = n.saturating_sub(1);
+                let message =
+                    format!("{what} set {id}: {what} {k} is not in the mesh (0 to {last})");
+                return Err(r.error(c.start(), message).into());
             }
-            cells.push(k as u64);
+            members.push(k as u64);
         }
-        out.push((id, cells));
+        out.push((id, members));
     }
     Ok(out)
 }

@@ -50,6 +50,11 @@ impl Project {
         if crate::formats::cbgeo::is_run_file(path) {
             return crate::pipeline::cbgeo::load(path);
         }
+        if path.is_dir()
+            && let Some(json) = crate::pipeline::cbgeo::run_file_in(path)
+        {
+            return crate::pipeline::cbgeo::load(&json);
+        }
         let files = project::discover(path)?;
         let gom = GomDocument::read(&files.gom)?;
         let cps = files.cps.as_deref().map(CpsDocument::read).transpose()?;

@@ -82,7 +82,7 @@ pub fn load(path: &Path) -> Result<Project, PipelineError> {
     let name = path
         .file_stem()
         .map_or_else(|| "mpm".into(), |s| s.to_string_lossy().into_owned());
-    let files = ProjectFiles {
+    let mut files = ProjectFiles {
         name,
         dir: cb.dir.clone(),
         gom: path.to_path_buf(),
@@ -97,9 +97,11 @@ pub fn load(path: &Path) -> Result<Project, PipelineError> {
         )],
         warnings: Vec::new(),
     };
+    let (solid_fixity, liquid_fixity, fixity_warnings) = fixities(&cb);
+    files.warnings.extend(fixity_warnings);
     let model = AnuraModel {
-        solid_fixity: vec![[false; 3]; mesh.nodes.len()],
-        liquid_fixity: vec![[false; 3]; mesh.nodes.len()],
+        solid_fixity,
+        liquid_fixity,
         mesh,
         materials,
         element_material,
@@ -119,6 +121,111 @@ pub fn load(path: &Path) -> Result<Project, PipelineError> {
             two_phase,
         })),
     })
+}
+
+/// The state CB-Geo will hold at t = 0 for the project `target` (what `verify`
+/// and `fos` start from): the stresses file and pore-pressure file its run
+/// file names, read as CB-Geo reads them, back in a3d-init's units and signs
+/// (kPa; for a two-phase particle the total σ′ − p·I and pwp = −p). A run
+/// file that names no stresses file starts from zero stress, as CB-Geo does.
+pub fn held_state(target: &CbGeoTarget) -> Result<Vec<crate::model::MpState>, PipelineError> {
+    use crate::formats::cbgeo::text;
+    use crate::model::MpState;
+    let m = &target.model;
+    let n = target.two_phase.len();
+    let mut states = vec![
+        MpState {
+            saturation: 1.0,
+            ..MpState::default()
+        };
+        n
+    ];
+    if let Some(name) = m.stresses_file() {
+        let path = m.dir.join(name);
+        let t = crate::formats::input::read_text(&path)?;
+        let stresses = text::read_stresses(&path, &t).map_err(crate::formats::FormatError::from)?;
+        if stresses.len() != n {
+            return Err(PipelineError::Input(format!(
+                "{}: {} stress lines for {n} particles: CB-Geo would set no stress at all",
+                path.display(),
+                stresses.len()
+            )));
+        }
+        for (s, v) in states.iter_mut().zip(&stresses) {
+            s.total = v.map(|x| x / 1000.0);
+        }
+    }
+    if let Some(name) = m.pore_pressures_file.as_deref().filter(|_| m.two_phase()) {
+        let path = m.dir.join(name);
+        let t = crate::formats::input::read_text(&path)?;
+        let values = text::read_id_values(&path, &t).map_err(crate::formats::FormatError::from)?;
+        for (id, p) in values {
+            let Some(s) = states.get_mut(id as usize) else {
+                return Err(PipelineError::Input(format!(
+                    "{}: particle {id}: the model has {n} particles (ids 0 to {})",
+                    path.display(),
+                    n.saturating_sub(1)
+                )));
+            };
+            s.pwp = -p / 1000.0;
+        }
+    }
+    for (s, &two) in states.iter_mut().zip(&target.two_phase) {
+        if two {
+            for c in s.total.iter_mut().take(3) {
+                *c += s.pwp;
+            }
+        } else {
+            s.pwp = 0.0;
+        }
+    }
+    Ok(states)
+}
+
+/// The run file in folder `dir` (`mpm.json`), when the folder is a CB-Geo
+/// project rather than an Anura3D one (it holds no GOM).
+pub fn run_file_in(dir: &Path) -> Option<std::path::PathBuf> {
+    let json = dir.join("mpm.json");
+    let gom = std::fs::read_dir(dir).ok()?.flatten().any(|e| {
+        let name = e.file_name().to_string_lossy().to_ascii_uppercase();
+        name.contains(".GOM") || name.ends_with("-2.DAT")
+    });
+    (json.is_file() && !gom).then_some(json)
+}
+
+/// Per node, the fixed directions of the solid and of the liquid: the
+/// velocity constraints of zero velocity (direction d < Tdim the solid's,
+/// Tdim ≤ d < 2·Tdim the fork's liquid), node set −1 every node; and a
+/// warning for each constraint of non-zero velocity, which the built-in
+/// runner does not prescribe.
+fn fixities(cb: &CbGeoModel) -> (Vec<[bool; 3]>, Vec<[bool; 3]>, Vec<String>) {
+    let n = cb.mesh.nodes.len();
+    let dim = cb.n_dim();
+    let (mut solid, mut liquid) = (vec![[false; 3]; n], vec![[false; 3]; n]);
+    let mut warnings = Vec::new();
+    for &(set, dir, velocity) in &cb.velocity_constraints {
+        if velocity != 0.0 {
+            warnings.push(format!(
+                "velocity constraint {velocity} m/s on node set {set}, direction {dir}: the built-in runner (verify, fos) does not prescribe velocities and leaves these nodes free"
+            ));
+            continue;
+        }
+        let nodes: Vec<usize> = if set == -1 {
+            (0..n).collect()
+        } else {
+            cb.node_sets
+                .iter()
+                .find(|(id, _)| *id == set)
+                .map(|(_, s)| s.iter().map(|&k| k as usize).collect())
+                .unwrap_or_default()
+        };
+        let (phase, k) = (dir as usize / dim, dir as usize % dim);
+        let target = if phase == 0 { &mut solid } else { &mut liquid };
+        for node in nodes {
+            target[node][k] = true;
+        }
+    }
+    (solid, liquid, warnings)
 }
 
 /// The model's materials in a3d-init's terms, in run-file order (index =

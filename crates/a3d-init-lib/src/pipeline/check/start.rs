@@ -40,6 +40,9 @@ pub enum StartState {
     Anura3d(Box<Judged>),
     /// A state table, as given.
     Table(Vec<MpState>),
+    /// A CB-Geo project folder: what CB-Geo will hold, read from the files
+    /// its run file names ([`crate::pipeline::cbgeo::held_state`]).
+    CbGeo(Vec<MpState>),
 }
 
 impl Start {
@@ -48,6 +51,15 @@ impl Start {
         match source {
             StateSource::Folder(dir) => {
                 let project = Project::load(dir)?;
+                if let Some(target) = &project.cbgeo {
+                    let states = crate::pipeline::cbgeo::held_state(target)?;
+                    return Ok(Start {
+                        points: project.points.clone(),
+                        home: project.files.dir.clone(),
+                        project,
+                        state: StartState::CbGeo(states),
+                    });
+                }
                 let judged = crate::pipeline::check::folder::judge_folder(&project)?;
                 Ok(Start {
                     points: project.points.clone(),
@@ -74,7 +86,7 @@ impl Start {
     pub fn states(&self) -> &[MpState] {
         match &self.state {
             StartState::Anura3d(judged) => &judged.run_start,
-            StartState::Table(states) => states,
+            StartState::Table(states) | StartState::CbGeo(states) => states,
         }
     }
 
@@ -83,7 +95,7 @@ impl Start {
     pub fn at_zero(&self) -> &[MpState] {
         match &self.state {
             StartState::Anura3d(judged) => &judged.start,
-            StartState::Table(states) => states,
+            StartState::Table(states) | StartState::CbGeo(states) => states,
         }
     }
 
@@ -91,7 +103,7 @@ impl Start {
     pub fn kernel(&self) -> Option<&KernelCheck> {
         match &self.state {
             StartState::Anura3d(judged) => Some(&judged.check),
-            StartState::Table(_) => None,
+            StartState::Table(_) | StartState::CbGeo(_) => None,
         }
     }
 
@@ -99,7 +111,7 @@ impl Start {
     pub fn rows_in_reach(&self) -> &[u32] {
         match &self.state {
             StartState::Anura3d(judged) => &judged.rows_in_reach,
-            StartState::Table(_) => &[],
+            StartState::Table(_) | StartState::CbGeo(_) => &[],
         }
     }
 
