@@ -594,3 +594,71 @@ fn fuzz_cli_pipeline() {
     }
     check(failures);
 }
+
+/// A CB-Geo run file and its model, read and placed as `map --mpm mpm.json`
+/// does, from the files written into `dir` beside `path`.
+fn read_cbgeo(path: &Path) -> Case {
+    match a3d_init::pipeline::cbgeo::load(path) {
+        Ok(project) => {
+            // What the writer edits: the run file with its keys set.
+            let model = &project.cbgeo.as_ref().unwrap().model;
+            let _ = a3d_init::formats::cbgeo::write::run_file(model, "s.txt", Some("p.txt"));
+            Case::Read
+        }
+        Err(_) => Case::Refused,
+    }
+}
+
+/// The column's files beside the cases, so that a run file finds its mesh.
+fn cbgeo_column_beside(case: &Path) {
+    let dir = case.parent().unwrap();
+    for f in ["mesh.txt", "entity_sets.json"] {
+        if !dir.join(f).exists() {
+            std::fs::copy(fixture("cbgeo/column").join(f), dir.join(f)).unwrap();
+        }
+    }
+}
+
+#[test]
+fn fuzz_cbgeo_run_file() {
+    let base = std::fs::read(fixture("cbgeo/column/mpm.json")).unwrap();
+    check(fuzz("cbgeo-json", &base, None, |path, bytes| {
+        cbgeo_column_beside(path);
+        std::fs::write(path, bytes).unwrap();
+        read_cbgeo(path)
+    }));
+}
+
+#[test]
+fn fuzz_cbgeo_mesh_and_particles() {
+    // The mesh of the column (gauss particles) and the consolidation's
+    // particle file (file particles), each mutated under an intact run file.
+    for (reader, base, model) in [
+        ("cbgeo-mesh", "cbgeo/column/mesh.txt", "cbgeo/column"),
+        (
+            "cbgeo-particles",
+            "cbgeo/consolidation/particle.txt",
+            "cbgeo/consolidation",
+        ),
+    ] {
+        let base_bytes = std::fs::read(fixture(base)).unwrap();
+        let name = Path::new(base)
+            .file_name()
+            .unwrap()
+            .to_str()
+            .unwrap()
+            .to_string();
+        check(fuzz(reader, &base_bytes, None, |path, bytes| {
+            let dir = path.with_extension("d");
+            std::fs::create_dir_all(&dir).unwrap();
+            for f in std::fs::read_dir(fixture(model)).unwrap() {
+                let f = f.unwrap().path();
+                std::fs::copy(&f, dir.join(f.file_name().unwrap())).unwrap();
+            }
+            std::fs::write(dir.join(&name), bytes).unwrap();
+            let case = read_cbgeo(&dir.join("mpm.json"));
+            std::fs::remove_dir_all(&dir).unwrap();
+            case
+        }));
+    }
+}

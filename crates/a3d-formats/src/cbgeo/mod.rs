@@ -51,6 +51,8 @@ pub enum Particles {
     File {
         path: PathBuf,
         coordinates: Vec<[f64; 3]>,
+        /// Each particle's 1-based line in the file.
+        lines: Vec<usize>,
     },
     /// `"type": "gauss"`: `per_dir` points per direction in each cell of the
     /// cell set (`-1`: every cell).
@@ -414,8 +416,12 @@ fn read_generators(
                 let name = r.required_string(g, "location", "a \"file\" generator")?;
                 let path = dir.join(&name);
                 let text = read_text(&path)?;
-                let coordinates = text::read_particles(&path, &text, dim)?;
-                Particles::File { path, coordinates }
+                let (coordinates, lines) = text::read_particles_with_lines(&path, &text, dim)?;
+                Particles::File {
+                    path,
+                    coordinates,
+                    lines,
+                }
             }
             "gauss" => {
                 let per_dir = r.uint(g, "nparticles_per_dir")?.ok_or_else(|| {

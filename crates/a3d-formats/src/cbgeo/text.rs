@@ -199,6 +199,15 @@ pub fn read_mesh(
 
 /// Reads a particles file: a count line, then `dim` coordinates per line.
 pub fn read_particles(path: &Path, text: &str, dim: usize) -> Result<Vec<[f64; 3]>, ParseError> {
+    read_particles_with_lines(path, text, dim).map(|(c, _)| c)
+}
+
+/// [`read_particles`], with each particle's 1-based line in the file.
+pub fn read_particles_with_lines(
+    path: &Path,
+    text: &str,
+    dim: usize,
+) -> Result<(Vec<[f64; 3]>, Vec<usize>), ParseError> {
     let mut lines = data_lines(text);
     let head = lines.next().ok_or_else(|| {
         ParseError::at(
@@ -210,8 +219,10 @@ pub fn read_particles(path: &Path, text: &str, dim: usize) -> Result<Vec<[f64; 3
     })?;
     let n = count(path, head, "the particle count")?;
     let mut out = Vec::new();
+    let mut at = Vec::new();
     for line in lines {
         out.push(reals(path, line, dim, &format!("particle {}", out.len()))?);
+        at.push(line.0);
     }
     if out.len() != n {
         return Err(ParseError::at(
@@ -224,7 +235,7 @@ pub fn read_particles(path: &Path, text: &str, dim: usize) -> Result<Vec<[f64; 3
             ),
         ));
     }
-    Ok(out)
+    Ok((out, at))
 }
 
 /// Reads a particle stresses file: a count line, then σxx σyy σzz τxy τyz τxz

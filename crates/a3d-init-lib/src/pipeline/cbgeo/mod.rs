@@ -57,7 +57,7 @@ pub fn load(path: &Path) -> Result<Project, PipelineError> {
     };
     if cb.gravity[0] != 0.0 || cb.gravity[1] > 0.0 {
         return Err(PipelineError::Input(format!(
-            "{}: gravity ({}, {}) m/s²: a3d-init's stresses take gravity along −y (x horizontal, y up)",
+            "{}: gravity ({:?}, {:?}) m/s²: a3d-init's stresses take gravity along −y (x horizontal, y up)",
             path.display(),
             cb.gravity[0],
             cb.gravity[1]
@@ -346,12 +346,17 @@ fn particles(
                     }
                 }
             }
-            Particles::File { path, coordinates } => {
+            Particles::File {
+                path,
+                coordinates,
+                lines,
+            } => {
                 for (i, x) in coordinates.iter().enumerate() {
                     let c = locator.find(mesh, *x).ok_or_else(|| {
-                        PipelineError::Input(format!(
-                            "{}: particle {i} at ({}, {}) lies in no cell of the mesh: CB-Geo drops it, and the stresses file would no longer match its particles",
+                        PipelineError::Positioned(format!(
+                            "{}:{}:1: particle {i} at ({:?}, {:?}) lies in no cell of the mesh: CB-Geo drops it, and the stresses file would no longer match its particles",
                             path.display(),
+                            lines[i],
                             x[0],
                             x[1]
                         ))
@@ -401,32 +406,55 @@ struct Locator {
 }
 
 impl Locator {
+    /// The grid over `mesh`: about one bucket per cell, at most 4 per cell
+    /// (and never more than 2²⁴); a mesh whose cells overlap so that the
+    /// buckets would hold more than 64 entries per cell (a crafted or broken
+    /// mesh) gets one bucket, searched cell by cell.
     fn new(mesh: &Mesh) -> Locator {
         let (lo, hi) = mesh.bounding_box();
         let n = mesh.n_elements().max(1);
-        let area = ((hi[0] - lo[0]) * (hi[1] - lo[1])).max(f64::MIN_POSITIVE);
+        let span = [hi[0] - lo[0], hi[1] - lo[1]];
+        let area = (span[0] * span[1]).max(f64::MIN_POSITIVE);
         let size = (area / n as f64).sqrt().max(1e-12);
-        let dims = [
-            (((hi[0] - lo[0]) / size) as usize + 1).min(1 << 12),
-            (((hi[1] - lo[1]) / size) as usize + 1).min(1 << 12),
-        ];
-        let size = ((hi[0] - lo[0]) / dims[0] as f64)
-            .max((hi[1] - lo[1]) / dims[1] as f64)
+        let most = (4 * n).min(1 << 24) as f64;
+        // In f64 first: a huge span or a NaN never overflows the counts.
+        let side = |w: f64| (w / size).min(most).max(0.0) as usize + 1;
+        let mut dims = [side(span[0]), side(span[1])];
+        while (dims[0] * dims[1]) as f64 > most.max(1.0) {
+            dims = [dims[0].div_ceil(2), dims[1].div_ceil(2)];
+        }
+        let size = (span[0] / dims[0] as f64)
+            .max(span[1] / dims[1] as f64)
             .max(1e-12);
+        let one_bucket = |n_el: usize| Locator {
+            lo: [lo[0], lo[1]],
+            size: f64::INFINITY,
+            dims: [1, 1],
+            buckets: vec![(0..n_el as u32).collect()],
+        };
+        if !size.is_finite() {
+            return one_bucket(mesh.n_elements());
+        }
         let mut buckets = vec![Vec::new(); dims[0] * dims[1]];
+        let mut entries = 0usize;
         for e in 0..mesh.n_elements() {
             let (mut a, mut b) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-            for &n in mesh.element_nodes(e) {
+            for &node in mesh.element_nodes(e) {
                 for k in 0..2 {
-                    a[k] = a[k].min(mesh.nodes[n as usize][k]);
-                    b[k] = b[k].max(mesh.nodes[n as usize][k]);
+                    a[k] = a[k].min(mesh.nodes[node as usize][k]);
+                    b[k] = b[k].max(mesh.nodes[node as usize][k]);
                 }
             }
             let cell = |v: f64, k: usize| {
                 (((v - lo[k]) / size).floor().max(0.0) as usize).min(dims[k] - 1)
             };
-            for i in cell(a[0], 0)..=cell(b[0], 0) {
-                for j in cell(a[1], 1)..=cell(b[1], 1) {
+            let (i0, i1, j0, j1) = (cell(a[0], 0), cell(b[0], 0), cell(a[1], 1), cell(b[1], 1));
+            entries += (i1 - i0 + 1) * (j1 - j0 + 1);
+            if entries > 64 * n + 1024 {
+                return one_bucket(mesh.n_elements());
+            }
+            for i in i0..=i1 {
+                for j in j0..=j1 {
                     buckets[j * dims[0] + i].push(e as u32);
                 }
             }
@@ -442,6 +470,9 @@ impl Locator {
     /// The first cell (mesh order) that holds `x`, on its boundary included.
     fn find(&self, mesh: &Mesh, x: [f64; 3]) -> Option<usize> {
         let at = |k: usize| {
+            if self.dims[k] == 1 {
+                return Some(0);
+            }
             let v = ((x[k] - self.lo[k]) / self.size).floor();
             (v >= -1.0 && v <= self.dims[k] as f64)
                 .then(|| (v.max(0.0) as usize).min(self.dims[k] - 1))
