@@ -208,65 +208,47 @@ pub fn read_particles_with_lines(
     text: &str,
     dim: usize,
 ) -> Result<(Vec<[f64; 3]>, Vec<usize>), ParseError> {
-    let mut lines = data_lines(text);
-    let head = lines.next().ok_or_else(|| {
-        ParseError::at(
-            path,
-            1,
-            1,
-            "empty particles file: the first line gives the count",
-        )
-    })?;
-    let n = count(path, head, "the particle count")?;
-    let mut out = Vec::new();
-    let mut at = Vec::new();
-    for line in lines {
-        out.push(reals(path, line, dim, &format!("particle {}", out.len()))?);
-        at.push(line.0);
-    }
-    if out.len() != n {
-        return Err(ParseError::at(
-            path,
-            head.0,
-            1,
-            format!(
-                "the file declares {n} particles but has {} particle lines",
-                out.len()
-            ),
-        ));
-    }
-    Ok((out, at))
+    counted_rows(path, text, dim, ("particles", "particle lines"))
 }
 
 /// Reads a particle stresses file: a count line, then σxx σyy σzz τxy τyz τxz
 /// per particle (Pa, tension positive), in particle order.
 pub fn read_stresses(path: &Path, text: &str) -> Result<Vec<[f64; 6]>, ParseError> {
+    let what = (
+        "stresses",
+        "stress lines (CB-Geo then sets no stress at all)",
+    );
+    counted_rows(path, text, 6, what).map(|(rows, _)| rows)
+}
+
+/// A count line, then `n` numbers per line (more ignored), the count checked
+/// against the lines; each row with its 1-based line. `what` names the file
+/// and its lines for the messages.
+fn counted_rows<const N: usize>(
+    path: &Path,
+    text: &str,
+    n: usize,
+    (file, rows): (&str, &str),
+) -> Result<(Vec<[f64; N]>, Vec<usize>), ParseError> {
     let mut lines = data_lines(text);
     let head = lines.next().ok_or_else(|| {
-        ParseError::at(
-            path,
-            1,
-            1,
-            "empty stresses file: the first line gives the count",
-        )
+        let message = format!("empty {file} file: the first line gives the count");
+        ParseError::at(path, 1, 1, message)
     })?;
-    let n = count(path, head, "the particle count")?;
-    let mut out = Vec::new();
+    let declared = count(path, head, "the particle count")?;
+    let (mut out, mut at) = (Vec::new(), Vec::new());
     for line in lines {
-        out.push(reals(path, line, 6, &format!("particle {}", out.len()))?);
+        out.push(reals(path, line, n, &format!("particle {}", out.len()))?);
+        at.push(line.0);
     }
-    if out.len() != n {
-        return Err(ParseError::at(
-            path,
-            head.0,
-            1,
-            format!(
-                "the file declares {n} particles but has {} stress lines (CB-Geo then sets no stress at all)",
-                out.len()
-            ),
-        ));
+    if out.len() != declared {
+        let message = format!(
+            "the file declares {declared} particles but has {} {rows}",
+            out.len()
+        );
+        return Err(ParseError::at(path, head.0, 1, message));
     }
-    Ok(out)
+    Ok((out, at))
 }
 
 /// Reads an `id value` file (pore pressures, volumes): one particle per line,
