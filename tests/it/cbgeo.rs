@@ -136,7 +136,7 @@ fn set_number(text: &str, key: &str, value: u32) -> String {
 /// One particle as CB-Geo's HDF5 output holds it.
 #[derive(Debug)]
 struct Particle {
-    xy: [f64; 2],
+    xyz: [f64; 3],
     stress: [f64; 6],
     pore_pressure: Option<f64>,
 }
@@ -163,7 +163,7 @@ fn read_back(cb: &CbGeo, dir: &Path, step: u32) -> Vec<Particle> {
             let f: Vec<&str> = l.split(',').collect();
             let num = |name: &str| f[col(name).unwrap()].parse::<f64>().unwrap();
             Particle {
-                xy: [num("coord_x"), num("coord_y")],
+                xyz: [num("coord_x"), num("coord_y"), num("coord_z")],
                 stress: [
                     "stress_xx",
                     "stress_yy",
@@ -180,7 +180,7 @@ fn read_back(cb: &CbGeo, dir: &Path, step: u32) -> Vec<Particle> {
 }
 
 /// What `map` says of each MP in mps.csv: position, pwp and total stress (kPa).
-fn mps(dir: &Path) -> Vec<([f64; 2], f64, [f64; 6])> {
+fn mps(dir: &Path) -> Vec<([f64; 3], f64, [f64; 6])> {
     let text = std::fs::read_to_string(dir.join("mps.csv")).unwrap();
     let mut lines = text.lines();
     let head: Vec<&str> = lines.next().unwrap().split(',').collect();
@@ -190,7 +190,7 @@ fn mps(dir: &Path) -> Vec<([f64; 2], f64, [f64; 6])> {
             let f: Vec<&str> = l.split(',').collect();
             let num = |name: &str| f[col(name)].parse::<f64>().unwrap();
             (
-                [num("x"), num("y")],
+                [num("x"), num("y"), num("z")],
                 num("pwp"),
                 ["sxx", "syy", "szz", "sxy", "syz", "sxz"].map(num),
             )
@@ -209,12 +209,12 @@ fn assert_holds(dir: &Path, got: &[Particle], two_phase: bool) {
         .flat_map(|w| w.2.iter().chain([&w.1]))
         .fold(0.0f64, |m, v| m.max(v.abs()))
         * 1000.0;
-    for (i, (g, (xy, pwp, total))) in got.iter().zip(&want).enumerate() {
-        for k in 0..2 {
+    for (i, (g, (xyz, pwp, total))) in got.iter().zip(&want).enumerate() {
+        for k in 0..3 {
             assert!(
-                (g.xy[k] - xy[k]).abs() <= 1e-12,
-                "particle {i}: CB-Geo at {:?}, map at {xy:?}",
-                g.xy
+                (g.xyz[k] - xyz[k]).abs() <= 1e-12,
+                "particle {i}: CB-Geo at {:?}, map at {xyz:?}",
+                g.xyz
             );
         }
         for (k, (&got, &s)) in g.stress.iter().zip(total).enumerate() {
@@ -353,7 +353,7 @@ fn the_mapped_column_stays_at_rest_in_develop_and_an_unstressed_one_does_not() {
     let moved = start
         .iter()
         .zip(&end)
-        .fold(0.0f64, |m, (a, b)| m.max((a.xy[1] - b.xy[1]).abs()));
+        .fold(0.0f64, |m, (a, b)| m.max((a.xyz[1] - b.xyz[1]).abs()));
     let changed = start.iter().zip(&end).fold(0.0f64, |m, (a, b)| {
         (0..6).fold(m, |m, k| m.max((a.stress[k] - b.stress[k]).abs()))
     });
@@ -371,7 +371,7 @@ fn the_mapped_column_stays_at_rest_in_develop_and_an_unstressed_one_does_not() {
     let sank = a
         .iter()
         .zip(&b)
-        .fold(0.0f64, |m, (a, b)| m.max((a.xy[1] - b.xy[1]).abs()));
+        .fold(0.0f64, |m, (a, b)| m.max((a.xyz[1] - b.xyz[1]).abs()));
     assert!(
         sank > 1e-3,
         "an unstressed column moved only {sank} m: the check could not fail"
@@ -632,5 +632,39 @@ fn verify_checks_what_cbgeo_will_hold_on_triangles_and_refuses_quadrilaterals_cl
     assert!(
         text.contains("does not support 2D-plane_strain with quadrilateral_4-noded"),
         "{text}"
+    );
+}
+
+#[test]
+fn develop_holds_a_mapped_3d_hexahedral_column_at_rest() {
+    let Some(cb) = cbgeo_or_skip("develop_holds_a_mapped_3d_hexahedral_column") else {
+        return;
+    };
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("column-3d");
+    let (code, text) = run_map(
+        &fixture("cbgeo/column-3d/mpm.json"),
+        &fixture("cbgeo/column-3d/hydrostatic.csv"),
+        &out,
+        &["--stress", "geostatic"],
+    );
+    assert_eq!(code, 0, "{text}");
+    // 0.02 s (200 steps of 1e-4 s) under gravity, rollers on all sides.
+    run_cbgeo(&cb.develop, &out, 201, 200, |t| t);
+    let start = read_back(&cb, &out, 0);
+    assert_eq!(start.len(), 640, "8 points in each of 80 hexahedra");
+    assert_holds(&out, &start, false);
+    let end = read_back(&cb, &out, 200);
+    let range = start.iter().fold(0.0f64, |m, p| m.max(p.stress[1].abs()));
+    let moved = start.iter().zip(&end).fold(0.0f64, |m, (a, b)| {
+        (0..3).fold(m, |m, k| m.max((a.xyz[k] - b.xyz[k]).abs()))
+    });
+    let changed = start.iter().zip(&end).fold(0.0f64, |m, (a, b)| {
+        (0..6).fold(m, |m, k| m.max((a.stress[k] - b.stress[k]).abs()))
+    });
+    assert!(moved < 1e-9, "the mapped 3D column moved {moved} m");
+    assert!(
+        changed < 1e-6 * range,
+        "its stresses changed by {changed} Pa of {range}"
     );
 }

@@ -251,6 +251,7 @@ fn every_rule_has_the_reference_weight_and_points_inside() {
                     ElementType::Tri3 => x >= 0.0 && y >= 0.0 && x + y <= 1.0,
                     ElementType::TetOld => x >= 0.0 && y >= 0.0 && z >= 0.0 && x + y + z <= 1.0,
                     ElementType::Quad4 => x.abs() <= 1.0 && y.abs() <= 1.0,
+                    ElementType::Hex8 => x.abs() <= 1.0 && y.abs() <= 1.0 && z.abs() <= 1.0,
                 };
                 assert!(inside, "{et:?} {count}: {:?}", p.xi);
             }
@@ -311,6 +312,8 @@ fn element_mesh(et: ElementType, coords: &[f64]) -> Option<Mesh> {
             }
             (Dimension::Cartesian3D, n)
         }
+        // CB-Geo's hexahedron: Anura3D places no MPs in it.
+        ElementType::Hex8 => return None,
     };
     let connectivity = (0..nodes.len() as u32).collect();
     Some(Mesh {

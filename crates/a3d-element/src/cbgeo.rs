@@ -135,34 +135,10 @@ impl CbGeoCell {
     }
 }
 
-/// A hexahedron's volume by the 2×2×2 Gauss rule on det J (exact for
-/// trilinear hexahedra).
+/// A hexahedron's volume: [`crate::Hex8`]'s measure.
 fn hex_volume(c: &[[f64; 3]]) -> f64 {
-    let mut v = 0.0;
-    for xi in q::QH2 {
-        let (x, y, z) = (xi[0], xi[1], xi[2]);
-        let s = [-1.0, 1.0, 1.0, -1.0, -1.0, 1.0, 1.0, -1.0];
-        let t = [-1.0, -1.0, 1.0, 1.0, -1.0, -1.0, 1.0, 1.0];
-        let u = [-1.0, -1.0, -1.0, -1.0, 1.0, 1.0, 1.0, 1.0];
-        let mut j = [[0.0; 3]; 3];
-        for n in 0..8 {
-            let d = [
-                0.125 * s[n] * (1.0 + t[n] * y) * (1.0 + u[n] * z),
-                0.125 * t[n] * (1.0 + s[n] * x) * (1.0 + u[n] * z),
-                0.125 * u[n] * (1.0 + s[n] * x) * (1.0 + t[n] * y),
-            ];
-            for a in 0..3 {
-                for b in 0..3 {
-                    j[a][b] += d[a] * c[n][b];
-                }
-            }
-        }
-        let det = j[0][0] * (j[1][1] * j[2][2] - j[1][2] * j[2][1])
-            - j[0][1] * (j[1][0] * j[2][2] - j[1][2] * j[2][0])
-            + j[0][2] * (j[1][0] * j[2][1] - j[1][1] * j[2][0]);
-        v += det.abs();
-    }
-    v
+    use crate::Element;
+    crate::Hex8::measure(&std::array::from_fn(|k| c[k]))
 }
 
 /// The particles CB-Geo's `"gauss"` generator creates in one cell with these

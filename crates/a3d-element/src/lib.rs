@@ -1,6 +1,6 @@
 //! Element geometry behind one seam: the [`Element`] trait, implemented once
 //! per element type in its own file ([`Tri3`] in `tri3.rs`, [`TetOld`] in
-//! `tet_old.rs`, [`Quad4`] in `quad4.rs`), and [`with_element`], the one place
+//! `tet_old.rs`, [`Quad4`] in `quad4.rs`, [`Hex8`] in `hex8.rs`), and [`with_element`], the one place
 //! that turns a mesh's [`ElementType`] into its implementation.
 //!
 //! An element gives, in Anura3D's parametrisation (e.g. the `tetrahedral_old`
@@ -23,6 +23,7 @@
 
 pub mod cbgeo;
 mod cbgeo_quadrature;
+mod hex8;
 pub mod place;
 mod quad4;
 pub mod simplex;
@@ -33,6 +34,7 @@ use std::marker::PhantomData;
 
 use nalgebra::{SMatrix, SVector};
 
+pub use hex8::Hex8;
 pub use quad4::Quad4;
 pub use simplex::Simplex;
 pub use tet_old::TetOld;
@@ -207,6 +209,7 @@ pub fn with_element<V: ElementVisitor>(element_type: ElementType, visitor: V) ->
         ElementType::Tri3 => visitor.visit::<2, 3, Tri3>(),
         ElementType::TetOld => visitor.visit::<3, 4, TetOld>(),
         ElementType::Quad4 => visitor.visit::<2, 4, Quad4>(),
+        ElementType::Hex8 => visitor.visit::<3, 8, Hex8>(),
     }
 }
 
@@ -298,7 +301,12 @@ mod tests {
     use super::*;
     use proptest::prelude::*;
 
-    const ALL: [ElementType; 3] = [ElementType::Tri3, ElementType::TetOld, ElementType::Quad4];
+    const ALL: [ElementType; 4] = [
+        ElementType::Tri3,
+        ElementType::TetOld,
+        ElementType::Quad4,
+        ElementType::Hex8,
+    ];
 
     fn close(a: f64, b: f64, tol: f64) -> Result<(), TestCaseError> {
         prop_assert!((a - b).abs() <= tol, "{a} vs {b} (tolerance {tol})");
@@ -432,7 +440,7 @@ mod tests {
 
         #[test]
         fn every_element_type_keeps_the_trait_promises(
-            r in proptest::collection::vec(-1.0f64..1.0, 28),
+            r in proptest::collection::vec(-1.0f64..1.0, 36),
         ) {
             for et in ALL {
                 with_element(et, Check(et, &r))?;

@@ -56,6 +56,9 @@ pub enum ElementType {
     TetOld,
     /// `quadrilateral_4-noded` (upstream Anura3D kernel only).
     Quad4,
+    /// The 8-noded hexahedron of CB-Geo mpm (`ED3H8`): Anura3D has none, so a
+    /// GOM never names it.
+    Hex8,
 }
 
 impl ElementType {
@@ -75,6 +78,7 @@ impl ElementType {
             ElementType::Tri3 => "triangular_3-noded",
             ElementType::TetOld => "tetrahedral_old",
             ElementType::Quad4 => "quadrilateral_4-noded",
+            ElementType::Hex8 => "hexahedral_8-noded (CB-Geo ED3H8)",
         }
     }
 
@@ -84,6 +88,7 @@ impl ElementType {
             ElementType::Tri3 => 3,
             ElementType::TetOld => 10,
             ElementType::Quad4 => 4,
+            ElementType::Hex8 => 8,
         }
     }
 
@@ -92,6 +97,7 @@ impl ElementType {
         match self {
             ElementType::Tri3 => 3,
             ElementType::TetOld | ElementType::Quad4 => 4,
+            ElementType::Hex8 => 8,
         }
     }
 
@@ -99,7 +105,7 @@ impl ElementType {
     pub fn n_dim(self) -> usize {
         match self {
             ElementType::Tri3 | ElementType::Quad4 => 2,
-            ElementType::TetOld => 3,
+            ElementType::TetOld | ElementType::Hex8 => 3,
         }
     }
 
@@ -109,6 +115,25 @@ impl ElementType {
             ElementType::Tri3 => &[1, 3, 6, 12, 16, 25, 46, 88],
             ElementType::TetOld => &[1, 4, 7, 8, 10, 13, 20],
             ElementType::Quad4 => &[1, 4],
+            ElementType::Hex8 => &[],
+        }
+    }
+
+    /// Each face's local corner indices (its edges in 2D), the first three
+    /// spanning its plane; every element type's faces cover its boundary.
+    pub fn faces(self) -> &'static [&'static [usize]] {
+        match self {
+            ElementType::Tri3 => &[&[0, 1], &[1, 2], &[2, 0]],
+            ElementType::Quad4 => &[&[0, 1], &[1, 2], &[2, 3], &[3, 0]],
+            ElementType::TetOld => &[&[0, 1, 2], &[0, 1, 3], &[0, 2, 3], &[1, 2, 3]],
+            ElementType::Hex8 => &[
+                &[0, 1, 2, 3],
+                &[4, 5, 6, 7],
+                &[0, 1, 5, 4],
+                &[1, 2, 6, 5],
+                &[2, 3, 7, 6],
+                &[3, 0, 4, 7],
+            ],
         }
     }
 }
@@ -144,8 +169,8 @@ impl Mesh {
     }
 
     /// Coordinates of the corners of element `e` (unused slots are zero).
-    pub fn corner_coords(&self, e: usize) -> [[f64; 3]; 4] {
-        let mut out = [[0.0; 3]; 4];
+    pub fn corner_coords(&self, e: usize) -> [[f64; 3]; 8] {
+        let mut out = [[0.0; 3]; 8];
         for (slot, &n) in out.iter_mut().zip(self.corners(e)) {
             *slot = self.nodes[n as usize];
         }

@@ -96,7 +96,9 @@ impl Domain {
             };
             let corners = match mesh.element_type {
                 ElementType::Tri3 | ElementType::Quad4 => mesh.corners(e),
-                ElementType::TetOld => unreachable!("3D types are refused above"),
+                ElementType::TetOld | ElementType::Hex8 => {
+                    unreachable!("3D types are refused above")
+                }
             };
             regions.push(Region {
                 polygon: corners

@@ -177,41 +177,33 @@ impl<'m> VerticalIndex<'m> {
             }
             true
         };
-        let ok = if mesh.dimension.n_dim() == 2 {
-            let nc = mesh.element_type.n_corners();
-            let centroid = {
-                let mut s = [0.0; 3];
-                for q in c.iter().take(nc) {
-                    for k in 0..3 {
-                        s[k] += q[k] / nc as f64;
-                    }
+        let nc = mesh.element_type.n_corners();
+        let centroid = {
+            let mut s = [0.0; 3];
+            for q in c.iter().take(nc) {
+                for k in 0..3 {
+                    s[k] += q[k] / nc as f64;
                 }
-                s
-            };
-            (0..nc).all(|i| {
-                let (a, b) = (c[i], c[(i + 1) % nc]);
-                clip([-(b[1] - a[1]), b[0] - a[0], 0.0], a, centroid)
-            })
-        } else {
-            let centroid = [
-                (c[0][0] + c[1][0] + c[2][0] + c[3][0]) / 4.0,
-                (c[0][1] + c[1][1] + c[2][1] + c[3][1]) / 4.0,
-                (c[0][2] + c[1][2] + c[2][2] + c[3][2]) / 4.0,
-            ];
-            [[0, 1, 2], [0, 1, 3], [0, 2, 3], [1, 2, 3]]
-                .iter()
-                .all(|f| {
-                    let (a, b, cc) = (c[f[0]], c[f[1]], c[f[2]]);
-                    let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
-                    let v = [cc[0] - a[0], cc[1] - a[1], cc[2] - a[2]];
-                    let nrm = [
-                        u[1] * v[2] - u[2] * v[1],
-                        u[2] * v[0] - u[0] * v[2],
-                        u[0] * v[1] - u[1] * v[0],
-                    ];
-                    clip(nrm, a, centroid)
-                })
+            }
+            s
         };
+        // Each face (edge in 2D) bounds the element by the plane through its
+        // first corners (its edge's line in 2D).
+        let ok = mesh.element_type.faces().iter().all(|f| {
+            if mesh.dimension.n_dim() == 2 {
+                let (a, b) = (c[f[0]], c[f[1]]);
+                return clip([-(b[1] - a[1]), b[0] - a[0], 0.0], a, centroid);
+            }
+            let (a, b, cc) = (c[f[0]], c[f[1]], c[f[2]]);
+            let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+            let v = [cc[0] - a[0], cc[1] - a[1], cc[2] - a[2]];
+            let nrm = [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ];
+            clip(nrm, a, centroid)
+        });
         (ok && y_hi > y_lo).then_some((y_lo, y_hi))
     }
 

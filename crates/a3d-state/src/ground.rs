@@ -68,21 +68,13 @@ pub fn ground_surface(mesh: &Mesh, active: impl Fn(usize) -> bool) -> GroundSurf
             low = low.min(y);
             high = high.max(y);
         }
-        if corners.len() != dim + 1 {
-            // Not a simplex: faces of quadrilaterals are their edges.
-            for k in 0..corners.len() {
-                let face = vec![corners[k], corners[(k + 1) % corners.len()]];
-                let other = corners[(k + 2) % corners.len()];
-                insert(&mut faces, face, other);
-            }
-            continue;
-        }
-        for skip in 0..corners.len() {
-            let face: Vec<u32> = (0..corners.len())
-                .filter(|&k| k != skip)
-                .map(|k| corners[k])
-                .collect();
-            insert(&mut faces, face, corners[skip]);
+        // Each face with a corner off it, which says which side is inside.
+        for local in mesh.element_type.faces() {
+            let face: Vec<u32> = local.iter().map(|&k| corners[k]).collect();
+            let inner = (0..corners.len())
+                .find(|k| !local.contains(k))
+                .map_or(corners[0], |k| corners[k]);
+            insert(&mut faces, face, inner);
         }
     }
     let height = (high - low).max(f64::MIN_POSITIVE);

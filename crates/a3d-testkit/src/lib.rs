@@ -233,7 +233,7 @@ pub fn place_points(model: &AnuraModel) -> Vec<MaterialPoint> {
                     push(k as u32 + 1, x, volume / 4.0);
                 }
             }
-            ElementType::Quad4 => {}
+            ElementType::Quad4 | ElementType::Hex8 => {}
         }
     }
     points

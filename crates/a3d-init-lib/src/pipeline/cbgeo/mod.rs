@@ -2,7 +2,7 @@
 //! them (`"file"` coordinates in file order; `"gauss"` points by
 //! [`crate::element::cbgeo`]), each in its cell, with its material and
 //! volume, and its materials and gravity in a3d-init's units, so that one
-//! mapping serves Anura3D and CB-Geo. The writer is [`write`].
+//! mapping serves Anura3D and CB-Geo. The writer is [`write::write_model`].
 //!
 //! What is translated, and how:
 //! - particle ids: CB-Geo counts from 0 over all generators in order; the
@@ -45,27 +45,23 @@ pub struct CbGeoTarget {
 /// Loads the CB-Geo model of the run file `path` and places its particles.
 pub fn load(path: &Path) -> Result<Project, PipelineError> {
     let cb = cbgeo::read(path)?;
-    let element_type = match cb.cell {
-        CbGeoCell::Quad4 => ElementType::Quad4,
-        CbGeoCell::Tri3 => ElementType::Tri3,
-        CbGeoCell::Hex8 => {
-            return Err(PipelineError::Input(format!(
-                "{}: ED3H8 cells: a3d-init maps CB-Geo models in 2D (ED2Q4, ED2T3) so far",
-                path.display()
-            )));
-        }
+    let (element_type, dimension) = match cb.cell {
+        CbGeoCell::Quad4 => (ElementType::Quad4, Dimension::PlaneStrain),
+        CbGeoCell::Tri3 => (ElementType::Tri3, Dimension::PlaneStrain),
+        CbGeoCell::Hex8 => (ElementType::Hex8, Dimension::Cartesian3D),
     };
-    if cb.gravity[0] != 0.0 || cb.gravity[1] > 0.0 {
+    if cb.gravity[0] != 0.0 || cb.gravity[1] > 0.0 || cb.gravity[2] != 0.0 {
         return Err(PipelineError::Input(format!(
-            "{}: gravity ({:?}, {:?}) m/s²: a3d-init's stresses take gravity along −y (x horizontal, y up)",
+            "{}: gravity ({:?}, {:?}, {:?}) m/s²: a3d-init's stresses take gravity along −y (y up, in 3D too, as Anura3D); a model with z up has to be turned",
             path.display(),
             cb.gravity[0],
-            cb.gravity[1]
+            cb.gravity[1],
+            cb.gravity[2]
         )));
     }
     let materials = materials(&cb);
     let mesh = Mesh {
-        dimension: Dimension::PlaneStrain,
+        dimension,
         element_type,
         nodes: cb.mesh.nodes.clone(),
         connectivity: cb.mesh.cells.iter().flatten().copied().collect(),
@@ -397,11 +393,12 @@ fn particles(
 }
 
 /// Finding the cell that holds a point: a uniform grid of the cells'
-/// bounding boxes, then the element's own containment test.
+/// bounding boxes (x, y and, in 3D, z), then the element's own containment
+/// test.
 struct Locator {
-    lo: [f64; 2],
+    lo: [f64; 3],
     size: f64,
-    dims: [usize; 2],
+    dims: [usize; 3],
     buckets: Vec<Vec<u32>>,
 }
 
@@ -412,35 +409,36 @@ impl Locator {
     /// mesh) gets one bucket, searched cell by cell.
     fn new(mesh: &Mesh) -> Locator {
         let (lo, hi) = mesh.bounding_box();
+        let dim = mesh.dimension.n_dim();
         let n = mesh.n_elements().max(1);
-        let span = [hi[0] - lo[0], hi[1] - lo[1]];
-        let area = (span[0] * span[1]).max(f64::MIN_POSITIVE);
-        let size = (area / n as f64).sqrt().max(1e-12);
+        let span: [f64; 3] = std::array::from_fn(|k| if k < dim { hi[k] - lo[k] } else { 0.0 });
+        let content = span[..dim].iter().product::<f64>().max(f64::MIN_POSITIVE);
+        let size = (content / n as f64).powf(1.0 / dim as f64).max(1e-12);
         let most = (4 * n).min(1 << 24) as f64;
         // In f64 first: a huge span or a NaN never overflows the counts.
         let side = |w: f64| (w / size).min(most).max(0.0) as usize + 1;
-        let mut dims = [side(span[0]), side(span[1])];
-        while (dims[0] * dims[1]) as f64 > most.max(1.0) {
-            dims = [dims[0].div_ceil(2), dims[1].div_ceil(2)];
+        let mut dims = span.map(side);
+        while (dims[0] * dims[1] * dims[2]) as f64 > most.max(1.0) {
+            dims = dims.map(|d| d.div_ceil(2));
         }
-        let size = (span[0] / dims[0] as f64)
-            .max(span[1] / dims[1] as f64)
-            .max(1e-12);
-        let one_bucket = |n_el: usize| Locator {
-            lo: [lo[0], lo[1]],
+        let size = (0..3)
+            .map(|k| span[k] / dims[k] as f64)
+            .fold(1e-12, f64::max);
+        let one_bucket = || Locator {
+            lo,
             size: f64::INFINITY,
-            dims: [1, 1],
-            buckets: vec![(0..n_el as u32).collect()],
+            dims: [1, 1, 1],
+            buckets: vec![(0..mesh.n_elements() as u32).collect()],
         };
         if !size.is_finite() {
-            return one_bucket(mesh.n_elements());
+            return one_bucket();
         }
-        let mut buckets = vec![Vec::new(); dims[0] * dims[1]];
+        let mut buckets = vec![Vec::new(); dims[0] * dims[1] * dims[2]];
         let mut entries = 0usize;
         for e in 0..mesh.n_elements() {
-            let (mut a, mut b) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+            let (mut a, mut b) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
             for &node in mesh.element_nodes(e) {
-                for k in 0..2 {
+                for k in 0..3 {
                     a[k] = a[k].min(mesh.nodes[node as usize][k]);
                     b[k] = b[k].max(mesh.nodes[node as usize][k]);
                 }
@@ -448,19 +446,24 @@ impl Locator {
             let cell = |v: f64, k: usize| {
                 (((v - lo[k]) / size).floor().max(0.0) as usize).min(dims[k] - 1)
             };
-            let (i0, i1, j0, j1) = (cell(a[0], 0), cell(b[0], 0), cell(a[1], 1), cell(b[1], 1));
-            entries += (i1 - i0 + 1) * (j1 - j0 + 1);
+            let (from, to): ([usize; 3], [usize; 3]) = (
+                std::array::from_fn(|k| cell(a[k], k)),
+                std::array::from_fn(|k| cell(b[k], k)),
+            );
+            entries += (0..3).map(|k| to[k] - from[k] + 1).product::<usize>();
             if entries > 64 * n + 1024 {
-                return one_bucket(mesh.n_elements());
+                return one_bucket();
             }
-            for i in i0..=i1 {
-                for j in j0..=j1 {
-                    buckets[j * dims[0] + i].push(e as u32);
+            for i in from[0]..=to[0] {
+                for j in from[1]..=to[1] {
+                    for l in from[2]..=to[2] {
+                        buckets[(l * dims[1] + j) * dims[0] + i].push(e as u32);
+                    }
                 }
             }
         }
         Locator {
-            lo: [lo[0], lo[1]],
+            lo,
             size,
             dims,
             buckets,
@@ -477,9 +480,9 @@ impl Locator {
             (v >= -1.0 && v <= self.dims[k] as f64)
                 .then(|| (v.max(0.0) as usize).min(self.dims[k] - 1))
         };
-        let (i, j) = (at(0)?, at(1)?);
+        let (i, j, l) = (at(0)?, at(1)?, at(2)?);
         let element = crate::element::mesh_element(mesh.element_type);
-        self.buckets[j * self.dims[0] + i]
+        self.buckets[(l * self.dims[1] + j) * self.dims[0] + i]
             .iter()
             .map(|&e| e as usize)
             .filter(|&e| element.contains(mesh, e, x, 1e-9))

@@ -1,5 +1,5 @@
 //! A folder the writers of a use case fill: each file written through a
-//! buffered, page-cache-bypassing writer ([`super::direct`]), or copied byte
+//! buffered, page-cache-bypassing writer (`direct`), or copied byte
 //! for byte. The folder is the staging folder of an [`super::output`] commit.
 
 use std::io::{BufWriter, Write};
