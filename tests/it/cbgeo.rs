@@ -668,3 +668,133 @@ fn develop_holds_a_mapped_3d_hexahedral_column_at_rest() {
         "its stresses changed by {changed} Pa of {range}"
     );
 }
+
+/// ACADS 1(a) written as a CB-Geo model: its Anura3D mesh as `mesh.txt`
+/// (ED2T3), its MPs as a particle file, its Mohr–Coulomb soil as
+/// `MohrCoulomb2D` with the bulk density (1 − n)·ρs (SI units).
+fn acads_1a_as_cbgeo(dir: &Path) {
+    let project = a3d_init::pipeline::Project::load(&fixture("acads-1a")).unwrap();
+    let mesh = &project.model.mesh;
+    let mut text = format!("{}\t{}\n", mesh.n_nodes(), mesh.n_elements());
+    for p in &mesh.nodes {
+        text += &format!("{}\t{}\n", p[0], p[1]);
+    }
+    for e in 0..mesh.n_elements() {
+        let c = mesh.element_nodes(e);
+        text += &format!("{}\t{}\t{}\n", c[0], c[1], c[2]);
+    }
+    std::fs::create_dir_all(dir).unwrap();
+    std::fs::write(dir.join("mesh.txt"), text).unwrap();
+    let mut particles = format!("{}\n", project.points.len());
+    for p in &project.points {
+        particles += &format!("{}\t{}\n", p.position[0], p.position[1]);
+    }
+    std::fs::write(dir.join("particles.txt"), particles).unwrap();
+    // The GOM's fixities as node sets: 0 fixed in x, 1 fixed in y.
+    let fixed = |k: usize| -> Vec<usize> {
+        let f = &project.model.solid_fixity;
+        (0..f.len()).filter(|&n| f[n][k]).collect()
+    };
+    let sets =
+        serde_json::json!({"node_sets": [{"id": 0, "set": fixed(0)}, {"id": 1, "set": fixed(1)}]});
+    std::fs::write(dir.join("entity_sets.json"), sets.to_string()).unwrap();
+    let m = &project.model.materials[0];
+    let density = (1.0 - m.porosity.unwrap()) * m.density_solid.unwrap();
+    let json = format!(
+        r#"{{
+	"title": "acads_1a",
+	"mesh": {{
+		"mesh": "mesh.txt",
+		"entity_sets": "entity_sets.json",
+		"cell_type": "ED2T3",
+		"io_type": "Ascii2D",
+		"node_type": "N2D",
+		"boundary_conditions": {{
+			"velocity_constraints": [
+				{{"nset_id": 0, "dir": 0, "velocity": 0.0}},
+				{{"nset_id": 1, "dir": 1, "velocity": 0.0}}
+			]
+		}}
+	}},
+	"particles": [
+		{{
+			"generator": {{
+				"type": "file",
+				"location": "particles.txt",
+				"io_type": "Ascii2D",
+				"particle_type": "P2D",
+				"material_id": 0,
+				"pset_id": 0
+			}}
+		}}
+	],
+	"materials": [
+		{{
+			"id": 0,
+			"name": "acads_1a",
+			"type": "MohrCoulomb2D",
+			"density": {density},
+			"youngs_modulus": {},
+			"poisson_ratio": {},
+			"friction": {},
+			"dilation": 0.0,
+			"cohesion": {},
+			"tension_cutoff": 0.0
+		}}
+	],
+	"external_loading_conditions": {{
+		"gravity": [0.0, -9.81]
+	}},
+	"analysis": {{
+		"type": "MPMExplicit2D",
+		"dt": 0.0001,
+		"nsteps": 10,
+		"velocity_update": false,
+		"uuid": "acads_1a"
+	}},
+	"post_processing": {{
+		"path": "results/",
+		"output_steps": 10
+	}}
+}}
+"#,
+        m.young_modulus.unwrap() * 1000.0,
+        m.poisson_ratio.unwrap(),
+        m.friction_angle.unwrap(),
+        m.cohesion.unwrap() * 1000.0
+    );
+    std::fs::write(dir.join("mpm.json"), json).unwrap();
+}
+
+#[test]
+fn fos_on_a_cbgeo_project_is_the_anura3d_models_factor() {
+    // The same slope, section, unit weight and strength through either
+    // target: limit equilibrium gives the same factor, near the referee's 1.00.
+    let tmp = tempfile::tempdir().unwrap();
+    let model = tmp.path().join("acads-1a-cbgeo");
+    acads_1a_as_cbgeo(&model);
+    let nodes = fixture("acads-1a/nodes.csv");
+    let cbgeo = tmp.path().join("cbgeo");
+    let (code, text) = run_map(&model.join("mpm.json"), &nodes, &cbgeo, &[]);
+    assert_eq!(code, 0, "{text}");
+    let anura3d = tmp.path().join("anura3d");
+    let (code, text) = run_map(&fixture("acads-1a"), &nodes, &anura3d, &[]);
+    assert_eq!(code, 0, "{text}");
+    let factor = |dir: &Path, out: &str| {
+        let (text, fos) = crate::common::fos(dir, &tmp.path().join(out), &[]);
+        (
+            fos["factor"].as_f64().unwrap_or_else(|| panic!("{text}")),
+            text,
+        )
+    };
+    let (f_cbgeo, text_cbgeo) = factor(&cbgeo, "fos-cbgeo");
+    let (f_anura3d, _) = factor(&anura3d, "fos-anura3d");
+    assert!(
+        (f_cbgeo / f_anura3d - 1.0).abs() < 1e-9,
+        "CB-Geo {f_cbgeo} against Anura3D {f_anura3d}: {text_cbgeo}"
+    );
+    assert!(
+        (f_cbgeo - 1.0).abs() < 0.05,
+        "{f_cbgeo} against the referee's 1.00"
+    );
+}

@@ -4,7 +4,8 @@
 //! [`a3d_element::cbgeo`]), the cell sets of `entity_sets`, the materials and
 //! gravity, and which branch the file is written for ([`Branch`]).
 //! Spec pages: `formats/cbgeo-mpm-json.md`, `formats/cbgeo-mesh.md`,
-//! `formats/cbgeo-particles.md`.
+//! `formats/cbgeo-particles.md`, `formats/cbgeo-particle-stresses.md`,
+//! `formats/cbgeo-pore-pressures.md`.
 //!
 //! Units are CB-Geo's (SI: m, Pa, kg/m³, m/s²) and signs its own (tension
 //! positive; pore pressure positive in compression). The mapping converts
