@@ -243,6 +243,24 @@ pub fn run(args: MapArgs) -> anyhow::Result<()> {
         r.sigma_yy_range.0,
         r.sigma_yy_range.1
     );
+    if let Some(cb) = &r.cbgeo {
+        say_err!(
+            "  CB-Geo {}: {} particles ({} two-phase): {} (Pa, tension positive{}){}",
+            cb.branch.name(),
+            cb.particles,
+            cb.two_phase_particles,
+            cb.stresses_file,
+            if cb.two_phase_particles > 0 {
+                "; two-phase: σ′ = σ + p·I"
+            } else {
+                "; total stress"
+            },
+            cb.pore_pressures_file
+                .as_deref()
+                .map(|p| format!(", {p} (Pa, compression positive)"))
+                .unwrap_or_default()
+        );
+    }
     for n in &r.notes {
         say_err!("  note: {n}");
     }

@@ -129,8 +129,13 @@ pub fn derive_stress(
                 )
             })
             .collect();
+        let why = if project.cbgeo.is_some() {
+            "CB-Geo's single phase carries no pore pressure, and its stresses file gets the total stress"
+        } else {
+            "as Anura3D would otherwise subtract the MAPF's Pwp from their stress"
+        };
         notes.push(format!(
-            "FEM pore pressure dropped on MPs of materials without a liquid phase (dry_material): {}; they carry pwp = 0 and σ' = σ, as Anura3D would otherwise subtract the MAPF's Pwp from their stress",
+            "FEM pore pressure dropped on MPs of materials without a liquid phase (dry_material): {}; they carry pwp = 0 and σ' = σ, {why}",
             list.join(", ")
         ));
     }
