@@ -342,3 +342,24 @@ def test_structured_columns_carry_headers_with_commas(tmp_path):
     # A header that is not there: the library's message, naming the keyword.
     with pytest.raises(a3d_init.InputFileError, match=r"the column mapping \(columns=\) names pwp=nope: no such header"):
         a3d_init.read_fem(fem, columns={"pwp": "nope"})
+
+
+def test_map_writes_a_cbgeo_project_as_the_cli_does(tmp_path):
+    # #41: a CB-Geo run file as the model: the same call writes CB-Geo's files.
+    cbgeo = FIXTURES / "cbgeo" / "consolidation"
+    fem = cbgeo / "fem-state.csv"
+    out = tmp_path / "py"
+    mapped = a3d_init.map(fem, cbgeo / "mpm.json", out, stress="fem")
+    assert mapped["material_points"] == 600
+    assert mapped["cbgeo"]["branch"] == "Fork"
+    assert mapped["cbgeo"]["two_phase_particles"] == 600
+    assert {"mpm.json", "particles-stresses.txt", "particles-pore-pressures.txt"} <= set(mapped.files)
+    # CB-Geo's pore pressure: Pa, compression positive, p = -pwp.
+    rows = [line.split() for line in (out / "particles-pore-pressures.txt").read_text().splitlines()]
+    p = np.array([float(r[1]) for r in rows])
+    assert np.allclose(p, -1000.0 * mapped.state["pwp"], rtol=1e-12, atol=0.0)
+    cli_out = tmp_path / "cli"
+    subprocess.run([cli_binary(), "map", "--fem", str(fem), "--mpm", str(cbgeo / "mpm.json"), "--stress", "fem", "--out", str(cli_out)], check=True, capture_output=True)
+    for name in mapped.files:
+        if name != "report.json":
+            assert (out / name).read_bytes() == (cli_out / name).read_bytes(), name
