@@ -86,59 +86,19 @@ impl CbGeoCell {
         }
     }
 
-    /// The shape functions at ξ, in CB-Geo's node order and arithmetic.
+    /// The shape functions at ξ, in CB-Geo's node order and arithmetic: the
+    /// element seam's for the quadrilateral and the hexahedron (the same
+    /// products, bit for bit), CB-Geo's own 1 − (ξ + η) for the triangle
+    /// (the seam's `Tri3` rounds 1 − ξ − η).
     pub fn shape(self, xi: [f64; 3]) -> Vec<f64> {
+        use crate::Element;
         let [x, y, z] = xi;
         match self {
             CbGeoCell::Tri3 => vec![1.0 - (x + y), x, y],
-            CbGeoCell::Quad4 => vec![
-                0.25 * (1.0 - x) * (1.0 - y),
-                0.25 * (1.0 + x) * (1.0 - y),
-                0.25 * (1.0 + x) * (1.0 + y),
-                0.25 * (1.0 - x) * (1.0 + y),
-            ],
-            CbGeoCell::Hex8 => vec![
-                0.125 * (1.0 - x) * (1.0 - y) * (1.0 - z),
-                0.125 * (1.0 + x) * (1.0 - y) * (1.0 - z),
-                0.125 * (1.0 + x) * (1.0 + y) * (1.0 - z),
-                0.125 * (1.0 - x) * (1.0 + y) * (1.0 - z),
-                0.125 * (1.0 - x) * (1.0 - y) * (1.0 + z),
-                0.125 * (1.0 + x) * (1.0 - y) * (1.0 + z),
-                0.125 * (1.0 + x) * (1.0 + y) * (1.0 + z),
-                0.125 * (1.0 - x) * (1.0 + y) * (1.0 + z),
-            ],
+            CbGeoCell::Quad4 => crate::Quad4::shape_values(&[x, y]).to_vec(),
+            CbGeoCell::Hex8 => crate::Hex8::shape_values(&[x, y, z]).to_vec(),
         }
     }
-
-    /// The measure of a cell with these corner coordinates (area in 2D,
-    /// volume in 3D), by the quadrature CB-Geo uses for a cell's volume
-    /// (one point, weight 2ᵈ for the box elements, ½ for the triangle): the
-    /// exact measure of a parallelogram, a triangle or a parallelepiped, and
-    /// of any bilinear quadrilateral.
-    pub fn measure(self, corners: &[[f64; 3]]) -> f64 {
-        match self {
-            CbGeoCell::Tri3 => {
-                let [a, b, c] = [corners[0], corners[1], corners[2]];
-                0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])).abs()
-            }
-            CbGeoCell::Quad4 => {
-                // The shoelace formula: exact for any straight-sided quadrilateral.
-                let mut s = 0.0;
-                for i in 0..4 {
-                    let (p, r) = (corners[i], corners[(i + 1) % 4]);
-                    s += p[0] * r[1] - r[0] * p[1];
-                }
-                0.5 * s.abs()
-            }
-            CbGeoCell::Hex8 => hex_volume(corners),
-        }
-    }
-}
-
-/// A hexahedron's volume: [`crate::Hex8`]'s measure.
-fn hex_volume(c: &[[f64; 3]]) -> f64 {
-    use crate::Element;
-    crate::Hex8::measure(&std::array::from_fn(|k| c[k]))
 }
 
 /// The particles CB-Geo's `"gauss"` generator creates in one cell with these
@@ -201,7 +161,10 @@ mod tests {
             }
         }
         let tri = [[0.0, 0.0, 0.0], [3.0, 0.0, 0.0], [0.0, 2.0, 0.0]];
-        assert_eq!(CbGeoCell::Tri3.measure(&tri), 3.0);
+        use crate::Element;
+        let flat = |c: &[[f64; 3]]| -> Vec<[f64; 2]> { c.iter().map(|p| [p[0], p[1]]).collect() };
+        // The measures the particles' volumes come from: the element seam's.
+        assert_eq!(crate::Tri3::measure(&flat(&tri).try_into().unwrap()), 3.0);
         let p = gauss_points(CbGeoCell::Tri3, 1, &tri);
         assert!((p[0][0] - 1.0).abs() < 1e-15 && (p[0][1] - 2.0 / 3.0).abs() < 1e-15);
         let cube: Vec<[f64; 3]> = [
@@ -217,13 +180,13 @@ mod tests {
         .iter()
         .map(|p| [2.0 * p[0], 3.0 * p[1], 0.5 * p[2]])
         .collect();
-        assert!((CbGeoCell::Hex8.measure(&cube) - 3.0).abs() < 1e-14);
+        assert!((crate::Hex8::measure(&cube.clone().try_into().unwrap()) - 3.0).abs() < 1e-14);
         let quad = [
             [0.0, 0.0, 0.0],
             [4.0, 0.0, 0.0],
             [3.0, 2.0, 0.0],
             [1.0, 2.0, 0.0],
         ];
-        assert_eq!(CbGeoCell::Quad4.measure(&quad), 6.0);
+        assert_eq!(crate::Quad4::measure(&flat(&quad).try_into().unwrap()), 6.0);
     }
 }

@@ -103,43 +103,29 @@ impl CbGeoSummary {
     pub fn of(t: &crate::pipeline::cbgeo::CbGeoTarget) -> CbGeoSummary {
         use crate::formats::cbgeo::Particles;
         let m = &t.model;
-        let mut first = 0;
         let generators = m
             .generators
             .iter()
-            .map(|g| {
-                let n = match &g.particles {
-                    Particles::File { coordinates, .. } => coordinates.len(),
-                    Particles::Gauss { per_dir, cset_id } => {
-                        let cells = if *cset_id == -1 {
-                            m.mesh.cells.len()
-                        } else {
-                            m.cell_sets
-                                .iter()
-                                .find(|(id, _)| id == cset_id)
-                                .map_or(0, |(_, s)| s.len())
-                        };
-                        cells * m.cell.points_per_cell(*per_dir)
-                    }
-                };
+            .zip(&t.generated)
+            .map(|(g, ids)| {
                 let what = match &g.particles {
                     Particles::File { path, .. } => format!("file {}", path.display()),
                     Particles::Gauss { per_dir, cset_id } => {
                         format!("gauss {per_dir} per direction in cell set {cset_id}")
                     }
                 };
-                let line = format!(
-                    "{what}: {n} {} particles (ids {first}..{}), material ids {:?}",
-                    if g.particle_type.is_empty() {
-                        "?"
-                    } else {
-                        &g.particle_type
-                    },
-                    first + n.saturating_sub(1),
+                let kind = if g.particle_type.is_empty() {
+                    "?"
+                } else {
+                    &g.particle_type
+                };
+                format!(
+                    "{what}: {} {kind} particles (ids {}..{}), material ids {:?}",
+                    ids.len(),
+                    ids.start,
+                    ids.end.saturating_sub(1).max(ids.start),
                     g.material_ids
-                );
-                first += n;
-                line
+                )
             })
             .collect();
         CbGeoSummary {
@@ -149,7 +135,7 @@ impl CbGeoSummary {
             analysis: m.analysis_type.clone(),
             gravity: m.gravity,
             generators,
-            two_phase_particles: t.two_phase.iter().filter(|&&b| b).count(),
+            two_phase_particles: t.two_phase_particles(),
             cell_sets: m.cell_sets.iter().map(|(id, s)| (*id, s.len())).collect(),
             stresses_key: m.stresses_key.clone(),
             files: m.referenced.iter().map(|r| r.name.clone()).collect(),

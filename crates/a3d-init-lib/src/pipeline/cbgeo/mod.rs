@@ -34,12 +34,37 @@ use crate::pipeline::{PipelineError, Project};
 
 pub mod write;
 
-/// A CB-Geo model behind a [`Project`]: the model as read, and which
-/// particles are two-phase (in particle order).
+/// A CB-Geo model behind a [`Project`]: the model as read, and the particles
+/// (ids from 0) each of its generators made, in order.
 #[derive(Clone, Debug)]
 pub struct CbGeoTarget {
     pub model: CbGeoModel,
-    pub two_phase: Vec<bool>,
+    pub generated: Vec<std::ops::Range<usize>>,
+}
+
+impl CbGeoTarget {
+    /// Particles in all.
+    pub fn particles(&self) -> usize {
+        self.generated.last().map_or(0, |r| r.end)
+    }
+
+    /// Per particle, in order: whether its generator makes two-phase particles.
+    pub fn two_phase(&self) -> Vec<bool> {
+        let mut flags = Vec::with_capacity(self.particles());
+        for (g, r) in self.model.generators.iter().zip(&self.generated) {
+            flags.resize(r.end, g.two_phase());
+        }
+        flags
+    }
+
+    /// How many particles are two-phase.
+    pub fn two_phase_particles(&self) -> usize {
+        let two = self.model.generators.iter().map(|g| g.two_phase());
+        two.zip(&self.generated)
+            .filter(|(t, _)| *t)
+            .map(|(_, r)| r.len())
+            .sum()
+    }
 }
 
 /// Loads the CB-Geo model of the run file `path` and places its particles.
@@ -66,7 +91,7 @@ pub fn load(path: &Path) -> Result<Project, PipelineError> {
         nodes: cb.mesh.nodes.clone(),
         connectivity: cb.mesh.cells.iter().flatten().copied().collect(),
     };
-    let (points, two_phase) = particles(&cb, &mesh)?;
+    let (points, generated) = particles(&cb, &mesh)?;
     let n_cells = cb.mesh.cells.len();
     let mut element_material = vec![0u32; n_cells];
     let mut counts = vec![(0u32, 0u32); n_cells];
@@ -114,7 +139,7 @@ pub fn load(path: &Path) -> Result<Project, PipelineError> {
         points,
         cbgeo: Some(Box::new(CbGeoTarget {
             model: cb,
-            two_phase,
+            generated,
         })),
     })
 }
@@ -128,7 +153,7 @@ pub fn held_state(target: &CbGeoTarget) -> Result<Vec<crate::model::MpState>, Pi
     use crate::formats::cbgeo::text;
     use crate::model::MpState;
     let m = &target.model;
-    let n = target.two_phase.len();
+    let n = target.particles();
     let mut states = vec![
         MpState {
             saturation: 1.0,
@@ -166,7 +191,7 @@ pub fn held_state(target: &CbGeoTarget) -> Result<Vec<crate::model::MpState>, Pi
             s.pwp = -p / 1000.0;
         }
     }
-    for (s, &two) in states.iter_mut().zip(&target.two_phase) {
+    for (s, two) in states.iter_mut().zip(target.two_phase()) {
         if two {
             for c in s.total.iter_mut().take(3) {
                 *c += s.pwp;
@@ -293,11 +318,11 @@ fn materials(cb: &CbGeoModel) -> Vec<Material> {
 }
 
 /// Every particle in CB-Geo's order (its cell, material and volume), and
-/// whether each is two-phase.
+/// the particles each generator made.
 fn particles(
     cb: &CbGeoModel,
     mesh: &Mesh,
-) -> Result<(Vec<MaterialPoint>, Vec<bool>), PipelineError> {
+) -> Result<(Vec<MaterialPoint>, Vec<std::ops::Range<usize>>), PipelineError> {
     let index_of = |id: u32| {
         cb.materials
             .iter()
@@ -312,8 +337,9 @@ fn particles(
     };
     let locator = Locator::new(mesh);
     let mut points: Vec<MaterialPoint> = Vec::new();
-    let mut two_phase = Vec::new();
+    let mut generated = Vec::new();
     for g in &cb.generators {
+        let first = points.len();
         let material = index_of(g.material_ids[0]);
         match &g.particles {
             Particles::Gauss { per_dir, cset_id } => {
@@ -368,7 +394,7 @@ fn particles(
                 }
             }
         }
-        two_phase.resize(points.len(), g.two_phase());
+        generated.push(first..points.len());
     }
     if points.len() > u32::MAX as usize - 1 {
         return Err(PipelineError::Input(
@@ -380,16 +406,20 @@ fn particles(
     for p in &points {
         per_cell[p.element as usize] += 1;
     }
+    let element = crate::element::mesh_element(mesh.element_type);
+    let share: Vec<f64> = (0..per_cell.len())
+        .map(|c| element.measure(mesh, c).abs() / f64::from(per_cell[c].max(1)))
+        .collect();
     let mut local = vec![0u32; cb.mesh.cells.len()];
     for p in &mut points {
         let c = p.element as usize;
-        p.volume = cb.cell.measure(&corners(c)) / f64::from(per_cell[c]);
+        p.volume = share[c];
         if p.local == 0 {
             local[c] += 1;
             p.local = local[c];
         }
     }
-    Ok((points, two_phase))
+    Ok((points, generated))
 }
 
 /// Finding the cell that holds a point: a uniform grid of the cells'

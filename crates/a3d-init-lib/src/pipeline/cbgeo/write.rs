@@ -65,14 +65,14 @@ fn free_name(target: &CbGeoTarget, want: &str, two_phase: bool) -> String {
 /// before writing, so that report.json and the files agree).
 pub fn report(target: &CbGeoTarget) -> CbGeoReport {
     let m = &target.model;
-    let two = target.two_phase.iter().filter(|&&t| t).count();
+    let two = target.two_phase_particles();
     let stresses_file = free_name(target, STRESSES, two > 0);
     let pore_pressures_file = (two > 0).then(|| free_name(target, PORE_PRESSURES, true));
     let mut conventions = vec![
         "units: Pa (a3d-init's kPa × 1000), m".to_string(),
         "stresses: σxx σyy σzz τxy τyz τxz per line, tension positive, one line per particle in CB-Geo's particle order (ids from 0: the generators in order, a file's lines in order, a gauss generator's cells in set order and each cell's points in CB-Geo's quadrature order)".to_string(),
     ];
-    if two < m_particles(target) {
+    if two < target.particles() {
         conventions.push(
             "single-phase particles: the total stress (CB-Geo's single phase carries no pore pressure)".into(),
         );
@@ -89,7 +89,7 @@ pub fn report(target: &CbGeoTarget) -> CbGeoReport {
         stresses_key: cbgeo::write::file_key(m.branch, &stresses_file),
         stresses_file,
         pore_pressures_file,
-        particles: m_particles(target),
+        particles: target.particles(),
         two_phase_particles: two,
         conventions,
     }
@@ -103,10 +103,6 @@ fn rewritten(file: &cbgeo::Referenced, pore_pressures: bool) -> bool {
         Some(_) => pore_pressures,
         None => false,
     }
-}
-
-fn m_particles(target: &CbGeoTarget) -> usize {
-    target.two_phase.len()
 }
 
 fn run_file_name(target: &CbGeoTarget) -> String {
@@ -141,7 +137,10 @@ pub fn write_model(
     out: &Folder<'_>,
 ) -> Result<Vec<String>, PipelineError> {
     let m = &target.model;
-    let r = report(target);
+    // The names report.json states are the names written.
+    let r = mapped.report.cbgeo.as_ref().ok_or_else(|| {
+        PipelineError::Output("a CB-Geo model's map report has no cbgeo section".into())
+    })?;
     let mut written = Vec::new();
     for f in &m.referenced {
         if !rewritten(f, r.pore_pressures_file.is_some()) {
@@ -150,7 +149,7 @@ pub fn write_model(
         }
     }
     let states = &mapped.states;
-    let two = &target.two_phase;
+    let two = target.two_phase();
     out.write(&r.stresses_file, |w| {
         cbgeo::write::stresses(w, states.len(), &|i| stored_stress(&states[i], two[i]))
     })?;
