@@ -55,6 +55,29 @@ fn no_stub_macros_in_the_library() {
     }
 }
 
+/// `unsafe` lives in one file, the kernel's AVX-512 distance test: the
+/// workspace denies it, and only that module allows it back.
+#[test]
+fn unsafe_code_stays_in_the_simd_module() {
+    let allowed = Path::new("crates/a3d-kernel/src/simd.rs");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut seen = Vec::new();
+    for path in source_files() {
+        let text = std::fs::read_to_string(&path).unwrap();
+        let code = text
+            .lines()
+            .filter(|l| !l.trim_start().starts_with("//"))
+            .collect::<Vec<_>>()
+            .join("\n");
+        if code.contains("unsafe") || code.contains("allow(unsafe_code)") {
+            seen.push(path.strip_prefix(root).unwrap_or(&path).to_path_buf());
+        }
+    }
+    assert_eq!(seen, vec![allowed.to_path_buf()], "files with unsafe code");
+    let manifest = std::fs::read_to_string(root.join("Cargo.toml")).unwrap();
+    assert!(manifest.contains("unsafe_code = \"deny\""));
+}
+
 /// The program's sources: the binary's `src/` and every crate's `src/`.
 fn source_files() -> Vec<PathBuf> {
     let mut files = Vec::new();

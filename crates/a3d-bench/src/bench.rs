@@ -66,6 +66,7 @@ pub fn map(args: &BenchArgs) -> anyhow::Result<()> {
         let t = Instant::now();
         let search = match args.search {
             SearchArg::Grid => mapper::Search::Grid,
+            SearchArg::GridPortable => mapper::Search::GridPortable,
             SearchArg::Kdtree => mapper::Search::KdTree,
         };
         let r = mapper::map_points_with(&cloud, &points, None, &settings, search, true)

@@ -69,6 +69,8 @@ pub struct BenchArgs {
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 pub enum SearchArg {
     Grid,
+    /// The grid without AVX-512.
+    GridPortable,
     Kdtree,
 }
 

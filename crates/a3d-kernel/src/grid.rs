@@ -4,16 +4,23 @@
 //! from anywhere in a cell (runs of cells along x, contiguous in the sorted
 //! columns) are found once per cell ([`Grid::blocks`]) and cut into blocks
 //! of LANES points; every query of the cell then tests those blocks in a
-//! loop the compiler vectorises, writing the hits without a branch
-//! ([`Grid::collect`]). The hits are ordered by a bucket pass and an
-//! insertion sort ([`Grid::sorted`]).
+//! loop the compiler vectorises (AVX-512 with `vcompresspd` where the
+//! processor has it, `simd.rs`), writing the hits without a branch
+//! ([`Grid::collect`]). The mapper takes the hits as they come, in the
+//! grid's order ([`Hits::in_grid_order`]): no sort per query, and the order
+//! a point's sums run in is fixed by the grid alone. [`Grid::within`] and
+//! [`Grid::sorted`] order them by (distance, index) instead, with a bucket
+//! pass and an insertion sort (the k-d tree's contract, for the tests).
 //! [`Grid::nearest_others`] instead gathers the 3^dim cells around a
 //! cell once for all the points of that cell.
 //!
-//! Same contract as the k-d tree of `neighbours.rs` (which stays the reference):
-//! physical radius in, `(index, distance)` out, inclusive, sorted by (distance,
-//! index), distances computed as `sqrt(Σ (p_k − q_k)²)` in axis order, so both
-//! give bit-identical lists. Like `neighbours.rs`, this file sees squared distances.
+//! [`Grid::within`] has the contract of the k-d tree of `neighbours.rs` (which
+//! stays the reference): physical radius in, `(index, distance)` out,
+//! inclusive, sorted by (distance, index), distances computed as
+//! `sqrt(Σ (p_k − q_k)²)` in axis order, so both give bit-identical lists.
+//! Like `neighbours.rs` and `simd.rs`, this file sees squared distances.
+
+use super::simd::{Avx512, Block};
 
 /// Points sorted by cell, coordinates stored column-wise.
 pub struct Grid {
@@ -39,6 +46,8 @@ pub struct Grid {
     zs: Vec<f64>,
     /// Original index of each sorted point.
     ids: Vec<u32>,
+    /// The AVX-512 distance test, where the processor has it.
+    simd: Option<Avx512>,
 }
 
 /// Cell coordinates of a query (may lie outside the grid by any amount).
@@ -48,6 +57,11 @@ pub type Cell = [i64; 3];
 /// order) that a search radius reaches, from [`Grid::stencil`].
 pub struct Stencil {
     rows: Vec<[i64; 3]>,
+    /// Per row, its offset in cells from the cell's (`dy·nx + dz·nx·ny`)
+    /// and its reach along x, for cells whose stencil lies in the grid.
+    offsets: Vec<(i64, i64)>,
+    /// How far the stencil reaches along y and z.
+    reach: [i64; 2],
 }
 
 impl Stencil {
@@ -148,6 +162,7 @@ impl Grid {
             ys: Vec::with_capacity(n + LANES),
             zs: Vec::with_capacity(n + LANES),
             ids: Vec::new(),
+            simd: Avx512::detect(),
         };
         let n_cells = (dims[0] * dims[1] * dims[2]) as usize;
         // Every point lies in the box; the clamp only catches a multiplication
@@ -190,6 +205,11 @@ impl Grid {
         grid
     }
 
+    /// Tests distances in portable code only, never AVX-512 (the same bits).
+    pub fn portable(&mut self) {
+        self.simd = None;
+    }
+
     /// True when the cells came out more than 4 times wider than asked (the
     /// cell count is kept near the point count: a radius tiny against the
     /// cloud, or one point far from the rest) or the rounding slack spans a
@@ -212,6 +232,7 @@ impl Grid {
     }
 
     /// The cell of `q`, clamped to one cell outside the grid (those see the border).
+    #[inline]
     pub fn cell(&self, q: [f64; 3]) -> Cell {
         let mut c = [0i64; 3];
         for (k, ck) in c.iter_mut().enumerate().take(self.dim) {
@@ -287,16 +308,49 @@ impl Grid {
                 }
             }
         }
-        Stencil { rows }
+        let (nx, ny) = (self.dims[0], self.dims[1]);
+        let offsets = rows
+            .iter()
+            .map(|&[dy, dz, dx]| (dy * nx + dz * nx * ny, dx))
+            .collect();
+        let reach = [0, 1].map(|k| rows.iter().map(|r| r[k].abs()).max().unwrap_or(0));
+        Stencil {
+            rows,
+            offsets,
+            reach,
+        }
     }
 
     /// The blocks of `stencil` around `cell`: its rows of cells clipped to
     /// the grid, each a run of grid positions (contiguous in the sorted
     /// columns), cut into blocks of LANES points. Every query in the cell
     /// shares them.
+    #[inline]
     pub fn blocks(&self, stencil: &Stencil, cell: Cell, out: &mut Blocks) {
         out.blocks.clear();
         let last = [self.dims[0] - 1, self.dims[1] - 1, self.dims[2] - 1];
+        let [ry, rz] = stencil.reach;
+        let most = stencil.offsets.iter().map(|o| o.1).max().unwrap_or(0);
+        let inside = cell[0] - most >= 0
+            && cell[0] + most <= last[0]
+            && cell[1] - ry >= 0
+            && cell[1] + ry <= last[1]
+            && cell[2] - rz >= 0
+            && cell[2] + rz <= last[2];
+        if inside {
+            // Every row lies in the grid, unclipped: the same runs as below
+            // from the rows' offsets, without the clipping.
+            let at = self.linear(cell) as i64;
+            for &(offset, dx) in &stencil.offsets {
+                let row = at + offset;
+                let (a, b) = (
+                    self.start[(row - dx) as usize],
+                    self.start[(row + dx + 1) as usize],
+                );
+                split(a, b, &mut out.blocks);
+            }
+            return;
+        }
         for &[dy, dz, dx] in &stencil.rows {
             let (y, z) = (cell[1] + dy, cell[2] + dz);
             if y < 0 || y > last[1] || z < 0 || z > last[2] {
@@ -306,31 +360,32 @@ impl Grid {
             if x0 > x1 {
                 continue;
             }
-            let (mut at, b) = (
+            let (a, b) = (
                 self.start[self.linear([x0, y, z])],
                 self.start[self.linear([x1, y, z]) + 1],
             );
-            while at < b {
-                let valid = (b - at).min(LANES as u32);
-                out.blocks.push(Block {
-                    at,
-                    valid: (1u32 << valid) - 1,
-                });
-                at += LANES as u32;
-            }
+            split(a, b, &mut out.blocks);
         }
     }
 
     /// The points of `blocks` (from [`Grid::blocks`] for `q`'s cell) within
     /// `radius` of `q` (inclusive) into `hits`, with their squared distances
     /// `Σ (p_k − q_k)²` summed in axis order. A non-finite `q` finds nothing.
+    #[inline(always)]
     pub fn collect(&self, blocks: &Blocks, q: [f64; 3], radius: f64, hits: &mut Hits) {
         hits.len = 0;
         if q[..self.dim].iter().any(|v| !v.is_finite()) {
             return;
         }
         let cols = [&self.xs[..], &self.ys[..], &self.zs[..]];
-        hits.test(cols, self.dim == 3, &blocks.blocks, q, radius * radius);
+        hits.test(
+            cols,
+            self.dim == 3,
+            &blocks.blocks,
+            q,
+            radius * radius,
+            self.simd,
+        );
     }
 
     /// The hits of [`Grid::collect`] for a search of `radius` as (position,
@@ -576,12 +631,38 @@ pub struct Hits {
     keys: Vec<u128>,
 }
 
+/// The grid positions `a..b` as blocks of LANES, the last one's lanes past
+/// `b` marked invalid.
+#[inline(always)]
+fn split(mut at: u32, b: u32, out: &mut Vec<Block>) {
+    while at < b {
+        let valid = (b - at).min(LANES as u32);
+        out.push(Block {
+            at,
+            valid: (1u32 << valid) - 1,
+        });
+        at += LANES as u32;
+    }
+}
+
 /// Candidates tested together, in one loop the compiler vectorises (8 beat
 /// 4 and 16 in `bench map`: a row of the mapper's cells holds about 7.5
 /// points).
 const LANES: usize = 8;
 
 impl Hits {
+    /// The hits of the last [`Grid::collect`] as (grid positions, distances),
+    /// in the order collect found them: the stencil's rows in ascending order,
+    /// each row's points in the grid's order, so ascending grid position. The
+    /// distances are `sqrt` of the squared distances, as in [`Grid::sorted`].
+    #[inline(always)]
+    pub fn in_grid_order(&mut self) -> (&[u32], &[f64]) {
+        let n = self.len;
+        self.d.clear();
+        self.d.extend(self.d2[..n].iter().map(|v| v.sqrt()));
+        (&self.pos[..n], &self.d[..n])
+    }
+
     /// Tests the `blocks` of the padded columns `xs`, `ys`, `zs` (`zs`
     /// unread unless `d3`) against `q`: the squared distances of a block are
     /// computed together, then every lane is written and kept (the count
@@ -595,6 +676,7 @@ impl Hits {
         blocks: &[Block],
         q: [f64; 3],
         r2: f64,
+        simd: Option<Avx512>,
     ) {
         let need = (blocks.len() + 1) * LANES;
         if self.pos.len() < need {
@@ -602,6 +684,11 @@ impl Hits {
             self.pos.resize(size, 0);
             self.d2.resize(size, 0.0);
             self.bucket.resize(size, 0);
+        }
+        if let Some(simd) = simd {
+            let cols = [xs, ys, zs];
+            self.len = simd.test(cols, d3, blocks, q, r2, (&mut self.pos, &mut self.d2));
+            return;
         }
         let mut len = 0;
         for &Block { at, valid } in blocks {
@@ -718,11 +805,3 @@ impl Hits {
 
 /// The most hits one bucket of [`Scratch::sort`] takes before it sorts by comparison.
 const MAX_BUCKET: u32 = 16;
-
-/// LANES grid positions from `at` tested together; `valid`: the lanes (bits)
-/// that belong to the runs.
-#[derive(Clone, Copy, Debug)]
-pub struct Block {
-    at: u32,
-    valid: u32,
-}

@@ -12,6 +12,7 @@ pub mod grid;
 pub mod loo;
 pub mod mapper;
 pub mod neighbours;
+pub mod simd;
 
 use std::f64::consts::PI;
 
@@ -200,6 +201,22 @@ impl KernelKind {
             KernelKind::Cubic => fill(found, h, w, |q| CubicSpline.shape(q)),
             KernelKind::Gaussian { cutoff } => fill(found, h, w, |q| Gaussian { cutoff }.shape(q)),
             KernelKind::Wendland { dim1 } => fill(found, h, w, |q| WendlandC2 { dim1 }.shape(q)),
+        }
+    }
+
+    /// `w[i] = shape(d[i] / h)` for every distance of `d` (the same values
+    /// as [`KernelKind::shapes`]), in one loop the compiler vectorises.
+    #[inline(always)]
+    pub fn weights(self, d: &[f64], h: f64, w: &mut Vec<f64>) {
+        #[inline(always)]
+        fn fill(d: &[f64], h: f64, w: &mut Vec<f64>, shape: impl Fn(f64) -> f64) {
+            w.clear();
+            w.extend(d.iter().map(|&d| shape(d / h)));
+        }
+        match self {
+            KernelKind::Cubic => fill(d, h, w, |q| CubicSpline.shape(q)),
+            KernelKind::Gaussian { cutoff } => fill(d, h, w, |q| Gaussian { cutoff }.shape(q)),
+            KernelKind::Wendland { dim1 } => fill(d, h, w, |q| WendlandC2 { dim1 }.shape(q)),
         }
     }
 }

@@ -2,9 +2,12 @@
 //! f(x) = Σ w(dᵢ/h)·fᵢ / Σ w(dᵢ/h) over the nodes inside the kernel support.
 //!
 //! Parallel over query points with rayon. Each point's sums run over its
-//! neighbours sorted by (distance, index), and chunks are concatenated in
-//! order, so the output is bit-identical for any thread count
-//! ([`map_points_with`] run serially is the oracle). Groups keep materials
+//! neighbours in the order of its group's cell grid (cell by cell, x
+//! fastest, then node index within a cell): an order fixed by the data
+//! structure and the point's coordinates alone, with no per-query sort, so
+//! the output is bit-identical for any thread count ([`map_points_with`] run
+//! serially is the oracle) and equals a brute-force sum in any other order
+//! to rounding. Groups keep materials
 //! apart: a point only takes nodes of its own group ("no smoothing across
 //! material boundaries").
 //!
@@ -14,14 +17,15 @@
 //! nodes a cell's support reaches, found once per cell, tested per query;
 //! the grid answers the `--outside nearest` fallback too) or from the kiddo
 //! tree ([`Search::KdTree`], the reference, its hits named by their grid
-//! positions); both give the same sorted lists, so the results are
-//! bit-identical. Results are scattered back batch by batch to bound memory;
+//! positions and put in that order); both give the same lists, so the
+//! results are bit-identical. Results are scattered back batch by batch to bound memory;
 //! progress is counted in `a3d_progress::MAP`.
 
 use rayon::prelude::*;
 
 use super::grid::{self, Grid, Hits};
 use super::neighbours::NeighbourIndex;
+use super::simd::Avx512;
 use super::{Kernel, KernelKind};
 
 /// What to do with a point that has no node inside the kernel support, or whose
@@ -107,8 +111,12 @@ type ChunkResult = (Vec<f64>, Vec<(u32, f64, PointStatus)>);
 /// How the mapper finds the nodes inside the kernel support.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
 pub enum Search {
-    /// Uniform cell grid, queries processed cell by cell (the default).
+    /// Uniform cell grid, queries processed cell by cell (the default), its
+    /// distance test and weights in AVX-512 where the processor has it.
     Grid,
+    /// [`Search::Grid`] in portable code only: the oracle of the vector path
+    /// (the same bits) and what a processor without AVX-512 runs.
+    GridPortable,
     /// The kiddo k-d tree, one query at a time (the reference).
     KdTree,
 }
@@ -144,7 +152,10 @@ fn build_indices(nodes: &NodeCloud<'_>, search: Search, radius: f64) -> Vec<Inde
                 &copied
             }
         };
-        let grid = Grid::with_cells(positions, nodes.dim, radius, CELLS_PER_SUPPORT);
+        let mut grid = Grid::with_cells(positions, nodes.dim, radius, CELLS_PER_SUPPORT);
+        if search == Search::GridPortable {
+            grid.portable();
+        }
         let nf = nodes.n_fields;
         let mut values = Vec::with_capacity(grid.order().len() * nf);
         for &local in grid.order() {
@@ -190,54 +201,88 @@ fn build_indices(nodes: &NodeCloud<'_>, search: Search, radius: f64) -> Vec<Inde
     }
 }
 
-/// One point to map: its position, its neighbours (positions in the grid's
-/// order and distances, sorted by distance then node index) and a buffer for
-/// their weights.
+/// One point to map: its position, its neighbours (their positions in the
+/// grid's order, ascending, and their distances) and a buffer for their
+/// weights.
 struct Query<'a> {
     p: [f64; 3],
-    found: &'a [(u32, f64)],
+    pos: &'a [u32],
+    d: &'a [f64],
     ws: &'a mut Vec<f64>,
 }
 
-/// Maps one point into `out` (n_fields values) from its neighbours; returns
-/// (neighbours, ratio, status).
-fn map_one(
-    nodes: &NodeCloud<'_>,
-    idx: &Indexed,
-    settings: &MapSettings,
-    Query { p, found, ws }: Query<'_>,
+/// Σ w·v and Σ w over the neighbours with a positive weight, in their
+/// order, for `NF` fields: the sums (into `out`), the count and Σ w.
+#[inline(always)]
+fn accumulate<const NF: usize>(
+    pos: &[u32],
+    ws: &[f64],
+    values: &[f64],
     out: &mut [f64],
-) -> (u32, f64, PointStatus) {
-    let nf = out.len();
-    let row = |k: u32| &idx.values[k as usize * nf..(k as usize + 1) * nf];
-    let alpha = settings.kernel.alpha(nodes.dim, settings.h);
-    out.iter_mut().for_each(|v| *v = 0.0);
-    let mut sum_w = 0.0;
-    let mut count = 0;
-    settings.kernel.shapes(found, settings.h, ws);
-    // Up to 8 fields sum in registers (the same operations in the same
-    // order as in `out`, so the same bits).
-    let mut acc = [0.0f64; 8];
-    for (&(k, _), &w) in found.iter().zip(ws.iter()) {
+) -> (u32, f64) {
+    let (mut acc, mut sum_w, mut count) = ([0.0f64; NF], 0.0, 0);
+    for (&k, &w) in pos.iter().zip(ws) {
         if w <= 0.0 {
             continue;
         }
         count += 1;
         sum_w += w;
-        let v = row(k);
-        if nf <= 8 {
-            for (a, v) in acc[..nf].iter_mut().zip(v) {
-                *a += w * v;
-            }
-        } else {
-            for (o, v) in out.iter_mut().zip(v) {
-                *o += w * v;
-            }
+        let at = k as usize * NF;
+        let v: &[f64; NF] = values[at..at + NF].try_into().unwrap_or(&[0.0; NF]);
+        for f in 0..NF {
+            acc[f] += w * v[f];
         }
     }
-    if nf <= 8 {
-        out.copy_from_slice(&acc[..nf]);
+    out.copy_from_slice(&acc);
+    (count, sum_w)
+}
+
+/// [`accumulate`] for any number of fields, summing in `out`.
+fn accumulate_any(pos: &[u32], ws: &[f64], values: &[f64], out: &mut [f64]) -> (u32, f64) {
+    let nf = out.len();
+    let (mut sum_w, mut count) = (0.0, 0);
+    out.iter_mut().for_each(|v| *v = 0.0);
+    for (&k, &w) in pos.iter().zip(ws) {
+        if w <= 0.0 {
+            continue;
+        }
+        count += 1;
+        sum_w += w;
+        let at = k as usize * nf;
+        for (o, v) in out.iter_mut().zip(&values[at..at + nf]) {
+            *o += w * v;
+        }
     }
+    (count, sum_w)
+}
+
+/// Maps one point into `out` (n_fields values) from its neighbours; returns
+/// (neighbours, ratio, status).
+#[inline(always)]
+fn map_one(
+    nodes: &NodeCloud<'_>,
+    idx: &Indexed,
+    settings: &MapSettings,
+    Query { p, pos, d, ws }: Query<'_>,
+    out: &mut [f64],
+) -> (u32, f64, PointStatus) {
+    let alpha = settings.kernel.alpha(nodes.dim, settings.h);
+    settings.kernel.weights(d, settings.h, ws);
+    // The sums in registers for the usual field counts (the same operations
+    // in the same order for every count, so the same bits).
+    let (count, sum_w) = match out.len() {
+        1 => accumulate::<1>(pos, ws, &idx.values, out),
+        2 => accumulate::<2>(pos, ws, &idx.values, out),
+        3 => accumulate::<3>(pos, ws, &idx.values, out),
+        4 => accumulate::<4>(pos, ws, &idx.values, out),
+        5 => accumulate::<5>(pos, ws, &idx.values, out),
+        6 => accumulate::<6>(pos, ws, &idx.values, out),
+        7 => accumulate::<7>(pos, ws, &idx.values, out),
+        8 => accumulate::<8>(pos, ws, &idx.values, out),
+        _ => accumulate_any(pos, ws, &idx.values, out),
+    };
+    let nf = out.len();
+    let row = |k: u32| &idx.values[k as usize * nf..(k as usize + 1) * nf];
     let ratio = sum_w * alpha * nodes.node_volume;
     if count > 0 && ratio >= settings.min_shepard {
         out.iter_mut().for_each(|v| *v /= sum_w);
@@ -265,6 +310,97 @@ fn map_one(
             out.iter_mut().for_each(|v| *v = f64::NAN);
             (count, ratio, PointStatus::Skipped)
         }
+    }
+}
+
+/// What every chunk of queries reads.
+struct Chunk<'a> {
+    nodes: &'a NodeCloud<'a>,
+    indices: &'a [Indexed],
+    settings: &'a MapSettings,
+    points: &'a [[f64; 3]],
+    /// The points' groups where groups separate.
+    point_group: Option<&'a [u32]>,
+    support: f64,
+}
+
+impl Chunk<'_> {
+    /// The group index of a point's group (see `build_indices`).
+    #[inline(always)]
+    fn lookup(&self, g: u32) -> &Indexed {
+        match self.point_group {
+            None => &self.indices[0],
+            Some(_) => self
+                .indices
+                .binary_search_by_key(&g, |ix| ix.group)
+                .map_or(&self.indices[0], |at| &self.indices[at]),
+        }
+    }
+
+    /// Maps the points `idx` (in query order): their values and per-point
+    /// (neighbours, ratio, status). Inlined into [`Avx512::run`] where the
+    /// processor has it.
+    #[inline(always)]
+    fn work(&self, idx: &[u32]) -> ChunkResult {
+        let (nodes, settings, support) = (self.nodes, self.settings, self.support);
+        let nf = nodes.n_fields;
+        let group_of = |i: usize| self.point_group.map_or(u32::MAX, |gs| gs[i]);
+        let points = self.points;
+        let mut blocks = grid::Blocks::default();
+        let mut blocks_of: Option<(u32, grid::Cell)> = None;
+        let mut hits = Hits::default();
+        let mut found = Vec::with_capacity(128);
+        let (mut tree_pos, mut tree_d) = (Vec::with_capacity(128), Vec::with_capacity(128));
+        let mut ws = Vec::with_capacity(128);
+        let mut values = vec![0.0; idx.len() * nf];
+        let mut meta = Vec::with_capacity(idx.len());
+        // The chunk's points gathered first: loads that do not wait on each other.
+        let gathered: Vec<([f64; 3], u32)> = idx
+            .iter()
+            .map(|&i| (points[i as usize], group_of(i as usize)))
+            .collect();
+        for (k, &(p, g)) in gathered.iter().enumerate() {
+            let ix = self.lookup(g);
+            let (pos, d) = match &ix.tree {
+                None => {
+                    let cell = ix.grid.cell(p);
+                    if blocks_of != Some((g, cell)) {
+                        ix.grid.blocks(&ix.stencil, cell, &mut blocks);
+                        blocks_of = Some((g, cell));
+                    }
+                    ix.grid.collect(&blocks, p, support, &mut hits);
+                    hits.in_grid_order()
+                }
+                Some((tree, rank)) => {
+                    // The reference: the tree's hits by their positions in
+                    // the grid's order, in that order.
+                    tree.within(p, support, &mut found);
+                    for e in found.iter_mut() {
+                        e.0 = rank[e.0 as usize];
+                    }
+                    found.sort_unstable_by_key(|e| e.0);
+                    tree_pos.clear();
+                    tree_d.clear();
+                    tree_pos.extend(found.iter().map(|e| e.0));
+                    tree_d.extend(found.iter().map(|e| e.1));
+                    (&tree_pos[..], &tree_d[..])
+                }
+            };
+            let query = Query {
+                p,
+                pos,
+                d,
+                ws: &mut ws,
+            };
+            meta.push(map_one(
+                nodes,
+                ix,
+                settings,
+                query,
+                &mut values[k * nf..(k + 1) * nf],
+            ));
+        }
+        (values, meta)
     }
 }
 
@@ -351,53 +487,18 @@ fn run(
         )
     };
     let order = query_order(points.len(), &indices, key_of);
-    let work = |idx: &[u32]| {
-        let mut blocks = grid::Blocks::default();
-        let mut blocks_of: Option<(u32, grid::Cell)> = None;
-        let mut hits = Hits::default();
-        let mut found = Vec::with_capacity(128);
-        let mut ws = Vec::with_capacity(128);
-        let mut values = vec![0.0; idx.len() * nf];
-        let mut meta = Vec::with_capacity(idx.len());
-        // The chunk's points gathered first: loads that do not wait on each other.
-        let gathered: Vec<([f64; 3], u32)> = idx
-            .iter()
-            .map(|&i| (points[i as usize], group_of(i as usize)))
-            .collect();
-        for (k, &(p, g)) in gathered.iter().enumerate() {
-            let ix = lookup(g).unwrap_or(&indices[0]);
-            match &ix.tree {
-                None => {
-                    let cell = ix.grid.cell(p);
-                    if blocks_of != Some((g, cell)) {
-                        ix.grid.blocks(&ix.stencil, cell, &mut blocks);
-                        blocks_of = Some((g, cell));
-                    }
-                    ix.grid.collect(&blocks, p, support, &mut hits);
-                    ix.grid.sorted(&mut hits, support, &mut found);
-                }
-                Some((tree, rank)) => {
-                    // The reference: the tree's hits, by their positions in the grid's order.
-                    tree.within(p, support, &mut found);
-                    for e in found.iter_mut() {
-                        e.0 = rank[e.0 as usize];
-                    }
-                }
-            }
-            let query = Query {
-                p,
-                found: &found,
-                ws: &mut ws,
-            };
-            meta.push(map_one(
-                nodes,
-                ix,
-                settings,
-                query,
-                &mut values[k * nf..(k + 1) * nf],
-            ));
-        }
-        (values, meta)
+    let ctx = Chunk {
+        nodes,
+        indices: &indices,
+        settings,
+        points,
+        point_group: if grouped { point_group } else { None },
+        support,
+    };
+    let simd = Avx512::detect().filter(|_| search != Search::GridPortable);
+    let work = |idx: &[u32]| match simd {
+        Some(simd) => simd.run(|| ctx.work(idx)),
+        None => ctx.work(idx),
     };
     let mut result = MapResult {
         values: vec![0.0; points.len() * nf],
