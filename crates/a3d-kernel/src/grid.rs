@@ -60,8 +60,8 @@ pub struct Stencil {
     /// Per row, its offset in cells from the cell's (`dy·nx + dz·nx·ny`)
     /// and its reach along x, for cells whose stencil lies in the grid.
     offsets: Vec<(i64, i64)>,
-    /// How far the stencil reaches along y and z.
-    reach: [i64; 2],
+    /// How far the stencil reaches along x, y and z.
+    reach: [i64; 3],
 }
 
 impl Stencil {
@@ -210,6 +210,11 @@ impl Grid {
         self.simd = None;
     }
 
+    /// The AVX-512 token this grid tests with, `None` for portable code.
+    pub fn simd(&self) -> Option<Avx512> {
+        self.simd
+    }
+
     /// True when the cells came out more than 4 times wider than asked (the
     /// cell count is kept near the point count: a radius tiny against the
     /// cloud, or one point far from the rest) or the rounding slack spans a
@@ -313,7 +318,8 @@ impl Grid {
             .iter()
             .map(|&[dy, dz, dx]| (dy * nx + dz * nx * ny, dx))
             .collect();
-        let reach = [0, 1].map(|k| rows.iter().map(|r| r[k].abs()).max().unwrap_or(0));
+        // Rows are [dy, dz, reach along x].
+        let reach = [2, 0, 1].map(|k| rows.iter().map(|r| r[k].abs()).max().unwrap_or(0));
         Stencil {
             rows,
             offsets,
@@ -329,10 +335,9 @@ impl Grid {
     pub fn blocks(&self, stencil: &Stencil, cell: Cell, out: &mut Blocks) {
         out.blocks.clear();
         let last = [self.dims[0] - 1, self.dims[1] - 1, self.dims[2] - 1];
-        let [ry, rz] = stencil.reach;
-        let most = stencil.offsets.iter().map(|o| o.1).max().unwrap_or(0);
-        let inside = cell[0] - most >= 0
-            && cell[0] + most <= last[0]
+        let [rx, ry, rz] = stencil.reach;
+        let inside = cell[0] - rx >= 0
+            && cell[0] + rx <= last[0]
             && cell[1] - ry >= 0
             && cell[1] + ry <= last[1]
             && cell[2] - rz >= 0

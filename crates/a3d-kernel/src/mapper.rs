@@ -25,7 +25,6 @@ use rayon::prelude::*;
 
 use super::grid::{self, Grid, Hits};
 use super::neighbours::NeighbourIndex;
-use super::simd::Avx512;
 use super::{Kernel, KernelKind};
 
 /// What to do with a point that has no node inside the kernel support, or whose
@@ -325,26 +324,38 @@ struct Chunk<'a> {
 }
 
 impl Chunk<'_> {
-    /// The group index of a point's group (see `build_indices`).
+    /// The position in `indices` of group `g`'s nodes (`indices` is sorted
+    /// by group, see `build_indices`); 0 where groups do not separate.
     #[inline(always)]
-    fn lookup(&self, g: u32) -> &Indexed {
+    fn group_at(&self, g: u32) -> Result<usize, MapError> {
         match self.point_group {
-            None => &self.indices[0],
+            None => Ok(0),
             Some(_) => self
                 .indices
                 .binary_search_by_key(&g, |ix| ix.group)
-                .map_or(&self.indices[0], |at| &self.indices[at]),
+                .map_err(|_| MapError::EmptyGroup(g)),
         }
     }
 
+    /// The group of point `i` (`u32::MAX` where groups do not separate).
+    #[inline(always)]
+    fn group_of(&self, i: usize) -> u32 {
+        self.point_group.map_or(u32::MAX, |gs| gs[i])
+    }
+
+    /// The nodes and search of group `g` (checked by `run` before any query).
+    #[inline(always)]
+    fn lookup(&self, g: u32) -> &Indexed {
+        &self.indices[self.group_at(g).unwrap_or(0)]
+    }
+
     /// Maps the points `idx` (in query order): their values and per-point
-    /// (neighbours, ratio, status). Inlined into [`Avx512::run`] where the
-    /// processor has it.
+    /// (neighbours, ratio, status). Inlined into
+    /// [`crate::simd::Avx512::run`] where the processor has it.
     #[inline(always)]
     fn work(&self, idx: &[u32]) -> ChunkResult {
         let (nodes, settings, support) = (self.nodes, self.settings, self.support);
         let nf = nodes.n_fields;
-        let group_of = |i: usize| self.point_group.map_or(u32::MAX, |gs| gs[i]);
         let points = self.points;
         let mut blocks = grid::Blocks::default();
         let mut blocks_of: Option<(u32, grid::Cell)> = None;
@@ -357,7 +368,7 @@ impl Chunk<'_> {
         // The chunk's points gathered first: loads that do not wait on each other.
         let gathered: Vec<([f64; 3], u32)> = idx
             .iter()
-            .map(|&i| (points[i as usize], group_of(i as usize)))
+            .map(|&i| (points[i as usize], self.group_of(i as usize)))
             .collect();
         for (k, &(p, g)) in gathered.iter().enumerate() {
             let ix = self.lookup(g);
@@ -446,47 +457,6 @@ fn run(
         values: &[],
         ..*given
     };
-    let lookup = |g: u32| -> Result<&Indexed, MapError> {
-        if !grouped {
-            return Ok(&indices[0]);
-        }
-        // `indices` is sorted by group (see `build_indices`).
-        indices
-            .binary_search_by_key(&g, |ix| ix.group)
-            .map(|at| &indices[at])
-            .map_err(|_| MapError::EmptyGroup(g))
-    };
-    if let Some(groups) = point_group {
-        for &g in groups {
-            lookup(g)?;
-        }
-    }
-    let nf = nodes.n_fields;
-    let chunk = 512;
-    let group_of = |i: usize| -> u32 {
-        if grouped {
-            point_group.map_or(u32::MAX, |gs| gs[i])
-        } else {
-            u32::MAX
-        }
-    };
-    // Queries run group by group, cell by cell, so that the points of a cell
-    // share its runs and neighbouring cells their nodes in cache; results are
-    // scattered back to the input order. The order depends only on the
-    // coordinates, so the output is the same for any thread count.
-    let key_of = |i: usize| -> (usize, u64) {
-        let at = if grouped {
-            let g = group_of(i);
-            indices.binary_search_by_key(&g, |ix| ix.group).unwrap_or(0)
-        } else {
-            0
-        };
-        (
-            at,
-            indices[at].grid.cell_key(indices[at].grid.cell(points[i])),
-        )
-    };
-    let order = query_order(points.len(), &indices, key_of);
     let ctx = Chunk {
         nodes,
         indices: &indices,
@@ -495,7 +465,27 @@ fn run(
         point_group: if grouped { point_group } else { None },
         support,
     };
-    let simd = Avx512::detect().filter(|_| search != Search::GridPortable);
+    if let Some(groups) = ctx.point_group {
+        for &g in groups {
+            ctx.group_at(g)?;
+        }
+    }
+    let nf = nodes.n_fields;
+    let chunk = 512;
+    // Queries run group by group, cell by cell, so that the points of a cell
+    // share its runs and neighbouring cells their nodes in cache; results are
+    // scattered back to the input order. The order depends only on the
+    // coordinates, so the output is the same for any thread count.
+    let key_of = |i: usize| -> (usize, u64) {
+        let at = ctx.group_at(ctx.group_of(i)).unwrap_or(0);
+        (
+            at,
+            indices[at].grid.cell_key(indices[at].grid.cell(points[i])),
+        )
+    };
+    let order = query_order(points.len(), &indices, key_of);
+    // Every group's grid made the same choice (see `build_indices`).
+    let simd = indices.first().and_then(|ix| ix.grid.simd());
     let work = |idx: &[u32]| match simd {
         Some(simd) => simd.run(|| ctx.work(idx)),
         None => ctx.work(idx),
