@@ -393,20 +393,25 @@ fn grid_map_equals_kiddo_map_bit_for_bit() {
                     assert_eq!(grid.n_neighbours, reference.n_neighbours);
                     assert_eq!(bits(&grid.shepard), bits(&reference.shepard));
                     assert_eq!(grid.status, reference.status);
-                    // Handing the values over (freed once the grid holds a
-                    // copy) changes nothing, the nearest fallback included.
+                    // Handing the values and positions over (freed once the
+                    // grid holds a copy) and reading the points inside
+                    // records change nothing, the nearest fallback included.
                     let bare = NodeCloud {
                         values: &[],
+                        positions: &[],
                         ..cloud
                     };
-                    let taken = mapper::map_points_taking(
-                        &bare,
-                        values.clone(),
-                        &points,
-                        groups,
-                        &settings,
-                    )
-                    .unwrap();
+                    let handed = mapper::Handed {
+                        values: Some(values.clone()),
+                        positions: Some(cloud.positions.to_vec()),
+                    };
+                    let at = |i: usize| points[i];
+                    let records = mapper::Points::Records {
+                        len: points.len(),
+                        at: &at,
+                    };
+                    let taken =
+                        mapper::map_points_from(&bare, handed, records, groups, &settings).unwrap();
                     assert_eq!(bits(&taken.values), bits(&reference.values));
                     assert_eq!(taken.status, reference.status);
                     if outside == OutsidePolicy::Nearest {

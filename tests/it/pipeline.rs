@@ -82,14 +82,15 @@ fn map_stages_run_alone_give_what_map_gives() {
     let placement = place::place(&project, &fem, None, source, config.outside, support).unwrap();
     // The FEM fields are not needed afterwards: freed once copied.
     let settings = config.settings(chosen.h);
-    let (l, keep_fields) = (chosen.spacing, false);
-    let cloud = interpolate::prepare(&mut fem.nodes, &placement, source, settings, l, keep_fields);
-    let mut result = interpolate::interpolate(&cloud, &placement, &fem.paths).unwrap();
+    let (l, keep) = (chosen.spacing, interpolate::KeepNodes::Positions);
+    let cloud = interpolate::prepare(&mut fem.nodes, &placement, source, settings, l, keep);
+    let mut result =
+        interpolate::interpolate(&cloud, &placement, &project.points, &fem.paths).unwrap();
     assert_eq!(interpolate::null_points(&result), 0);
     let values = std::mem::take(&mut result.values);
     let mut states = stress::derive_stress(&project, source, &cloud.quantities, values).states;
     let notes =
-        stress::geostatic_stress(&project, &placement.positions, &cloud, &mut states).unwrap();
+        stress::geostatic_stress(&project, &project.mp_positions(), &cloud, &mut states).unwrap();
     assert!(notes[0].contains("overburden"));
     stress::zero_skipped(&mut states, &result.status);
     let collapse = mixed::collapse_mixed(&project, config.mixed_state, &mut states);
@@ -159,10 +160,11 @@ fn auto_on_a_slope_is_the_equilibrium_stage() {
         source,
         config.settings(chosen.h),
         chosen.spacing,
-        false,
+        interpolate::KeepNodes::Nothing,
     );
     let quantities = cloud.quantities.clone();
-    let mut result = interpolate::interpolate_taking(cloud, &placement, &fem.paths).unwrap();
+    let mut result =
+        interpolate::interpolate_taking(cloud, &placement, &project.points, &fem.paths).unwrap();
     let values = std::mem::take(&mut result.values);
     let mut states = stress::derive_stress(&project, source, &quantities, values).states;
     stress::zero_skipped(&mut states, &result.status);

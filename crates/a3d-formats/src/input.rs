@@ -182,12 +182,20 @@ fn open_nonblocking(path: &Path) -> std::io::Result<File> {
     File::open(path)
 }
 
-/// Reads a whole regular file of at most `limit` bytes.
-pub fn read_bytes_limited(path: &Path, limit: u64) -> Result<Vec<u8>, FormatError> {
+/// Opens a regular file of at most `limit` bytes (as [`open_regular`]) for a
+/// reader that reads it in parts; the reader refuses it when it grows past
+/// `limit` while it is read.
+pub fn open_limited(path: &Path, limit: u64) -> Result<(File, u64), FormatError> {
     let (file, len) = open_regular(path)?;
     if len > limit {
         return Err(too_large(path, len, limit));
     }
+    Ok((file, len))
+}
+
+/// Reads a whole regular file of at most `limit` bytes.
+pub fn read_bytes_limited(path: &Path, limit: u64) -> Result<Vec<u8>, FormatError> {
+    let (file, len) = open_limited(path, limit)?;
     let mut bytes = Vec::with_capacity(usize::try_from(len).unwrap_or(0));
     // The file may grow while it is read: never read more than the limit.
     file.take(limit + 1)
@@ -199,7 +207,8 @@ pub fn read_bytes_limited(path: &Path, limit: u64) -> Result<Vec<u8>, FormatErro
     Ok(bytes)
 }
 
-fn too_large(path: &Path, len: u64, limit: u64) -> FormatError {
+/// The error for a file of `len` bytes or more over `limit`.
+pub(crate) fn too_large(path: &Path, len: u64, limit: u64) -> FormatError {
     FormatError::file(
         path,
         format!("{len} bytes or more, larger than the {limit}-byte limit on an input file"),

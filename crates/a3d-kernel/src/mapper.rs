@@ -312,12 +312,47 @@ fn map_one(
     }
 }
 
+/// The points to map: a slice of positions, or the positions inside a
+/// caller's own records (a material point table), read where they are
+/// instead of copied out.
+#[derive(Clone, Copy)]
+pub enum Points<'a> {
+    Slice(&'a [[f64; 3]]),
+    /// `len` records, record `i` at `at(i)`.
+    Records {
+        len: usize,
+        at: &'a (dyn Fn(usize) -> [f64; 3] + Sync),
+    },
+}
+
+impl Points<'_> {
+    pub fn len(&self) -> usize {
+        match self {
+            Points::Slice(s) => s.len(),
+            Points::Records { len, .. } => *len,
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Point `i`'s position.
+    #[inline(always)]
+    pub fn at(&self, i: usize) -> [f64; 3] {
+        match self {
+            Points::Slice(s) => s[i],
+            Points::Records { at, .. } => at(i),
+        }
+    }
+}
+
 /// What every chunk of queries reads.
 struct Chunk<'a> {
     nodes: &'a NodeCloud<'a>,
     indices: &'a [Indexed],
     settings: &'a MapSettings,
-    points: &'a [[f64; 3]],
+    points: Points<'a>,
     /// The points' groups where groups separate.
     point_group: Option<&'a [u32]>,
     support: f64,
@@ -368,7 +403,7 @@ impl Chunk<'_> {
         // The chunk's points gathered first: loads that do not wait on each other.
         let gathered: Vec<([f64; 3], u32)> = idx
             .iter()
-            .map(|&i| (points[i as usize], self.group_of(i as usize)))
+            .map(|&i| (points.at(i as usize), self.group_of(i as usize)))
             .collect();
         for (k, &(p, g)) in gathered.iter().enumerate() {
             let ix = self.lookup(g);
@@ -421,12 +456,12 @@ impl Chunk<'_> {
 struct RunOptions {
     search: Search,
     parallel: bool,
-    owned_values: Option<Vec<f64>>,
+    owned: Handed,
 }
 
 fn run(
     given: &NodeCloud<'_>,
-    points: &[[f64; 3]],
+    points: Points<'_>,
     point_group: Option<&[u32]>,
     settings: &MapSettings,
     options: RunOptions,
@@ -434,7 +469,7 @@ fn run(
     let RunOptions {
         search,
         parallel,
-        owned_values,
+        owned,
     } = options;
     if !(settings.h > 0.0 && settings.h.is_finite()) {
         return Err(MapError::BadSmoothingLength(settings.h));
@@ -443,18 +478,20 @@ fn run(
     let grouped = given.group.is_some() && point_group.is_some();
     let support = settings.kernel.support() * settings.h;
     let indices = {
-        let values = owned_values.as_deref().unwrap_or(given.values);
         let cloud = NodeCloud {
-            values,
+            values: owned.values.as_deref().unwrap_or(given.values),
+            positions: owned.positions.as_deref().unwrap_or(given.positions),
             group: if grouped { given.group } else { None },
             ..*given
         };
         build_indices(&cloud, search, support)
     };
-    // Every group holds its own copy of the values: a handed-over copy goes now.
-    drop(owned_values);
+    // Every group holds its own copy of the positions and values: what was
+    // handed over goes now.
+    drop(owned);
     let nodes = &NodeCloud {
         values: &[],
+        positions: &[],
         ..*given
     };
     let ctx = Chunk {
@@ -480,7 +517,9 @@ fn run(
         let at = ctx.group_at(ctx.group_of(i)).unwrap_or(0);
         (
             at,
-            indices[at].grid.cell_key(indices[at].grid.cell(points[i])),
+            indices[at]
+                .grid
+                .cell_key(indices[at].grid.cell(points.at(i))),
         )
     };
     let order = query_order(points.len(), &indices, key_of);
@@ -560,25 +599,36 @@ pub fn map_points_with(
     let options = RunOptions {
         search,
         parallel,
-        owned_values: None,
+        owned: Handed::default(),
     };
-    run(nodes, points, point_group, settings, options)
+    run(nodes, Points::Slice(points), point_group, settings, options)
 }
 
-/// [`map_points`] for a caller that hands over the node values (`nodes.values`
-/// is ignored): they are freed as soon as the grid holds its own copy, which
-/// lowers the peak memory of a large mapping by one copy of the values.
-pub fn map_points_taking(
+/// Node data a caller hands over to [`map_points_from`] in place of the
+/// cloud's own (`None`: the cloud's): the mapper frees it as soon as its grid
+/// holds its own copy, which lowers the peak memory of a large mapping by one
+/// copy of the values and one of the positions.
+#[derive(Default)]
+pub struct Handed {
+    /// Row-major node values (as `NodeCloud::values`).
+    pub values: Option<Vec<f64>>,
+    /// Node positions (as `NodeCloud::positions`).
+    pub positions: Option<Vec<[f64; 3]>>,
+}
+
+/// [`map_points`] on [`Points`] (positions read inside the caller's
+/// records), with node data the caller may hand over ([`Handed`]).
+pub fn map_points_from(
     nodes: &NodeCloud<'_>,
-    values: Vec<f64>,
-    points: &[[f64; 3]],
+    owned: Handed,
+    points: Points<'_>,
     point_group: Option<&[u32]>,
     settings: &MapSettings,
 ) -> Result<MapResult, MapError> {
     let options = RunOptions {
         search: Search::Grid,
         parallel: true,
-        owned_values: Some(values),
+        owned,
     };
     run(nodes, points, point_group, settings, options)
 }

@@ -14,7 +14,8 @@
 //! `dialect` (delimiter sniffing, field splitting), `table` (the whole-table
 //! pass: header, column report, assembly, checks), `rows` (the data rows in
 //! parallel chunks, and the field-by-field path with positioned errors) and
-//! `fast` (the allocation-free path for common rows). This file holds the
+//! `fast` (the allocation-free path for common rows), `source` (the input
+//! read in blocks of whole lines). This file holds the
 //! report types and the entry points.
 
 use std::path::Path;
@@ -22,6 +23,7 @@ use std::path::Path;
 use super::error::FormatError;
 use crate::fem::FemReadReport;
 use a3d_model::FemNodes;
+use table::Sizes;
 
 mod dialect;
 mod fast;
@@ -29,6 +31,7 @@ mod headers;
 mod options;
 mod rows;
 mod schema;
+mod source;
 mod table;
 #[cfg(test)]
 mod tests;
@@ -38,13 +41,15 @@ pub use options::{
     CsvOptions, columns_from_pairs, parse_columns_option, parse_units_option, units_from,
 };
 
-/// Reads a node table. `path` names the file in errors.
+/// Reads a node table, block by block (the file's text is never held
+/// whole). `path` names the file in errors.
 pub fn read_csv(
     path: &Path,
     options: &CsvOptions,
 ) -> Result<(FemNodes, FemReadReport), FormatError> {
-    let bytes = super::input::read_bytes(path)?;
-    table::parse_csv_chunked(path, bytes.into(), options, rows::CHUNK_BYTES)
+    let limit = super::input::MAX_INPUT_BYTES;
+    let (mut file, len) = super::input::open_limited(path, limit)?;
+    table::parse_csv_stream(path, &mut file, (len, limit), options, Sizes::DEFAULT)
 }
 
 /// Parses node-table bytes (see [`read_csv`]).
@@ -53,7 +58,9 @@ pub fn parse_csv(
     bytes: &[u8],
     options: &CsvOptions,
 ) -> Result<(FemNodes, FemReadReport), FormatError> {
-    table::parse_csv_chunked(path, bytes.into(), options, rows::CHUNK_BYTES)
+    let mut reader = bytes;
+    let len = bytes.len() as u64;
+    table::parse_csv_stream(path, &mut reader, (len, u64::MAX), options, Sizes::DEFAULT)
 }
 
 /// Gives a GeoStudio `node.csv` its coordinates from the mesh PLY: node id k is

@@ -19,27 +19,50 @@ pub(super) struct Merged {
     pub(super) errors: Vec<ParseError>,
 }
 
-/// Joins chunk results in file order. Errors are cut as a serial pass would:
-/// after the row that brings them past [`MAX_ROW_ERRORS`].
-pub(super) fn merge_rows(parts: Vec<Rows>, n_values: usize) -> Merged {
-    let n: usize = parts.iter().map(|p| p.positions.len()).sum();
-    let n_rows: usize = parts
-        .iter()
-        .map(|p| p.values.first().map_or(0, Vec::len))
-        .sum();
-    let mut rows = Rows {
-        positions: Vec::with_capacity(n),
-        ids: Vec::with_capacity(n),
-        // Each column with its own capacity (`vec![v; n]` clones would have none).
-        values: (0..n_values).map(|_| Vec::with_capacity(n_rows)).collect(),
-        lines: Vec::with_capacity(n),
-        has_value: vec![false; n_values + 2],
-        first_short: vec![None; n_values + 2],
-        ..Rows::default()
-    };
-    let mut errors: Vec<ParseError> = Vec::new();
-    let mut full = false;
-    for part in parts {
+/// Joins chunk results in file order, one chunk at a time (the chunks of
+/// one block, then the next block's). Errors are cut as a serial pass
+/// would: after the row that brings them past [`MAX_ROW_ERRORS`].
+pub(super) struct Merger {
+    merged: Merged,
+    full: bool,
+}
+
+impl Merger {
+    pub(super) fn new(n_values: usize) -> Merger {
+        Merger {
+            merged: Merged {
+                rows: Rows {
+                    values: vec![Vec::new(); n_values],
+                    has_value: vec![false; n_values + 2],
+                    first_short: vec![None; n_values + 2],
+                    ..Rows::default()
+                },
+                errors: Vec::new(),
+            },
+            full: false,
+        }
+    }
+
+    /// Room for `n` more rows in every column, allocated once rather than
+    /// grown by doubling.
+    pub(super) fn reserve(&mut self, n: usize) {
+        let rows = &mut self.merged.rows;
+        rows.positions.reserve_exact(n);
+        rows.ids.reserve_exact(n);
+        rows.lines.reserve_exact(n);
+        for v in &mut rows.values {
+            v.reserve_exact(n);
+        }
+    }
+
+    /// Whether the errors are cut: later rows cannot change the result.
+    pub(super) fn full(&self) -> bool {
+        self.full
+    }
+
+    /// Appends the next chunk's rows, flags and errors.
+    pub(super) fn push(&mut self, part: Rows) {
+        let Merged { rows, errors } = &mut self.merged;
         rows.positions.extend_from_slice(&part.positions);
         rows.ids.extend_from_slice(&part.ids);
         for (all, v) in rows.values.iter_mut().zip(&part.values) {
@@ -57,31 +80,31 @@ pub(super) fn merge_rows(parts: Vec<Rows>, n_values: usize) -> Merged {
             rows.first_empty_id = part.first_empty_id;
         }
         for e in part.errors {
-            if full {
+            if self.full {
                 break;
             }
             if errors.len() > MAX_ROW_ERRORS
                 && errors.last().map(|l| l.position.line) != Some(e.position.line)
             {
-                full = true;
+                self.full = true;
                 break;
             }
             errors.push(e);
         }
     }
-    Merged { rows, errors }
-}
 
-/// Byte offset of 0-based line `k` of `text` (its length when there are fewer lines).
-pub(super) fn nth_line_start(text: &str, k: usize) -> usize {
-    if k == 0 {
-        return 0;
+    /// The rows and errors, the columns without spare room.
+    pub(super) fn finish(self) -> Merged {
+        let mut merged = self.merged;
+        let rows = &mut merged.rows;
+        rows.positions.shrink_to_fit();
+        rows.ids.shrink_to_fit();
+        rows.lines.shrink_to_fit();
+        for v in &mut rows.values {
+            v.shrink_to_fit();
+        }
+        merged
     }
-    text.bytes()
-        .enumerate()
-        .filter(|&(_, b)| b == b'\n')
-        .nth(k - 1)
-        .map_or(text.len(), |(i, _)| i + 1)
 }
 
 /// Splits `text` into pieces of about `size` bytes, each ending just after a newline

@@ -10,42 +10,74 @@ use rayon::prelude::*;
 use super::dialect::{Delimiter, sniff_delimiter, split_line};
 use super::headers::{Field, header_unit, normalise, strip_unit_suffix, synonym, unit_factor};
 use super::options::{CsvOptions, check_columns_option};
-use super::rows::{merge_rows, nth_line_start, parse_chunk, split_chunks};
+use super::rows::{Merged, Merger, parse_chunk, split_chunks};
 use super::schema::{Rows, Schema};
+use super::source::{Source, decode, nth_line_start};
 use crate::error::{FormatError, ParseError};
 use crate::extent::{far_outlier, first_coincident};
 use crate::fem::{ColumnReport, FemReadReport};
 use a3d_model::{FemNodes, Quantity};
 
-/// [`parse_csv`](super::parse_csv) with data-row chunks of about `chunk_bytes`
-/// (tests vary it). Owned bytes are freed as soon as the rows are parsed,
-/// before they are joined (the file's text is the largest thing held).
+/// Block and chunk sizes of the data-row pass (tests make them tiny).
+#[derive(Clone, Copy)]
+pub(super) struct Sizes {
+    /// Bytes read per block (see [`super::source`]).
+    pub(super) block: usize,
+    /// Bytes per chunk parsed in parallel within a block.
+    pub(super) chunk: usize,
+}
+
+impl Sizes {
+    pub(super) const DEFAULT: Sizes = Sizes {
+        block: super::source::BLOCK_BYTES,
+        chunk: super::rows::CHUNK_BYTES,
+    };
+}
+
+/// [`parse_csv`](super::parse_csv) on what `reader` gives (`len` bytes
+/// expected, for the progress; at most `limit`), read in blocks of whole
+/// lines: the text is never held whole, only the head and one block.
 ///
-/// The phases: the text ([`decode`]), the dialect ([`sniff`]), the header
-/// ([`find_header`]), units and signs per column ([`column_plan`]), the data
-/// rows in parallel chunks ([`parse_rows`]), then the checks on what they
-/// gave (short rows, ids, missing values, duplicates).
-pub(super) fn parse_csv_chunked(
+/// The phases: the encoding ([`encoding`]), the head's dialect ([`sniff`]),
+/// the header ([`find_header`]), units and signs per column
+/// ([`column_plan`]), the data rows block by block in parallel chunks
+/// ([`parse_rows`]), then the checks on what they gave (short rows, ids,
+/// missing values, duplicates).
+pub(super) fn parse_csv_stream(
     path: &Path,
-    bytes: std::borrow::Cow<'_, [u8]>,
+    reader: &mut dyn std::io::Read,
+    (len, limit): (u64, u64),
     options: &CsvOptions,
-    chunk_bytes: usize,
+    sizes: Sizes,
 ) -> Result<(FemNodes, FemReadReport), FormatError> {
     check_columns_option(&options.columns).map_err(|m| ParseError::at(path, 1, 1, m))?;
-    let (bom, text) = decode(path, &bytes)?;
-    let dialect = sniff(&text);
-    let header = find_header(path, &dialect, options)?;
+    let mut source = Source::new(path, reader, limit, sizes.block);
+    let bom = encoding(path, &mut source)?;
+    let (head_len, any_text) = source.head()?;
+    if !any_text {
+        return Err(ParseError::at(
+            path,
+            1,
+            1,
+            "empty file: expected a header line with X and Y (or Node) columns",
+        )
+        .into());
+    }
+    let (header, delim, decimal_comma) = {
+        let head = decode(&source.buf[..head_len]);
+        let dialect = sniff(&head);
+        (
+            find_header(path, &dialect, options)?,
+            dialect.delim,
+            dialect.decimal_comma,
+        )
+    };
     let (columns, factors) = column_plan(path, &header, options)?;
     let Header {
         index: header_idx,
         mapping,
         headers,
     } = header;
-    let Dialect {
-        delim,
-        decimal_comma,
-        ..
-    } = dialect;
 
     let col_of = |f: Field| mapping.iter().position(|m| *m == Some(f));
     let (cx, cy, cz, cnode, cregion) = (
@@ -78,10 +110,9 @@ pub(super) fn parse_csv_chunked(
         value_cols: &value_cols,
         factors: &factors,
     };
-    let parts = parse_rows(&schema, &text, header_idx, chunk_bytes);
-    drop(text);
-    drop(bytes);
-    let merged = merge_rows(parts, value_cols.len());
+    let body_start = nth_line_start(&source.buf, header_idx + 1);
+    source.consume(body_start);
+    let merged = parse_rows(&schema, &mut source, header_idx + 2, (len, sizes.chunk))?;
     if let Some(e) = FormatError::from_list(merged.errors) {
         return Err(e);
     }
@@ -102,6 +133,8 @@ pub(super) fn parse_csv_chunked(
         .enumerate()
         .map(|(k, id)| id.unwrap_or(k as i64 + 1))
         .collect();
+    // Collected in place: half the room the optional ids took is spare.
+    nodes.ids.shrink_to_fit();
     if nodes.positions.is_empty() {
         return Err(ParseError::at(
             path,
@@ -170,12 +203,12 @@ pub(super) fn parse_csv_chunked(
     Ok((nodes, report))
 }
 
-/// The text of the file: UTF-16 refused, a UTF-8 BOM dropped (and said),
-/// Windows-1252 read with its non-ASCII bytes replaced; empty refused.
-fn decode<'b>(
-    path: &Path,
-    bytes: &'b [u8],
-) -> Result<(bool, std::borrow::Cow<'b, str>), FormatError> {
+/// The encoding at the start of the input: UTF-16 refused, a UTF-8 BOM
+/// dropped (and said: true). Windows-1252 bytes are replaced as each block
+/// is decoded.
+fn encoding(path: &Path, source: &mut Source<'_>) -> Result<bool, FormatError> {
+    source.fill_to(3)?;
+    let bytes = &source.buf;
     if bytes.starts_with(&[0xFF, 0xFE]) || bytes.starts_with(&[0xFE, 0xFF]) {
         return Err(ParseError::at(
             path,
@@ -185,25 +218,11 @@ fn decode<'b>(
         )
         .into());
     }
-    let (bom, body) = match bytes.strip_prefix(&[0xEF, 0xBB, 0xBF]) {
-        Some(rest) => (true, rest),
-        None => (false, bytes),
-    };
-    let text = match std::str::from_utf8(body) {
-        Ok(t) => std::borrow::Cow::Borrowed(t),
-        // Windows-1252 exports: keep ASCII, replace the rest (units like ³ only).
-        Err(_) => String::from_utf8_lossy(body),
-    };
-    if text.trim().is_empty() {
-        return Err(ParseError::at(
-            path,
-            1,
-            1,
-            "empty file: expected a header line with X and Y (or Node) columns",
-        )
-        .into());
+    let bom = bytes.starts_with(&[0xEF, 0xBB, 0xBF]);
+    if bom {
+        source.consume(3);
     }
-    Ok((bom, text))
+    Ok(bom)
 }
 
 /// The dialect, from the first lines: the delimiter, decimal commas, and the
@@ -420,35 +439,61 @@ fn column_plan(
     Ok((columns, factors))
 }
 
-/// The data rows after the header, in parallel chunks split after a
-/// newline; the chunks come back in file order, so the result does not
-/// depend on the thread count.
-fn parse_rows(schema: &Schema<'_>, text: &str, header_idx: usize, chunk_bytes: usize) -> Vec<Rows> {
-    let body_start = nth_line_start(text, header_idx + 1);
-    let body = &text[body_start..];
-    let chunks = split_chunks(body, chunk_bytes.max(1));
-    let newlines: Vec<usize> = chunks
-        .par_iter()
-        .map(|c| c.bytes().filter(|&b| b == b'\n').count())
-        .collect();
-    let mut first_line = Vec::with_capacity(chunks.len());
-    let mut line = header_idx + 2;
-    for n in &newlines {
-        first_line.push(line);
-        line += n;
-    }
-    a3d_progress::READ_FEM.start(body.len() as u64);
-    let parts: Vec<Rows> = chunks
-        .par_iter()
-        .zip(first_line.par_iter().zip(&newlines))
-        .map(|(chunk, (&l0, &n))| {
+/// The data rows, whose first line is `first_line` (1-based), block by
+/// block from `source`; each block in parallel chunks split after a newline,
+/// merged in file order, so the result does not depend on the thread count
+/// or the sizes. Reading stops once the errors are cut. `len`: the input's
+/// size (for the progress); `chunk_bytes`: the chunks' size.
+fn parse_rows(
+    schema: &Schema<'_>,
+    source: &mut Source<'_>,
+    first_line: usize,
+    (len, chunk_bytes): (u64, usize),
+) -> Result<Merged, FormatError> {
+    let mut merger = Merger::new(schema.value_cols.len());
+    let mut line = first_line;
+    let (mut bytes_done, mut reserved) = (0u64, false);
+    a3d_progress::READ_FEM.start(len);
+    while !merger.full() {
+        let n = source.next_block()?;
+        if n == 0 {
+            break;
+        }
+        let text = decode(&source.buf[..n]);
+        let chunks = split_chunks(&text, chunk_bytes.max(1));
+        let newlines: Vec<usize> = chunks
+            .par_iter()
+            .map(|c| memchr::memchr_iter(b'\n', c.as_bytes()).count())
+            .collect();
+        let mut first_lines = Vec::with_capacity(chunks.len());
+        for n in &newlines {
+            first_lines.push(line);
+            line += n;
+        }
+        let parts: Vec<Rows> = chunks
+            .par_iter()
+            .zip(first_lines.par_iter().zip(&newlines))
             // A last line without its newline is one more.
-            let rows = parse_chunk(schema, chunk, l0, n + 1);
-            a3d_progress::READ_FEM.add(chunk.len() as u64);
-            rows
-        })
-        .collect();
-    parts
+            .map(|(chunk, (&l0, &n))| parse_chunk(schema, chunk, l0, n + 1))
+            .collect();
+        drop(text);
+        if !reserved && !source.at_end() {
+            // The rest of the file at this block's rows per byte, a little
+            // over: the columns are allocated once, not grown by doubling.
+            let rows: usize = parts.iter().map(|p| p.positions.len()).sum();
+            let per_byte = rows as f64 / n as f64;
+            let left = len.saturating_sub(bytes_done) as f64;
+            merger.reserve((left * per_byte * 1.02) as usize + 64);
+            reserved = true;
+        }
+        for part in parts {
+            merger.push(part);
+        }
+        source.consume(n);
+        bytes_done += n as u64;
+        a3d_progress::READ_FEM.add(n as u64);
+    }
+    Ok(merger.finish())
 }
 
 /// A row without a field that other rows fill (fewer fields than the header)

@@ -8,7 +8,7 @@ use super::fast::fast_row;
 use super::headers::strip_unit_suffix;
 use super::rows::slow_row;
 use super::schema::{Rows, Schema};
-use super::table::parse_csv_chunked;
+use super::table::{Sizes, parse_csv_stream};
 use super::*;
 use crate::extent::{far_outlier, first_coincident};
 use a3d_model::{Quantity, StressComponent};
@@ -54,12 +54,24 @@ fn headers_normalise_to_synonyms() {
     }
 }
 
+/// Parses `text` read in blocks of `chunk` bytes, parsed in chunks of as
+/// many (1 MiB: one block, one chunk for the tables here).
 fn parse(text: &str, chunk: usize) -> Result<(FemNodes, FemReadReport), String> {
-    parse_csv_chunked(
-        Path::new("t.csv"),
-        text.as_bytes().into(),
-        &CsvOptions::default(),
+    parse_bytes(text.as_bytes(), chunk)
+}
+
+fn parse_bytes(bytes: &[u8], chunk: usize) -> Result<(FemNodes, FemReadReport), String> {
+    let mut reader = bytes;
+    let sizes = Sizes {
+        block: chunk,
         chunk,
+    };
+    parse_csv_stream(
+        Path::new("t.csv"),
+        &mut reader,
+        (bytes.len() as u64, u64::MAX),
+        &CsvOptions::default(),
+        sizes,
     )
     .map_err(|e| e.to_string())
 }
@@ -329,4 +341,58 @@ fn first_coincident_finds_pairs_and_only_pairs() {
     assert_eq!(first_coincident(&dup), Some((40 * 300 + 20, grid.len())));
     assert_eq!(first_coincident(&[[1.0; 3]; 2]), Some((0, 1)));
     assert_eq!(first_coincident(&[[1.0; 3]]), None);
+}
+
+#[test]
+fn blocks_do_not_change_the_result_or_the_error_positions() {
+    // A BOM, a preamble of titles and blank lines (CRLF) that makes the
+    // head longer than its 51 lines, a Windows-1252 byte in a title and in a row's region, and
+    // enough rows to span many blocks; then the same table with a bad value
+    // far down.
+    let mut good: Vec<u8> = vec![0xEF, 0xBB, 0xBF];
+    for k in 0..3 {
+        good.extend_from_slice(format!("title-{k}\r\n").as_bytes());
+        good.extend_from_slice(&b" \r\n".repeat(8));
+    }
+    good.extend_from_slice(b"Pr\xfcfung\r\nX (m);Y (m);PWP (kPa);Region\r\n");
+    for i in 0..300 {
+        let region: &[u8] = if i % 7 == 0 { b"s\xe4nd" } else { b"clay" };
+        good.extend_from_slice(format!("{i};{},5;{}e-1;", i % 13, i * 3).as_bytes());
+        good.extend_from_slice(region);
+        good.extend_from_slice(b"\r\n");
+    }
+    let whole = parse_bytes(&good, 1 << 20).unwrap();
+    assert_eq!(whole.0.len(), 300);
+    assert!(whole.1.bom && whole.1.decimal_comma);
+    assert_eq!(whole.1.header_line, 29);
+    let mut bad = good.clone();
+    bad.extend_from_slice(b"300;1;x;clay\r\n301;\xff;2;clay\r\n");
+    let whole_bad = parse_bytes(&bad, 1 << 20).unwrap_err();
+    assert!(whole_bad.contains("t.csv:330:7"), "{whole_bad}");
+    assert!(whole_bad.contains("t.csv:331:5"), "{whole_bad}");
+    for block in [1, 2, 3, 7, 64, 1000] {
+        let part = parse_bytes(&good, block).unwrap();
+        assert_eq!(part.0, whole.0, "block {block}");
+        assert_eq!(part.1.warnings, whole.1.warnings, "block {block}");
+        assert_eq!(part.1.header_line, whole.1.header_line);
+        assert_eq!(
+            parse_bytes(&bad, block).unwrap_err(),
+            whole_bad,
+            "block {block}"
+        );
+    }
+}
+
+#[test]
+fn a_blank_or_bom_only_input_is_empty_and_utf16_is_refused() {
+    for (bytes, expected) in [
+        (&b""[..], "t.csv:1:1: empty file"),
+        (&b"\xef\xbb\xbf \r\n\t\n"[..], "t.csv:1:1: empty file"),
+        (&b"\xff\xfeX\0,\0Y\0"[..], "t.csv:1:1: UTF-16 text"),
+    ] {
+        for block in [1, 2, 1 << 20] {
+            let e = parse_bytes(bytes, block).unwrap_err();
+            assert!(e.starts_with(expected), "{e}");
+        }
+    }
 }

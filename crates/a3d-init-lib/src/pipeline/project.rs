@@ -30,6 +30,12 @@ pub struct Project {
 }
 
 impl Project {
+    /// The MPs' positions, in MP order (a copy: steps that need them as a
+    /// slice take it when the kernel's index is gone).
+    pub fn mp_positions(&self) -> Vec<[f64; 3]> {
+        self.points.iter().map(|p| p.position).collect()
+    }
+
     /// Per material of the model (in GOM order), whether any MP is of it.
     pub fn materials_with_mps(&self) -> Vec<bool> {
         let mut has_mps = vec![false; self.model.materials.len()];

@@ -9,14 +9,18 @@ use std::path::PathBuf;
 
 use super::{Outside, Placement, StressSource};
 use crate::formats::mps_table::MpDiagnostics;
-use crate::kernel::mapper::{self, MapResult, MapSettings, NodeCloud, PointStatus};
-use crate::model::{FemNodes, Quantity, StressComponent};
+use std::borrow::Cow;
+
+use crate::kernel::mapper::{self, Handed, MapResult, MapSettings, NodeCloud, PointStatus, Points};
+use crate::model::{FemNodes, MaterialPoint, Quantity, StressComponent};
 use crate::pipeline::PipelineError;
 
 /// The FEM nodes as the kernel sees them: positions, groups, the values of
 /// the mapped quantities and the kernel's settings.
 pub struct FemCloud<'a> {
-    pub positions: &'a [[f64; 3]],
+    /// The nodes' positions: borrowed from the nodes, or taken from them
+    /// ([`KeepNodes::Nothing`]).
+    pub positions: Cow<'a, [[f64; 3]]>,
     pub dim: usize,
     /// Each node's group (GOM material index), when MPs take only their own.
     pub groups: Option<&'a [u32]>,
@@ -50,17 +54,32 @@ pub fn mapped_quantities(nodes: &FemNodes, source: StressSource) -> Vec<Quantity
     quantities
 }
 
+/// What [`prepare`] leaves in the FEM nodes once the cloud holds what the
+/// kernel reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KeepNodes {
+    /// Everything (`fem.vtu` is written from them).
+    All,
+    /// Their positions and ids; the fields go (the cloud has its copy).
+    Positions,
+    /// Nothing but their dimension: the positions go into the cloud (the
+    /// mapper frees them once its grid holds them, see
+    /// [`interpolate_taking`]), ids, regions and fields are dropped. For a
+    /// mapping that is the nodes' last use.
+    Nothing,
+}
+
 /// The cloud mapping `nodes` onto `placement`'s MPs with `settings`: the
-/// quantities of [`mapped_quantities`] copied row-major, and the FEM fields
-/// themselves freed unless `keep_fields` (memory). `spacing` is the median
-/// node spacing l.
+/// quantities of [`mapped_quantities`] copied row-major; what `keep` does not
+/// keep is taken out of the nodes (memory). `spacing` is the median node
+/// spacing l.
 pub fn prepare<'a>(
     nodes: &'a mut FemNodes,
     placement: &'a Placement,
     source: StressSource,
     settings: MapSettings,
     spacing: f64,
-    keep_fields: bool,
+    keep: KeepNodes,
 ) -> FemCloud<'a> {
     let quantities = mapped_quantities(nodes, source);
     let n_fields = quantities.len();
@@ -70,17 +89,25 @@ pub fn prepare<'a>(
             values[i * n_fields + k] = *v;
         }
     }
-    if !keep_fields {
+    if keep != KeepNodes::All {
         nodes.fields = Vec::new();
     }
-    let nodes: &'a FemNodes = nodes;
+    let dim = nodes.dim;
+    let positions = if keep == KeepNodes::Nothing {
+        nodes.ids = Vec::new();
+        nodes.region = None;
+        Cow::Owned(std::mem::take(&mut nodes.positions))
+    } else {
+        let nodes: &'a FemNodes = nodes;
+        Cow::Borrowed(&nodes.positions[..])
+    };
     FemCloud {
-        positions: &nodes.positions,
-        dim: nodes.dim,
+        positions,
+        dim,
         groups: placement.node_groups.as_deref(),
         quantities,
         values,
-        node_volume: spacing.powi(nodes.dim as i32),
+        node_volume: spacing.powi(dim as i32),
         settings,
         excluded: placement.unmapped_materials.clone(),
     }
@@ -100,46 +127,48 @@ impl FemCloud<'_> {
         groups: Option<&[u32]>,
         settings: &MapSettings,
     ) -> Result<MapResult, PipelineError> {
-        map_subset(self, None, points, groups, settings)
+        map_subset(
+            self,
+            Handed::default(),
+            Points::Slice(points),
+            groups,
+            settings,
+        )
     }
 }
 
 /// Maps the points whose group is not in `cloud.excluded`; excluded points get
 /// zero values and status `Mapped` with no neighbours (they are dry and need
-/// no pwp). `owned`: node values handed over in place of `cloud.values` (see
-/// [`mapper::map_points_taking`]), or `None` to map with `cloud.values`.
+/// no pwp). `owned`: node values and positions handed over in place of the
+/// cloud's (see [`mapper::map_points_from`]).
 fn map_subset(
     cloud: &FemCloud<'_>,
-    owned: Option<Vec<f64>>,
-    points: &[[f64; 3]],
+    owned: Handed,
+    points: Points<'_>,
     groups: Option<&[u32]>,
     settings: &MapSettings,
 ) -> Result<MapResult, PipelineError> {
     let nodes = NodeCloud {
-        positions: cloud.positions,
+        positions: &cloud.positions,
         dim: cloud.dim,
         values: &cloud.values,
         n_fields: cloud.quantities.len(),
         group: cloud.groups,
         node_volume: cloud.node_volume,
     };
-    let map = |points: &[[f64; 3]], groups: Option<&[u32]>| {
-        match owned {
-            Some(values) => mapper::map_points_taking(&nodes, values, points, groups, settings),
-            None => mapper::map_points(&nodes, points, groups, settings),
-        }
-        .map_err(|e| PipelineError::Input(e.to_string()))
+    let map = |points: Points<'_>, groups: Option<&[u32]>| {
+        mapper::map_points_from(&nodes, owned, points, groups, settings)
+            .map_err(|e| PipelineError::Input(e.to_string()))
     };
     let excluded = &cloud.excluded;
-    let keep: Vec<usize> = (0..points.len())
-        .filter(|&i| groups.is_none_or(|g| !excluded.contains(&g[i])))
-        .collect();
-    if keep.len() == points.len() {
+    let left_out = |i: usize| groups.is_some_and(|g| excluded.contains(&g[i]));
+    if !(0..points.len()).any(left_out) {
         return map(points, groups);
     }
-    let sub_points: Vec<[f64; 3]> = keep.iter().map(|&i| points[i]).collect();
+    let keep: Vec<usize> = (0..points.len()).filter(|&i| !left_out(i)).collect();
+    let sub_points: Vec<[f64; 3]> = keep.iter().map(|&i| points.at(i)).collect();
     let sub_groups: Option<Vec<u32>> = groups.map(|g| keep.iter().map(|&i| g[i]).collect());
-    let sub = map(&sub_points, sub_groups.as_deref())?;
+    let sub = map(Points::Slice(&sub_points), sub_groups.as_deref())?;
     let nf = nodes.n_fields;
     let mut full = MapResult {
         values: vec![0.0; points.len() * nf],
@@ -156,38 +185,52 @@ fn map_subset(
     Ok(full)
 }
 
-/// Maps `placement`'s MPs through `cloud`, which keeps its values (for a
-/// second mapping, as the geostatic stress needs). A failure names the FEM
-/// files `fem_paths` and both extents.
+/// Maps the MPs `mps` (placed by `placement`) through `cloud`, which keeps
+/// its values (for a second mapping, as the geostatic stress needs). A
+/// failure names the FEM files `fem_paths` and both extents.
 pub fn interpolate(
     cloud: &FemCloud<'_>,
     placement: &Placement,
+    mps: &[MaterialPoint],
     fem_paths: &[PathBuf],
 ) -> Result<MapResult, PipelineError> {
-    interpolate_owning(cloud, None, placement, fem_paths)
+    interpolate_owning(cloud, Handed::default(), (placement, mps), fem_paths)
 }
 
-/// [`interpolate`], handing the cloud's values to the mapper, which frees them
-/// once its grid holds a copy.
+/// [`interpolate`], handing the cloud's values (and its positions, when it
+/// owns them) to the mapper, which frees them once its grid holds a copy.
 pub fn interpolate_taking(
     mut cloud: FemCloud<'_>,
     placement: &Placement,
+    mps: &[MaterialPoint],
     fem_paths: &[PathBuf],
 ) -> Result<MapResult, PipelineError> {
-    let values = std::mem::take(&mut cloud.values);
-    interpolate_owning(&cloud, Some(values), placement, fem_paths)
+    let handed = Handed {
+        values: Some(std::mem::take(&mut cloud.values)),
+        positions: match &mut cloud.positions {
+            Cow::Owned(p) => Some(std::mem::take(p)),
+            Cow::Borrowed(_) => None,
+        },
+    };
+    interpolate_owning(&cloud, handed, (placement, mps), fem_paths)
 }
 
+/// The MPs' positions are read inside the MP table, not copied out.
 fn interpolate_owning(
     cloud: &FemCloud<'_>,
-    owned: Option<Vec<f64>>,
-    placement: &Placement,
+    owned: Handed,
+    (placement, mps): (&Placement, &[MaterialPoint]),
     fem_paths: &[PathBuf],
 ) -> Result<MapResult, PipelineError> {
+    let at = |i: usize| mps[i].position;
+    let points = Points::Records {
+        len: mps.len(),
+        at: &at,
+    };
     map_subset(
         cloud,
         owned,
-        &placement.positions,
+        points,
         placement.point_groups.as_deref(),
         &cloud.settings,
     )

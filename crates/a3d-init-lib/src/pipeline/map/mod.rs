@@ -6,8 +6,8 @@
 //! [`map`] composes stages that a caller can also run alone, one file each:
 //! 1. [`inputs`] checks the FEM against the model and decides the stress source;
 //! 2. [`smoothing`] chooses h (spacing rule, given, or calibrated);
-//! 3. [`place`] finds the MPs' positions, the material separation and the
-//!    FEM's reach;
+//! 3. [`place`] measures the MPs' spacing, finds the material separation and
+//!    the FEM's reach;
 //! 4. [`interpolate`] maps the FEM fields onto the MPs with the kernel;
 //! 5. [`stress`] derives the MPs' states (pwp, total stress from the FEM, the
 //!    overburden or zero), or [`equilibrium`] solves for the stress at rest
@@ -55,7 +55,9 @@ pub use smoothing::ChosenH;
 pub struct Mapped {
     /// The model, its files and its MPs.
     pub project: Project,
-    /// The FEM nodes (their fields dropped unless `fem.vtu` is wanted).
+    /// The FEM nodes: their fields dropped unless `fem.vtu` is wanted, and
+    /// their positions and ids too when nothing else needs them
+    /// ([`interpolate::KeepNodes`]); report.json keeps their count.
     pub fem: LoadedFem,
     /// The state of each MP, in MP order.
     pub states: Vec<MpState>,
@@ -111,30 +113,42 @@ pub fn map(
     notes.append(&mut placement.notes);
     warnings.append(&mut placement.warnings);
 
+    // The geostatic stress maps the cloud a second time: it keeps its values;
+    // otherwise the mapper takes them and frees them once its grid has a copy.
+    // `--stress equilibrium` keeps it too: where no state at rest exists,
+    // the geostatic state is its floor (`equilibrium::no_worse_than_geostatic`).
+    let samples_again = matches!(source, StressSource::Geostatic | StressSource::Equilibrium);
+    let keep = match (config.keep_fem_fields, samples_again) {
+        (true, _) => interpolate::KeepNodes::All,
+        (false, true) => interpolate::KeepNodes::Positions,
+        // Without fem.vtu or a second mapping, the mapping is the nodes' last
+        // use: their positions go to the mapper too.
+        (false, false) => interpolate::KeepNodes::Nothing,
+    };
+    let fem_nodes = fem.nodes.len();
     let cloud = interpolate::prepare(
         &mut fem.nodes,
         &placement,
         source,
         config.settings(chosen.h),
         chosen.spacing,
-        config.keep_fem_fields,
+        keep,
     );
     let quantities = cloud.quantities.clone();
     let t = Instant::now();
-    // The geostatic stress maps the cloud a second time: it keeps its values;
-    // otherwise the mapper takes them and frees them once its grid has a copy.
-    // `--stress equilibrium` keeps it too: where no state at rest exists,
-    // the geostatic state is its floor (`equilibrium::no_worse_than_geostatic`).
-    let (mut result, sampler) =
-        if matches!(source, StressSource::Geostatic | StressSource::Equilibrium) {
-            let result = interpolate::interpolate(&cloud, &placement, &fem.paths)?;
-            (result, Some(cloud))
-        } else {
-            let result = interpolate::interpolate_taking(cloud, &placement, &fem.paths)?;
-            (result, None)
-        };
+    let (mut result, sampler) = if samples_again {
+        let result = interpolate::interpolate(&cloud, &placement, &project.points, &fem.paths)?;
+        (result, Some(cloud))
+    } else {
+        let result =
+            interpolate::interpolate_taking(cloud, &placement, &project.points, &fem.paths)?;
+        (result, None)
+    };
     timings.push(("kernel mapping".to_string(), ms(t)));
 
+    // The kernel's index is gone: the MP positions as a slice, for the steps
+    // that follow.
+    let positions = project.mp_positions();
     let values = std::mem::take(&mut result.values);
     let stress = stress::derive_stress(&project, source, &quantities, values);
     let mut states = stress.states;
@@ -146,7 +160,7 @@ pub fn map(
         let t = Instant::now();
         notes.extend(stress::geostatic_stress(
             &project,
-            &placement.positions,
+            &positions,
             cloud,
             &mut states,
         )?);
@@ -169,7 +183,7 @@ pub fn map(
             config,
             resolved.because,
             sampler.as_ref(),
-            &placement.positions,
+            &positions,
         )?;
         notes.extend(phase.notes);
         warnings.extend(phase.warnings);
@@ -186,10 +200,7 @@ pub fn map(
     if source != StressSource::Zero {
         let g = stress::gravity(&project);
         warnings.extend(plausibility::check_plausibility(
-            &placement.positions,
-            &states,
-            dim,
-            g,
+            &positions, &states, dim, g,
         ));
     }
     let collapse = mixed::collapse_mixed(&project, config.mixed_state, &mut states);
@@ -200,6 +211,7 @@ pub fn map(
     let report = report::build_report(report::ReportInputs {
         project: &project,
         fem: &fem,
+        fem_nodes,
         files: hashing.join()?,
         kernel: config.kernel,
         smoothing: chosen,

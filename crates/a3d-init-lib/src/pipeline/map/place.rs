@@ -17,8 +17,6 @@ use crate::pipeline::{PipelineError, Project};
 /// Where the MPs are and which FEM nodes each may take.
 #[derive(Clone, Debug)]
 pub struct Placement {
-    /// Each MP's position, in MP order.
-    pub positions: Vec<[f64; 3]>,
     /// The smallest distance between two MPs (m), which gives the exact-point
     /// MAPF's h.
     pub min_mp_spacing: f64,
@@ -56,7 +54,9 @@ pub fn place(
     let dim = project.model.mesh.dimension.n_dim();
     let (node_groups, separation) = groups(project, &fem.nodes, material_map)?;
     let points = &project.points;
-    let positions: Vec<[f64; 3]> = points.iter().map(|p| p.position).collect();
+    // A copy for the measures below, gone before the FEM values are copied
+    // for the kernel (which reads the positions inside the MP table).
+    let positions = project.mp_positions();
     // Measured before the FEM values are copied for the kernel, so its search
     // index is not held at the peak.
     let min_mp_spacing = mapper::min_spacing(&positions, dim);
@@ -111,7 +111,6 @@ pub fn place(
         }
     }
     Ok(Placement {
-        positions,
         min_mp_spacing,
         node_groups,
         point_groups,

@@ -185,6 +185,9 @@ pub fn mapf_note(dim: usize) -> &'static str {
 pub struct ReportInputs<'a> {
     pub project: &'a Project,
     pub fem: &'a LoadedFem,
+    /// The FEM nodes read (`fem`'s may be gone by now, see
+    /// [`super::interpolate::KeepNodes`]).
+    pub fem_nodes: usize,
     /// The input files with their SHA-256 ([`Hashing`]).
     pub files: Vec<InputFile>,
     pub kernel: KernelKind,
@@ -265,7 +268,7 @@ pub fn build_report(r: ReportInputs<'_>) -> MapReport {
         calibration: r.smoothing.calibration,
         material_separation: r.placement.separation.clone(),
         materials,
-        fem_nodes: r.fem.nodes.len(),
+        fem_nodes: r.fem_nodes,
         material_points: points.len(),
         null_points: r.null_points,
         null_point_policy: r.outside,

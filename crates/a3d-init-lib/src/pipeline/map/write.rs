@@ -135,7 +135,10 @@ fn write_diagnostics(
         vtu::write_points_with(w, points.len(), &|i| points[i].position, &arrays)
     })?;
     written.push("mps.vtu".into());
-    if fem_vtu || mapped.fem.nodes.len() <= FEM_VTU_AUTO_MAX {
+    // The nodes are kept for fem.vtu (`MapConfig::keep_fem_fields`), and
+    // only then.
+    let kept = !mapped.fem.nodes.is_empty();
+    if kept && (fem_vtu || mapped.fem.nodes.len() <= FEM_VTU_AUTO_MAX) {
         let nodes = &mapped.fem.nodes;
         let fem_arrays: Vec<vtu::ArrayFn<'_>> = nodes
             .fields
