@@ -21,6 +21,7 @@
 //! Pure computation: no I/O, nothing printed. The choice of the elastic
 //! parameters (ν from K0, …) is the caller's, through the laws it passes.
 
+mod ordering;
 mod solve;
 mod sparse;
 mod system;

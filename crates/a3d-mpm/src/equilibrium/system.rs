@@ -26,7 +26,8 @@ use super::super::grid::Grid;
 use super::super::loading::Analysis;
 use super::super::material::SolidModel;
 use super::EquilibriumSettings;
-use super::sparse::{CONSTRAINED, LowerPattern};
+use super::ordering::DISSECTION_FROM;
+use super::sparse::{CONSTRAINED, LowerPattern, Ordering};
 use a3d_element::Element;
 use a3d_model::{AnuraModel, Dimension, MaterialPoint, MpState};
 
@@ -75,6 +76,9 @@ pub(super) struct System<const D: usize, const NC: usize> {
     /// ‖f_ext‖ over the free directions (the runner's denominator).
     pub external_norm: f64,
     pub axisymmetric: bool,
+    /// Per compact node, its mesh coordinates (the ordering of large
+    /// systems, [`super::ordering`]).
+    pub node_positions: Vec<[f64; 3]>,
 }
 
 /// The free directions of the nodes that carry mass (heavier than 10⁻¹⁰ of the
@@ -250,6 +254,11 @@ impl<const D: usize, const NC: usize> System<D, NC> {
         let (dof, n_free, external, external_sq) =
             number_dofs(&grid, &out_points, &masses, &weights, gravity);
         let n_nodes = grid.n_nodes();
+        let node_positions = grid
+            .mesh_node
+            .iter()
+            .map(|&m| model.mesh.nodes[m as usize])
+            .collect();
         let mut system = System {
             grid,
             points: out_points,
@@ -261,6 +270,7 @@ impl<const D: usize, const NC: usize> System<D, NC> {
             pore_force: vec![0.0; n_nodes * D],
             external_norm: external_sq.sqrt(),
             axisymmetric,
+            node_positions,
         };
         let mut pore = vec![0.0; n_nodes * D];
         for p in &system.points {
@@ -379,8 +389,15 @@ impl<const D: usize, const NC: usize> System<D, NC> {
     }
 
     /// The pattern of the stiffness matrix over the free unknowns (from the
-    /// elements that hold MPs).
+    /// elements that hold MPs), ordered by nested dissection for a 3D system
+    /// of [`DISSECTION_FROM`] unknowns or more, by AMD otherwise
+    /// ([`super::ordering`]).
     pub fn pattern(&self) -> LowerPattern {
+        let ordering = if D == 3 && self.n_free >= DISSECTION_FROM {
+            Ordering::Dissection(&self.node_positions)
+        } else {
+            Ordering::Amd
+        };
         let mut active = vec![false; self.grid.elements.len()];
         for g in &self.groups {
             active[g.element as usize] = true;
@@ -395,6 +412,7 @@ impl<const D: usize, const NC: usize> System<D, NC> {
             self.grid.n_nodes(),
             D,
             &self.dof,
+            ordering,
         )
     }
 
