@@ -20,8 +20,6 @@ use faer::dyn_stack::{MemBuffer, MemStack};
 use faer::sparse::SymbolicSparseColMatRef;
 use faer::sparse::linalg::amd;
 
-use super::sparse::CONSTRAINED;
-
 /// Free unknowns from which the nested dissection replaces AMD (3D only).
 pub(super) const DISSECTION_FROM: usize = 25_000;
 
@@ -34,18 +32,18 @@ const LEAF: usize = 128;
 /// (the first `dim` used), `adjacency` the nodes' neighbours (compressed
 /// rows: `adjacency.0` the row starts, `adjacency.1` the neighbours),
 /// `dof[node * dim + i]` the free number of each direction or
-/// [`CONSTRAINED`].
+/// `constrained` (the marker of a direction not solved for).
 pub(super) fn nested_dissection(
     positions: &[[f64; 3]],
     dim: usize,
     adjacency: (&[usize], &[u32]),
-    (dof, n_free): (&[u32], usize),
+    (dof, constrained, n_free): (&[u32], u32, usize),
 ) -> Vec<usize> {
     let n_nodes = positions.len();
     let free = |node: usize| {
         dof[node * dim..(node + 1) * dim]
             .iter()
-            .any(|&f| f != CONSTRAINED)
+            .any(|&f| f != constrained)
     };
     let nodes: Vec<u32> = (0..n_nodes as u32).filter(|&n| free(n as usize)).collect();
     let mut state = Dissection {
@@ -64,7 +62,7 @@ pub(super) fn nested_dissection(
         out.extend(
             dof[node * dim..(node + 1) * dim]
                 .iter()
-                .filter(|&&f| f != CONSTRAINED)
+                .filter(|&&f| f != constrained)
                 .map(|&f| f as usize),
         );
     }

@@ -118,7 +118,9 @@ impl LowerPattern {
                 col_ptr.push(row_idx.len());
             }
         }
-        let dissect = |p| super::ordering::nested_dissection(p, dim, (&start, &unique), (dof, n));
+        let dissect = |p| {
+            super::ordering::nested_dissection(p, dim, (&start, &unique), (dof, CONSTRAINED, n))
+        };
         let order = match ordering {
             Ordering::Amd => None,
             Ordering::Dissection(p) => Some(dissect(p)),
