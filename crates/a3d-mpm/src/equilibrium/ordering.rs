@@ -1,17 +1,21 @@
 //! The fill-reducing ordering of large 3D systems: nested dissection of the
-//! mesh's nodes by their coordinates. The nodes are split at the median of
-//! their widest extent; the nodes of the lower half that touch the upper
-//! half form the separator, numbered after both halves, which are split the
-//! same way in turn down to parts of [`LEAF`] nodes, each ordered by faer's
-//! AMD on its own graph. The separators are planes, so the fill they cause
-//! grows more slowly with the mesh than the minimum degree's alone.
+//! mesh's nodes by their coordinates. The nodes are split at the median
+//! along each axis in turn, the nodes level with the median kept on one
+//! side (a plane of nodes is never cut in two); the nodes of the lower part
+//! that touch the upper one form that axis's separator, and the axis with
+//! the smallest separator is taken. The separator is numbered after both
+//! parts, which are split the same way in turn down to parts of [`LEAF`]
+//! nodes, each ordered by faer's AMD on its own graph. The separators are
+//! planes, so the fill they cause grows more slowly with the mesh than the
+//! minimum degree's alone.
 //!
 //! Chosen by measurement (`a3d-bench equilibrium`, README *Performance*):
-//! on the generated 3D slopes (tetrahedral_old) it keeps 15 % fewer entries
-//! in L than AMD at 3×10⁴ unknowns, 26 % at 6.5×10⁴, 29 % at 1.3×10⁵, and
-//! factors 1.5–2.5× faster; in 2D (TRI3) AMD keeps less fill, and on small
-//! regular lattices too, so 2D systems and small ones keep AMD (and their
-//! solutions keep their bits).
+//! on the generated 3D slopes (tetrahedral_old) it keeps 18 % fewer entries
+//! in L than the widest-axis dissection it replaced at 3.0×10⁴ unknowns,
+//! 16 % at 6.5×10⁴ and 15 % at 1.3×10⁵ (and that one 15–29 % fewer than
+//! AMD); in 2D (TRI3) AMD keeps less fill, and on small regular lattices
+//! too, so 2D systems and small ones keep AMD (and their solutions keep
+//! their bits).
 //!
 //! Deterministic: the split sorts by (coordinate, node), nothing depends on
 //! threads.
@@ -23,9 +27,9 @@ use faer::sparse::linalg::amd;
 /// Free unknowns from which the nested dissection replaces AMD (3D only).
 pub(super) const DISSECTION_FROM: usize = 25_000;
 
-/// Nodes below which a part is not split further (its own order, the node
-/// numbering, is kept).
-const LEAF: usize = 128;
+/// Nodes below which a part is not split further (ordered by AMD instead;
+/// 32–256 keep about as much fill, 1024 6 % more).
+const LEAF: usize = 64;
 
 /// The order in which to eliminate the free unknowns: `order[k]` is the
 /// free number eliminated k-th. `positions[node]` are the node coordinates
@@ -90,41 +94,59 @@ impl Dissection<'_> {
             self.leaf(&nodes);
             return;
         }
+        let mut best: Option<(Vec<u32>, Vec<u32>, Vec<u32>)> = None;
+        for axis in 0..self.dim {
+            let (separator, lower, upper) = self.split(nodes.clone(), axis);
+            if best.as_ref().is_none_or(|b| separator.len() < b.0.len()) {
+                best = Some((separator, lower, upper));
+            }
+        }
+        let Some((separator, lower, upper)) = best else {
+            return;
+        };
+        self.dissect(lower);
+        self.dissect(upper);
+        let mut separator = separator;
+        separator.sort_unstable();
+        self.order.extend(separator);
+    }
+
+    /// Splits `nodes` at the median along `axis`: (separator, lower, upper).
+    fn split(&mut self, mut nodes: Vec<u32>, axis: usize) -> (Vec<u32>, Vec<u32>, Vec<u32>) {
         let positions = self.positions;
-        let axis = (0..self.dim)
-            .map(|k| {
-                let (lo, hi) = nodes.iter().fold((f64::MAX, f64::MIN), |(lo, hi), &n| {
-                    let x = positions[n as usize][k];
-                    (lo.min(x), hi.max(x))
-                });
-                (hi - lo, k)
-            })
-            .fold((f64::MIN, 0), |best, e| if e.0 > best.0 { e } else { best })
-            .1;
         let mid = nodes.len() / 2;
         nodes.select_nth_unstable_by(mid, |&a, &b| {
             positions[a as usize][axis]
                 .total_cmp(&positions[b as usize][axis])
                 .then(a.cmp(&b))
         });
-        let upper = nodes.split_off(mid);
+        // The nodes level with the median go to one side together, so that
+        // a plane of nodes is not cut in two: to the upper side, or, where
+        // the median is the lowest level, to the lower one.
+        let level = positions[nodes[mid] as usize][axis];
+        let is_below = |n: &u32| positions[*n as usize][axis] < level;
+        let is_level = |n: &u32| positions[*n as usize][axis] <= level;
+        let (lower, upper): (Vec<u32>, Vec<u32>) = if nodes.iter().any(is_below) {
+            nodes.iter().partition(|n| is_below(n))
+        } else if !nodes.iter().all(is_level) {
+            nodes.iter().partition(|n| is_level(n))
+        } else {
+            let upper = nodes.split_off(mid);
+            (nodes, upper)
+        };
         self.next_label += 1;
         let upper_label = self.next_label;
         for &n in &upper {
             self.label[n as usize] = upper_label;
         }
         let (starts, neighbours) = self.adjacency;
-        let (separator, lower): (Vec<u32>, Vec<u32>) = nodes.into_iter().partition(|&n| {
+        let (separator, lower): (Vec<u32>, Vec<u32>) = lower.into_iter().partition(|&n| {
             let n = n as usize;
             neighbours[starts[n]..starts[n + 1]]
                 .iter()
                 .any(|&m| self.label[m as usize] == upper_label)
         });
-        self.dissect(lower);
-        self.dissect(upper);
-        let mut separator = separator;
-        separator.sort_unstable();
-        self.order.extend(separator);
+        (separator, lower, upper)
     }
 
     /// Orders a leaf (`nodes` sorted) by faer's AMD on the graph its nodes
