@@ -3,7 +3,7 @@
 //! workloads nor their generators ship in `a3d-init`:
 //!
 //! ```text
-//! cargo run --release -p a3d-bench -- map|gom|loo|e2e|csv|equilibrium|fos|runner
+//! cargo run --release -p a3d-bench -- map|gom|loo|e2e|csv|equilibrium|fos|runner|kernel
 //! ```
 
 /// `println!` that never panics: a closed stdout ends the output quietly.
@@ -15,7 +15,12 @@ macro_rules! say {
 
 mod bench;
 mod bench_fos;
+mod bench_kernel;
 mod bench_runner;
+/// The shipped binary's allocator setting, the same file, so that the peak
+/// memory a benchmark reports is the one `a3d-init` would have.
+#[path = "../../../src/memory.rs"]
+mod memory;
 
 use std::io::Write;
 use std::process::ExitCode;
@@ -61,9 +66,33 @@ pub struct BenchArgs {
     /// Write `fem.vtu` in `e2e` too.
     #[arg(long)]
     pub fem_vtu: bool,
-    /// Repetitions; the best is reported.
+    /// Repetitions; the best is reported (`kernel`: our runs, whose
+    /// minimum and median are reported).
     #[arg(long, default_value_t = 3)]
     pub repeat: usize,
+    /// The real Anura3D kernel's binary (`kernel`;
+    /// shared/anura3d-kernel/build.sh builds it).
+    #[arg(long)]
+    pub anura3d: Option<std::path::PathBuf>,
+    /// The `a3d-init` binary that `kernel` times (default: the one next to
+    /// this binary).
+    #[arg(long)]
+    pub a3d_init: Option<std::path::PathBuf>,
+    /// Which model `kernel` runs.
+    #[arg(long, value_enum, default_value_t = KernelCase::Both)]
+    pub case: KernelCase,
+    /// Runs of the kernel (`kernel`; one takes one to two minutes).
+    #[arg(long, default_value_t = 1)]
+    pub kernel_repeat: usize,
+}
+
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum KernelCase {
+    /// The demo's slope, two-phase, 0.2 s undamped.
+    Demo,
+    /// A 3D tetrahedral box of about `--points` MPs, 4 s at damping 0.75.
+    Tet,
+    Both,
 }
 
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -102,6 +131,12 @@ pub enum BenchWhat {
     /// `--points` MPs: particle-steps/s drained and two-phase coupled, and
     /// the time step of each.
     Runner,
+    /// The runner against the real Anura3D kernel (`--anura3d`), both as
+    /// whole processes on one thread, on the demo's slope (two-phase, 0.2 s)
+    /// and a 3D tetrahedral box (`--points`, 4 s; the README's figure takes
+    /// 100 000, which the kernel runs in about a minute): particle-steps/s
+    /// each.
+    Kernel,
 }
 
 pub fn run(args: BenchArgs) -> anyhow::Result<()> {
@@ -112,6 +147,7 @@ pub fn run(args: BenchArgs) -> anyhow::Result<()> {
         BenchWhat::Equilibrium => bench::equilibrium(&args),
         BenchWhat::Fos => bench_fos::fos(&args),
         BenchWhat::Runner => bench_runner::runner(&args),
+        BenchWhat::Kernel => bench_kernel::kernel(&args),
         BenchWhat::Csv => bench::csv(&args),
         BenchWhat::Gom => bench::gom(&args),
     }
@@ -123,6 +159,7 @@ fn write_line(args: std::fmt::Arguments) {
 }
 
 fn main() -> ExitCode {
+    memory::return_freed_memory();
     let cli = Cli::parse();
     match run(cli.args) {
         Ok(()) => ExitCode::SUCCESS,
