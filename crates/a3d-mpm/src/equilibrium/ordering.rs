@@ -94,11 +94,24 @@ impl Dissection<'_> {
             self.leaf(&nodes);
             return;
         }
+        // The smallest separator among the splits that leave each side a
+        // quarter of the nodes or more (ties in the coordinates can leave
+        // less); where none does, the most even split. The recursion then
+        // stays O(log n) deep.
+        let n = nodes.len();
         let mut best: Option<(Vec<u32>, Vec<u32>, Vec<u32>)> = None;
+        let score = |(separator, lower, upper): &(Vec<u32>, Vec<u32>, Vec<u32>)| {
+            let smaller = (separator.len() + lower.len()).min(upper.len());
+            if 4 * smaller >= n {
+                (0, separator.len())
+            } else {
+                (1, n - smaller)
+            }
+        };
         for axis in 0..self.dim {
-            let (separator, lower, upper) = self.split(nodes.clone(), axis);
-            if best.as_ref().is_none_or(|b| separator.len() < b.0.len()) {
-                best = Some((separator, lower, upper));
+            let split = self.split(nodes.clone(), axis);
+            if best.as_ref().is_none_or(|b| score(&split) < score(b)) {
+                best = Some(split);
             }
         }
         let Some((separator, lower, upper)) = best else {

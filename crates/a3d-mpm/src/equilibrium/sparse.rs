@@ -396,9 +396,10 @@ mod tests {
     }
 
     /// A 3D lattice of springs (three directions per node, the bottom
-    /// fixed), ordered by nested dissection and by AMD: the dissection is a
-    /// permutation of the free unknowns that splits below its leaf size, and
-    /// both factors solve K x = f to the same answer. (Its fill pays on large
+    /// fixed), ordered by nested dissection (of its coordinates, and of
+    /// coordinates full of ties) and by AMD: the dissection is a permutation
+    /// of the free unknowns that splits below its leaf size, and every
+    /// factor solves K x = f to the same answer. (Its fill pays on large
     /// 3D meshes, not on a lattice this small: the benchmark measures that.)
     #[test]
     fn nested_dissection_solves_as_amd_does() {
@@ -467,12 +468,24 @@ mod tests {
         };
         let (amd, amd_fill) = solve(Ordering::Amd);
         let (nd, nd_fill) = solve(Ordering::Dissection(&positions));
+        // Coordinates full of ties for the ordering (two levels along x,
+        // all but one layer level along y, one level along z): the splits
+        // fall back to even ones and still order every unknown.
+        let ties: Vec<[f64; 3]> = (0..n * n * n)
+            .map(|m| {
+                let (i, j) = (m / (n * n), (m / n) % n);
+                [(i % 2) as f64, if j + 1 < n { 0.0 } else { 1.0 }, 0.0]
+            })
+            .collect();
+        let (tied, _) = solve(Ordering::Dissection(&ties));
         let scale = amd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let worst = amd
-            .iter()
-            .zip(&nd)
-            .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
-        assert!(worst <= 1e-10 * scale, "worst {worst:e} of {scale:e}");
+        for other in [&nd, &tied] {
+            let worst = amd
+                .iter()
+                .zip(other)
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            assert!(worst <= 1e-10 * scale, "worst {worst:e} of {scale:e}");
+        }
         assert!(nd_fill != amd_fill, "the orders differ");
     }
 }
