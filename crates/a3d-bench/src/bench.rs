@@ -217,17 +217,7 @@ pub fn e2e(args: &BenchArgs) -> anyhow::Result<()> {
     use a3d_init::pipeline::map::job::{self, MapJob};
     use a3d_init::pipeline::map::{MapConfig, Outside, SmoothingLength};
     let threads = rayon::current_num_threads();
-    let tmp;
-    let dir = match &args.dir {
-        Some(d) => {
-            std::fs::create_dir_all(d)?;
-            d.clone()
-        }
-        None => {
-            tmp = tempfile::tempdir()?;
-            tmp.path().to_path_buf()
-        }
-    };
+    let (dir, _removed_at_the_end) = crate::work_dir(args.dir.as_deref())?;
     let t = Instant::now();
     // The generated case, kept in `case/` for later runs, is published whole
     // through the output guard, as `map`'s folder is.

@@ -89,17 +89,7 @@ pub fn kernel(args: &BenchArgs) -> anyhow::Result<()> {
             ours.display()
         );
     }
-    let tmp;
-    let dir = match &args.dir {
-        Some(d) => {
-            std::fs::create_dir_all(d)?;
-            d.clone()
-        }
-        None => {
-            tmp = tempfile::tempdir()?;
-            tmp.path().to_path_buf()
-        }
-    };
+    let (dir, _removed_at_the_end) = crate::work_dir(args.dir.as_deref())?;
     let repeat = args.repeat.max(1);
     let kernel_repeat = args.kernel_repeat.max(1);
     say!(
