@@ -305,6 +305,49 @@ pub fn e2e(args: &BenchArgs) -> anyhow::Result<()> {
         compute_s + write_s + publish_s
     );
     say_peak_rss();
+    if let Some(python) = &args.peer {
+        let total = compute_s + write_s + publish_s;
+        peer(python, &fem, &target.join("mps.csv"), support / 2.0, total)?;
+    }
+    Ok(())
+}
+
+/// The scipy peer (`benches/peer/scipy_map.py`: cKDTree on all threads, the
+/// same cubic Shepard mapping, nothing written) on the same case, run by
+/// `python` (with numpy and scipy): its read and compute times, and `ours`
+/// (this map's total, s) against its compute alone.
+fn peer(python: &Path, fem: &Path, mps: &Path, h: f64, ours: f64) -> anyhow::Result<()> {
+    let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../benches/peer/scipy_map.py");
+    let output = std::process::Command::new(python)
+        .arg(&script)
+        .arg(fem)
+        .arg(mps)
+        .arg(h.to_string())
+        .stdin(std::process::Stdio::null())
+        .output()?;
+    let text = String::from_utf8_lossy(&output.stdout);
+    // "read R s, compute C s, N MPs, M nodes"
+    let seconds = |key: &str| {
+        text.split(", ").find_map(|part| {
+            part.trim()
+                .strip_prefix(key)?
+                .strip_suffix(" s")?
+                .parse::<f64>()
+                .ok()
+        })
+    };
+    let (Some(read), Some(compute)) = (seconds("read "), seconds("compute ")) else {
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        anyhow::bail!(
+            "the scipy peer ({}) printed no times: {}",
+            script.display(),
+            stderr.lines().rev().take(3).collect::<Vec<_>>().join(" | ")
+        );
+    };
+    say!(
+        "  scipy peer                    read {read:.3} s, compute {compute:.3} s: this map's total is {:.1}× faster than the peer's compute alone",
+        compute / ours
+    );
     Ok(())
 }
 

@@ -66,6 +66,11 @@ pub struct BenchArgs {
     /// Write `fem.vtu` in `e2e` too.
     #[arg(long)]
     pub fem_vtu: bool,
+    /// `e2e`: also run the scipy peer (`benches/peer/scipy_map.py`) on the
+    /// same case with this Python (numpy and scipy installed), and print the
+    /// map's total against the peer's compute.
+    #[arg(long)]
+    pub peer: Option<std::path::PathBuf>,
     /// Repetitions; the best is reported (`kernel`: our runs, whose
     /// minimum and median are reported).
     #[arg(long, default_value_t = 3)]
