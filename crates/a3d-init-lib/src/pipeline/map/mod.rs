@@ -148,7 +148,7 @@ pub fn map(
 
     // The kernel's index is gone: the MP positions as a slice, for the steps
     // that follow.
-    let positions = project.mp_positions();
+    let positions = positions_for(&project, source);
     let values = std::mem::take(&mut result.values);
     let stress = stress::derive_stress(&project, source, &quantities, values);
     let mut states = stress.states;
@@ -203,6 +203,7 @@ pub fn map(
             &positions, &states, dim, g,
         ));
     }
+    drop(positions);
     let collapse = mixed::collapse_mixed(&project, config.mixed_state, &mut states);
     notes.extend(collapse.notes);
     warnings.extend(collapse.warnings);
@@ -234,6 +235,17 @@ pub fn map(
         diagnostics,
         report,
     })
+}
+
+/// The MP positions for the steps after the kernel (the geostatic stress,
+/// the equilibrium solve, the plausibility check), none when the stress is
+/// zero and none of them runs.
+fn positions_for(project: &Project, source: StressSource) -> Vec<[f64; 3]> {
+    if source == StressSource::Zero {
+        Vec::new()
+    } else {
+        project.mp_positions()
+    }
 }
 
 /// What the equilibrium phase of [`map`] adds to the report.
