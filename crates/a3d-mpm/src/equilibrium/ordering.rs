@@ -115,6 +115,9 @@ impl Dissection<'_> {
             }
         }
         let Some((separator, lower, upper)) = best else {
+            // No axis (never for 2 or 3): the part as one leaf.
+            nodes.sort_unstable();
+            self.leaf(&nodes);
             return;
         };
         self.dissect(lower);
@@ -136,16 +139,17 @@ impl Dissection<'_> {
         // The nodes level with the median go to one side together, so that
         // a plane of nodes is not cut in two: to the upper side, or, where
         // the median is the lowest level, to the lower one.
+        // Where neither leaves both sides some nodes (all level, or a
+        // coordinate that is not a number), the split by index.
         let level = positions[nodes[mid] as usize][axis];
-        let is_below = |n: &u32| positions[*n as usize][axis] < level;
-        let is_level = |n: &u32| positions[*n as usize][axis] <= level;
-        let (lower, upper): (Vec<u32>, Vec<u32>) = if nodes.iter().any(is_below) {
-            nodes.iter().partition(|n| is_below(n))
-        } else if !nodes.iter().all(is_level) {
-            nodes.iter().partition(|n| is_level(n))
-        } else {
-            let upper = nodes.split_off(mid);
-            (nodes, upper)
+        let parts = two_sides(&nodes, |n| positions[n as usize][axis] < level)
+            .or_else(|| two_sides(&nodes, |n| positions[n as usize][axis] <= level));
+        let (lower, upper) = match parts {
+            Some(parts) => parts,
+            None => {
+                let upper = nodes.split_off(mid);
+                (nodes, upper)
+            }
         };
         self.next_label += 1;
         let upper_label = self.next_label;
@@ -205,4 +209,11 @@ impl Dissection<'_> {
             Err(_) => self.order.extend_from_slice(nodes),
         }
     }
+}
+
+/// `nodes` parted by `lower` into (those it holds for, the others), or
+/// `None` where either would be empty.
+fn two_sides(nodes: &[u32], lower: impl Fn(u32) -> bool) -> Option<(Vec<u32>, Vec<u32>)> {
+    let (a, b): (Vec<u32>, Vec<u32>) = nodes.iter().partition(|&&n| lower(n));
+    (!a.is_empty() && !b.is_empty()).then_some((a, b))
 }

@@ -396,8 +396,9 @@ mod tests {
     }
 
     /// A 3D lattice of springs (three directions per node, the bottom
-    /// fixed), ordered by nested dissection (of its coordinates, and of
-    /// coordinates full of ties) and by AMD: the dissection is a permutation
+    /// fixed), ordered by nested dissection (of its coordinates, of
+    /// coordinates full of ties, and of coordinates that are not numbers)
+    /// and by AMD: the dissection is a permutation
     /// of the free unknowns that splits below its leaf size, and every
     /// factor solves K x = f to the same answer. (Its fill pays on large
     /// 3D meshes, not on a lattice this small: the benchmark measures that.)
@@ -478,8 +479,10 @@ mod tests {
             })
             .collect();
         let (tied, _) = solve(Ordering::Dissection(&ties));
+        // Coordinates that are not numbers: the splits by index.
+        let (unknown, _) = solve(Ordering::Dissection(&vec![[f64::NAN; 3]; n * n * n]));
         let scale = amd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        for other in [&nd, &tied] {
+        for other in [&nd, &tied, &unknown] {
             let worst = amd
                 .iter()
                 .zip(other)
