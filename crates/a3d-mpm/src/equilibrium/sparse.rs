@@ -167,6 +167,9 @@ enum Factor {
 enum Failure {
     /// The indices' type cannot count the factor's entries.
     Overflow,
+    OutOfMemory,
+    /// Not positive definite: a mechanism.
+    Mechanism,
     Other(String),
 }
 
@@ -175,9 +178,10 @@ impl Cholesky {
     /// that is not positive definite (a mechanism: too few fixities, or
     /// elements without stiffness) is an error.
     pub fn factor(pattern: &LowerPattern, values: &[f64]) -> Result<Cholesky, MpmError> {
-        let failed = |what: &str| {
+        let n = pattern.n;
+        let too_large = |what: &str| {
             MpmError::InvalidSettings(format!(
-                "the stiffness matrix could not be factored ({what}): the model is not held in place (check the GOM's fixities)"
+                "the stiffness matrix of {n} unknowns could not be factored: {what}"
             ))
         };
         let narrow = narrow(&pattern.col_ptr).and_then(|col_ptr| {
@@ -216,10 +220,16 @@ impl Cholesky {
         };
         match factor {
             Ok(f) => Ok(Cholesky(f)),
-            Err(Failure::Overflow) => Err(failed(
-                "more entries in the factor than this machine can index",
+            Err(Failure::Overflow) => Err(too_large(
+                "its factor has more entries than this machine can index",
             )),
-            Err(Failure::Other(what)) => Err(failed(&what)),
+            Err(Failure::OutOfMemory) => Err(too_large("its factor does not fit in memory")),
+            Err(Failure::Mechanism) => Err(MpmError::InvalidSettings(
+                "the stiffness matrix could not be factored (not positive definite): the model is not held in place (check the GOM's fixities)".into(),
+            )),
+            Err(Failure::Other(what)) => Err(MpmError::InvalidSettings(format!(
+                "the stiffness matrix could not be factored ({what})"
+            ))),
         }
     }
 
@@ -275,18 +285,19 @@ fn factor_with<I: faer::Index>(
     let symbolic = factorize_symbolic_cholesky(matrix, Side::Lower, ordering, params).map_err(
         |e| match e {
             FaerError::IndexOverflow => Failure::Overflow,
+            FaerError::OutOfMemory => Failure::OutOfMemory,
             other => Failure::Other(format!("{other:?}")),
         },
     )?;
     let mut factor = Vec::new();
     factor
         .try_reserve_exact(symbolic.len_val())
-        .map_err(|_| Failure::Other("out of memory".into()))?;
+        .map_err(|_| Failure::OutOfMemory)?;
     factor.resize(symbolic.len_val(), 0.0);
     let par = Par::Seq;
     let mut buffer =
         MemBuffer::try_new(symbolic.factorize_numeric_llt_scratch::<f64>(par, Default::default()))
-            .map_err(|_| Failure::Other("out of memory".into()))?;
+            .map_err(|_| Failure::OutOfMemory)?;
     symbolic
         .factorize_numeric_llt(
             &mut factor,
@@ -297,7 +308,7 @@ fn factor_with<I: faer::Index>(
             MemStack::new(&mut buffer),
             Default::default(),
         )
-        .map_err(|_| Failure::Other("not positive definite".into()))?;
+        .map_err(|_| Failure::Mechanism)?;
     Ok((symbolic, factor))
 }
 
