@@ -44,14 +44,16 @@ impl Merger {
     }
 
     /// Room for `n` more rows in every column, allocated once rather than
-    /// grown by doubling.
+    /// grown by doubling. `n` is an estimate from the file's size, which a
+    /// sparse or crafted file can make far larger than its rows: where the
+    /// room cannot be had, the columns grow with the rows instead.
     pub(super) fn reserve(&mut self, n: usize) {
         let rows = &mut self.merged.rows;
-        rows.positions.reserve_exact(n);
-        rows.ids.reserve_exact(n);
-        rows.lines.reserve_exact(n);
+        let _ = rows.positions.try_reserve_exact(n);
+        let _ = rows.ids.try_reserve_exact(n);
+        let _ = rows.lines.try_reserve_exact(n);
         for v in &mut rows.values {
-            v.reserve_exact(n);
+            let _ = v.try_reserve_exact(n);
         }
     }
 
