@@ -322,13 +322,7 @@ fn readme_figures_are_the_demos_measurements() {
     let readme =
         std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("README.md"))
             .unwrap();
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("demo");
-    let o = Command::new(env!("CARGO_BIN_EXE_a3d-init"))
-        .args(["demo", "--no-fos", "--out", out.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert_eq!(o.status.code(), Some(0), "{o:?}");
+    let (out, _) = common::demo_no_fos();
     let json = |name: &str| -> serde_json::Value {
         serde_json::from_str(&std::fs::read_to_string(out.join(name)).unwrap()).unwrap()
     };

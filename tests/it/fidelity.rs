@@ -311,11 +311,9 @@ fn dry_materials_carry_no_pore_water() {
 
 #[test]
 fn demo_prints_only_measured_words() {
-    let tmp = tempfile::tempdir().unwrap();
-    let out = tmp.path().join("demo");
-    let text = run_ok(&["demo", "--no-fos", "--out", out.to_str().unwrap()]);
+    let (out, text) = demo_no_fos();
     assert!(!text.contains("FS ≈ 1"), "{text}");
-    assert_contains(&text, &["σ'zz := τxy"]);
+    assert_contains(text, &["σ'zz := τxy"]);
     let report: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("report.json")).unwrap()).unwrap();
     assert!(
@@ -473,9 +471,8 @@ fn anura3d_kernel_holds_what_verify_says() {
     }
     // The demo slope (unsaturated sand over a dry base) and a foreign MAPF
     // written at the FEM nodes (Anura3D's own interpolation, with NaN MPs).
-    let demo = tmp.path().join("demo");
-    run(&["demo", "--no-fos", "--out", demo.to_str().unwrap()]);
-    compare_with_kernel(&kernel, &demo, &tmp.path().join("run-demo"));
+    let (demo, _) = demo_no_fos();
+    compare_with_kernel(&kernel, demo, &tmp.path().join("run-demo"));
     let nodal = tmp.path().join("nodal");
     std::fs::create_dir_all(&nodal).unwrap();
     for f in ["slope.GOM", "slope.CPS_001"] {

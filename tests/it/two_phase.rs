@@ -6,7 +6,7 @@
 
 use crate::common;
 use common::kernel_run::{run_kernel, vtk_scalars, vtk_vectors};
-use common::{anura3d_kernel_or_skip, run_map, run_ok, soil_spec};
+use common::{anura3d_kernel_or_skip, demo_no_fos, run_map, run_ok, soil_spec};
 
 use a3d_init::formats::gom::write::model_to_text;
 use a3d_init::model::{AnuraModel, MaterialPoint, MpState};
@@ -447,8 +447,7 @@ fn anura3d_kernel_demo_slope_within_twenty_percent() {
         return;
     };
     let tmp = tempfile::tempdir().unwrap();
-    let demo = tmp.path().join("demo");
-    run_ok(&["demo", "--no-fos", "--out", demo.to_str().unwrap()]);
+    let (demo, _) = demo_no_fos();
     let time = 0.2;
     // The kernel's copy, at Courant 0.5.
     let project = tmp.path().join("kernel-project");
@@ -474,7 +473,7 @@ fn anura3d_kernel_demo_slope_within_twenty_percent() {
         "pressure_liquid",
     );
 
-    let report = run_undamped(&demo, &tmp.path().join("ours"), time);
+    let report = run_undamped(demo, &tmp.path().join("ours"), time);
     assert_eq!(
         report["formulations"][0],
         serde_json::json!([1, "coupled"]),
@@ -506,7 +505,7 @@ fn anura3d_kernel_demo_slope_within_twenty_percent() {
         "largest displacement: kernel {kernel_max:.4e} m, ours {our_max:.4e} m"
     );
 
-    let points = a3d_init::pipeline::Project::load(&demo).unwrap().points;
+    let points = a3d_init::pipeline::Project::load(demo).unwrap().points;
     let sand = |k: usize| points[k].material == 1;
     // Monitored MPs in the suction zone: the sand MP nearest to each point
     // 0.15 m below the top of its column, from crest to toe (measured: within

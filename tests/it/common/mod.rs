@@ -43,6 +43,35 @@ pub fn run(args: &[&str]) -> (i32, String) {
     (code, stdout + &stderr)
 }
 
+/// One `a3d-init demo --no-fos` run for the tests that read its output (a
+/// minute of the test build's time each, four times over before): its
+/// folder, which no test writes into, and what it printed (stdout, then
+/// stderr). It runs on first use, in `CARGO_TARGET_TMPDIR`, in a folder named
+/// after this process; folders that earlier test processes left are removed.
+pub fn demo_no_fos() -> &'static (PathBuf, String) {
+    static DEMO: std::sync::OnceLock<(PathBuf, String)> = std::sync::OnceLock::new();
+    DEMO.get_or_init(|| {
+        let root = Path::new(env!("CARGO_TARGET_TMPDIR"));
+        let prefix = "demo-no-fos-";
+        // Where /proc tells which processes live, a folder whose process has
+        // ended is removed; a running one's is left alone.
+        let proc = Path::new("/proc/self").exists();
+        for entry in std::fs::read_dir(root).into_iter().flatten().flatten() {
+            let name = entry.file_name().to_string_lossy().into_owned();
+            if let Some(pid) = name.strip_prefix(prefix)
+                && proc
+                && !Path::new("/proc").join(pid).exists()
+            {
+                let _ = std::fs::remove_dir_all(entry.path());
+            }
+        }
+        let out = root.join(format!("{prefix}{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&out);
+        let text = run_ok(&["demo", "--no-fos", "--out", out.to_str().unwrap()]);
+        (out, text)
+    })
+}
+
 /// Runs the binary and checks that it exits 0: stdout followed by stderr.
 #[track_caller]
 pub fn run_ok(args: &[&str]) -> String {
