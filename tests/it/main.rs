@@ -7,6 +7,7 @@
 mod common;
 
 mod anura3d_documents;
+mod anura3d_kernel_runs;
 mod axisymmetric;
 mod calibrate;
 mod cbgeo;
