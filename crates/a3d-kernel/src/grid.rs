@@ -345,15 +345,39 @@ impl Grid {
         if inside {
             // Every row lies in the grid, unclipped: the same runs as below
             // from the rows' offsets, without the clipping.
+            // Two blocks written per row whatever its length, and kept as
+            // it needs them (a run past two blocks, rare, takes the loop):
+            // no branch that the runs' lengths would mispredict.
             let at = self.linear(cell) as i64;
-            for &(offset, dx) in &stencil.offsets {
+            let blocks = &mut out.blocks;
+            let mut n = 0;
+            let rows = stencil.offsets.len();
+            blocks.resize(2 * rows, Block { at: 0, valid: 0 });
+            for (i, &(offset, dx)) in stencil.offsets.iter().enumerate() {
                 let row = at + offset;
                 let (a, b) = (
                     self.start[(row - dx) as usize],
                     self.start[(row + dx + 1) as usize],
                 );
-                split(a, b, &mut out.blocks);
+                let len = b - a;
+                let mask = |k: u32| (1u32 << k.min(LANES as u32)) - 1;
+                blocks[n] = Block {
+                    at: a,
+                    valid: mask(len),
+                };
+                blocks[n + 1] = Block {
+                    at: a + LANES as u32,
+                    valid: mask(len.saturating_sub(LANES as u32)),
+                };
+                n += usize::from(len > 0) + usize::from(len > LANES as u32);
+                if len > 2 * LANES as u32 {
+                    blocks.truncate(n);
+                    split(a + 2 * LANES as u32, b, blocks);
+                    n = blocks.len();
+                    blocks.resize(n + 2 * (rows - i - 1), Block { at: 0, valid: 0 });
+                }
             }
+            blocks.truncate(n);
             return;
         }
         for &[dy, dz, dx] in &stencil.rows {
