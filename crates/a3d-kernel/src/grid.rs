@@ -352,7 +352,7 @@ impl Grid {
             let blocks = &mut out.blocks;
             let mut n = 0;
             let rows = stencil.offsets.len();
-            blocks.resize(2 * rows, Block { at: 0, valid: 0 });
+            blocks.resize(2 * rows, Block::EMPTY);
             for (i, &(offset, dx)) in stencil.offsets.iter().enumerate() {
                 let row = at + offset;
                 let (a, b) = (
@@ -360,21 +360,20 @@ impl Grid {
                     self.start[(row + dx + 1) as usize],
                 );
                 let len = b - a;
-                let mask = |k: u32| (1u32 << k.min(LANES as u32)) - 1;
                 blocks[n] = Block {
                     at: a,
-                    valid: mask(len),
+                    valid: lanes(len),
                 };
                 blocks[n + 1] = Block {
                     at: a + LANES as u32,
-                    valid: mask(len.saturating_sub(LANES as u32)),
+                    valid: lanes(len.saturating_sub(LANES as u32)),
                 };
                 n += usize::from(len > 0) + usize::from(len > LANES as u32);
                 if len > 2 * LANES as u32 {
                     blocks.truncate(n);
                     split(a + 2 * LANES as u32, b, blocks);
                     n = blocks.len();
-                    blocks.resize(n + 2 * (rows - i - 1), Block { at: 0, valid: 0 });
+                    blocks.resize(n + 2 * (rows - i - 1), Block::EMPTY);
                 }
             }
             blocks.truncate(n);
@@ -665,13 +664,19 @@ pub struct Hits {
 #[inline(always)]
 fn split(mut at: u32, b: u32, out: &mut Vec<Block>) {
     while at < b {
-        let valid = (b - at).min(LANES as u32);
         out.push(Block {
             at,
-            valid: (1u32 << valid) - 1,
+            valid: lanes(b - at),
         });
         at += LANES as u32;
     }
+}
+
+/// The valid-lane bits of a block whose run has `count` points from its
+/// start: the first `min(count, LANES)` lanes.
+#[inline(always)]
+fn lanes(count: u32) -> u32 {
+    (1u32 << count.min(LANES as u32)) - 1
 }
 
 /// Candidates tested together, in one loop the compiler vectorises (8 beat

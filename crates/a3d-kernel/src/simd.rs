@@ -148,3 +148,8 @@ pub struct Block {
     pub(crate) at: u32,
     pub(crate) valid: u32,
 }
+
+impl Block {
+    /// A block with no valid lane (a placeholder, never tested).
+    pub(crate) const EMPTY: Block = Block { at: 0, valid: 0 };
+}
