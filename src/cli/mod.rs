@@ -172,6 +172,24 @@ pub fn main() -> ExitCode {
             "error: internal error{location}: {message} (please report this bug)"
         );
     }));
+    // Ctrl-C, SIGTERM or SIGHUP: delete what the run had not finished
+    // writing, then end with 130, as a shell reports an interrupted command.
+    // Without a handler (another one was set first) the signal's default
+    // stands.
+    let _ = ctrlc::set_handler(|| {
+        let removed = a3d_init::pipeline::io::output::discard_unfinished();
+        let names: Vec<String> = removed.iter().map(|p| p.display().to_string()).collect();
+        let _ = writeln!(
+            std::io::stderr(),
+            "interrupted: {}",
+            if names.is_empty() {
+                "no output was being written".to_owned()
+            } else {
+                format!("removed the unfinished output {}", names.join(", "))
+            }
+        );
+        std::process::exit(130);
+    });
     let result = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| run(cli)));
     let Ok(result) = result else {
         return ExitCode::from(2);

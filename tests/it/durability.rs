@@ -327,3 +327,60 @@ fn regression_a_closed_pipe_is_not_a_crash() {
         .unwrap();
     assert_eq!(output.status.code(), Some(1), "{output:?}");
 }
+
+/// Regression (#38): fuzzing stopped `run`, `verify`, `fos` and `map` with
+/// Ctrl-C or SIGTERM and found their hidden staging folder left behind (for
+/// `run` and `verify` inside the map folder), with the snapshots written so
+/// far in it. Now the signal's handler deletes the unfinished output and
+/// the command ends with 130, for SIGINT, SIGTERM and SIGHUP alike.
+#[test]
+fn an_interrupted_run_leaves_no_output_behind() {
+    use std::time::{Duration, Instant};
+    let tmp = tempfile::tempdir().unwrap();
+    let map = tmp.path().join("m");
+    let (fem, slope) = (fixture("slope/sand-nodes.csv"), fixture("slope"));
+    assert_eq!(run_map(&slope, &fem, &map, &[]).0, 0);
+    let names = |dir: &Path| -> Vec<String> {
+        let mut names: Vec<String> = std::fs::read_dir(dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        names.sort();
+        names
+    };
+    let before = names(&map);
+    for signal in ["INT", "TERM", "HUP"] {
+        // `run` writes into a staging folder inside the map folder (its
+        // default output is `m/run`) for the whole simulated time.
+        let mut child = common::bin()
+            .args(["run", map.to_str().unwrap(), "--time", "3"])
+            .stdin(std::process::Stdio::null())
+            .stdout(std::process::Stdio::null())
+            .stderr(std::process::Stdio::piped())
+            .spawn()
+            .unwrap();
+        let deadline = Instant::now() + Duration::from_secs(120);
+        while !names(&map)
+            .iter()
+            .any(|n| n.starts_with(".a3d-init-staging-"))
+        {
+            assert!(
+                child.try_wait().unwrap().is_none(),
+                "run ended before SIG{signal} was sent"
+            );
+            assert!(Instant::now() < deadline, "no staging folder appeared");
+            std::thread::sleep(Duration::from_millis(20));
+        }
+        let pid = child.id().to_string();
+        let killed = Command::new("kill").args(["-s", signal, &pid]).status();
+        assert!(killed.unwrap().success());
+        let out = child.wait_with_output().unwrap();
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(130), "SIG{signal}: {stderr}");
+        assert!(
+            stderr.contains("interrupted: removed the unfinished output"),
+            "SIG{signal}: {stderr}"
+        );
+        assert_eq!(names(&map), before, "left behind after SIG{signal}");
+    }
+}

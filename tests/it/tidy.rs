@@ -295,7 +295,8 @@ fn the_crate_graph_keeps_its_layers() {
 
 /// The heavy crates compile only where they are used, and the command line
 /// is clap, anyhow and indicatif over the library (and libc for its one
-/// allocator setting, `src/memory.rs`, which the benchmark binary shares).
+/// allocator setting, `src/memory.rs`, which the benchmark binary shares;
+/// ctrlc for its signal handler, which a library user does not get).
 #[test]
 fn heavy_and_front_end_crates_stay_where_they_are_used() {
     let users = |wanted: &str| -> Vec<&str> {
@@ -321,9 +322,17 @@ fn heavy_and_front_end_crates_stay_where_they_are_used() {
     binary.sort();
     assert_eq!(
         binary,
-        ["a3d-init-lib", "anyhow", "clap", "indicatif", "libc"]
+        [
+            "a3d-init-lib",
+            "anyhow",
+            "clap",
+            "ctrlc",
+            "indicatif",
+            "libc"
+        ]
     );
     assert_eq!(users("libc"), ["a3d-bench", "a3d-init"]);
+    assert_eq!(users("ctrlc"), ["a3d-init"]);
 }
 
 /// The files of one source folder by module path (`lib.rs`, `main.rs` and

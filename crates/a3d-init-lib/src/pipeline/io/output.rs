@@ -25,6 +25,15 @@
 //! old folder is kept under the backup name, and it is moved back if the second
 //! rename fails. That one window cannot be closed without `RENAME_EXCHANGE`.
 //!
+//! **Interrupted.** Every hidden path a run is writing (a staging folder, a
+//! temporary sibling, an old output set aside) is listed while it exists.
+//! [`discard_unfinished`] deletes them all: the command line calls it on
+//! SIGINT, SIGTERM or SIGHUP before it exits, so Ctrl-C leaves neither a
+//! partial output nor a hidden folder. It waits for a commit's renames to
+//! end, so it finds either the unfinished new folder or the old one set
+//! aside, never the only copy of an output. Only SIGKILL (or a crash of the
+//! machine) can leave a `.a3d-init-staging-*` folder behind.
+//!
 //! **Inputs.** The guard takes a [`ReadLog`]: every file the command opened
 //! through [`crate::formats::input`], on any thread, since it started. Before
 //! anything is created, and again just before the commit replaces anything, the
@@ -35,6 +44,7 @@
 
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
+use std::sync::{Mutex, MutexGuard, PoisonError};
 
 pub use crate::formats::input::ReadLog;
 use crate::pipeline::PipelineError;
@@ -138,10 +148,12 @@ pub fn write_new(
         }
     }
     let dir = parent_of(path);
+    let listed: Unfinished;
     let tmp = tempfile::Builder::new()
         .prefix(".a3d-init-")
         .tempfile_in(&dir)
         .map_err(|e| io_error(format_args!("creating a file in {}", dir.display()), e))?;
+    listed = Unfinished::new(tmp.path());
     {
         let mut w = BufWriter::new(tmp.as_file());
         fill(&mut w)
@@ -156,8 +168,64 @@ pub fn write_new(
         tmp.persist_noclobber(path)
     };
     persisted.map_err(|e| io_error(format_args!("renaming into {}", path.display()), e.error))?;
+    drop(listed);
     sync::trace_event(trace::Event::Rename(path.to_path_buf()));
     sync::dir(&dir)
+}
+
+/// The hidden paths this process is writing and has neither published nor
+/// removed: staging folders, temporary siblings of single files, old
+/// outputs set aside for deletion. A commit holds the lock across its
+/// renames.
+static UNFINISHED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn unfinished() -> MutexGuard<'static, Vec<PathBuf>> {
+    UNFINISHED.lock().unwrap_or_else(PoisonError::into_inner)
+}
+
+/// A path listed in [`UNFINISHED`] for as long as this lives. Declared before
+/// the temporary folder or file it names, so that it outlives it: the path
+/// is removed, then unlisted.
+struct Unfinished(PathBuf);
+
+impl Unfinished {
+    fn new(path: &Path) -> Unfinished {
+        unfinished().push(path.to_path_buf());
+        Unfinished(path.to_path_buf())
+    }
+}
+
+impl Drop for Unfinished {
+    fn drop(&mut self) {
+        let mut list = unfinished();
+        if let Some(i) = list.iter().rposition(|p| *p == self.0) {
+            list.swap_remove(i);
+        }
+    }
+}
+
+/// Deletes every unfinished output of this process (see the module notes)
+/// and returns the paths it removed. For a signal handler that then ends
+/// the process: it waits for a commit's renames to finish, and keeps the
+/// list locked from then on, so that nothing is published after it.
+pub fn discard_unfinished() -> Vec<PathBuf> {
+    let list = unfinished();
+    let mut removed = Vec::new();
+    for path in list.iter() {
+        // A thread still writing may add a file while the folder goes: a
+        // few passes.
+        for _ in 0..5 {
+            remove_path(path);
+            if std::fs::symlink_metadata(path).is_err() {
+                removed.push(path.clone());
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
+    }
+    // Held until the process ends.
+    std::mem::forget(list);
+    removed
 }
 
 fn parent_of(path: &Path) -> PathBuf {
@@ -220,6 +288,8 @@ fn replaceable(target: &Path) -> Result<(), PipelineError> {
 pub struct OutputDir<'a> {
     target: PathBuf,
     staging: Option<tempfile::TempDir>,
+    /// The staging folder's place in [`UNFINISHED`], dropped after it.
+    listed: Option<Unfinished>,
     force: bool,
     reads: &'a ReadLog,
 }
@@ -271,9 +341,11 @@ impl<'a> OutputDir<'a> {
             .prefix(".a3d-init-staging-")
             .tempdir_in(&parent)
             .map_err(|e| io_error(format_args!("creating a folder in {}", parent.display()), e))?;
+        let listed = Unfinished::new(staging.path());
         let dir = OutputDir {
             target: target.to_path_buf(),
             staging: Some(staging),
+            listed: Some(listed),
             force,
             reads,
         };
@@ -338,6 +410,9 @@ impl<'a> OutputDir<'a> {
     /// notes), then syncs the parent folder. On any error the staging folder is
     /// removed and the old target is left as it was.
     pub fn commit(mut self) -> Result<PathBuf, PipelineError> {
+        // Unlisted when this returns, after the staging folder is published
+        // or removed (declared first, dropped last).
+        let _listed = self.listed.take();
         let Some(staging) = self.staging.take() else {
             return Ok(self.target.clone());
         };
@@ -347,7 +422,10 @@ impl<'a> OutputDir<'a> {
         refuse_inputs(&target, &self.reads.files())?;
         let exists = std::fs::symlink_metadata(&target).is_ok();
         if !exists {
-            rename_noreplace(staging.path(), &target)?;
+            {
+                let _renaming = unfinished();
+                rename_noreplace(staging.path(), &target)?;
+            }
             // The staging path is gone; keep() stops TempDir from looking for it.
             let _ = staging.keep();
             sync::trace_event(trace::Event::Rename(target.clone()));
@@ -357,7 +435,11 @@ impl<'a> OutputDir<'a> {
         if !self.force {
             return Err(PipelineError::Exists(target.to_path_buf()));
         }
-        match exchange(staging.path(), &target) {
+        let exchanged = {
+            let _renaming = unfinished();
+            exchange(staging.path(), &target)
+        };
+        match exchanged {
             Ok(()) => {
                 sync::trace_event(trace::Event::Rename(target.clone()));
                 // The new name must be on disk before the old data goes.
@@ -406,17 +488,23 @@ fn replace_by_two_renames(
         .tempdir_in(&parent)
         .map_err(|e| io_error(format_args!("creating a folder in {}", parent.display()), e))?;
     let backup_path = backup.keep();
-    // rename() onto an empty folder replaces it.
-    if let Err(e) = std::fs::rename(target, &backup_path) {
-        let _ = std::fs::remove_dir(&backup_path);
-        return Err(io_error(
-            format_args!("moving the old {} aside", target.display()),
-            e,
-        ));
-    }
-    if let Err(e) = rename_noreplace(staging.path(), target) {
-        let _ = std::fs::rename(&backup_path, target);
-        return Err(e);
+    let _listed = Unfinished::new(&backup_path);
+    {
+        // Both renames under the lock: an interruption between them would
+        // find the old output set aside and the new one not yet in place.
+        let _renaming = unfinished();
+        // rename() onto an empty folder replaces it.
+        if let Err(e) = std::fs::rename(target, &backup_path) {
+            let _ = std::fs::remove_dir(&backup_path);
+            return Err(io_error(
+                format_args!("moving the old {} aside", target.display()),
+                e,
+            ));
+        }
+        if let Err(e) = rename_noreplace(staging.path(), target) {
+            let _ = std::fs::rename(&backup_path, target);
+            return Err(e);
+        }
     }
     let _ = staging.keep();
     sync::trace_event(trace::Event::Rename(target.to_path_buf()));
