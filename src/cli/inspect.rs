@@ -29,6 +29,30 @@ pub struct InspectArgs {
 }
 
 pub fn run(args: InspectArgs) -> anyhow::Result<()> {
+    // Nothing asked for is dropped in silence: a model and --fem files are
+    // inspected one at a time, and --mps needs an Anura3D model.
+    if let (false, Some(model)) = (args.fem.fem.is_empty(), &args.model) {
+        anyhow::bail!(
+            "give a model ({}) or --fem FILE, not both: inspect summarises one at a time",
+            model.display()
+        );
+    }
+    if let Some(path) = &args.mps {
+        let model = args.model.as_deref().filter(|m| {
+            !fem_vtu::is_vtk_path(m)
+                && !m.extension().is_some_and(|e| e.eq_ignore_ascii_case("gsz"))
+        });
+        if model.is_none() {
+            anyhow::bail!(
+                "--mps {}: the MP table is predicted from an Anura3D model (GOM, CPS or folder); {}",
+                path.display(),
+                match &args.model {
+                    Some(m) => format!("{} is not one", m.display()),
+                    None => "none was given".to_owned(),
+                }
+            );
+        }
+    }
     if !args.fem.fem.is_empty() {
         let summary = inspect::fem(&args.fem.options()?)?;
         let mut out = std::io::stdout().lock();

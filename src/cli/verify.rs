@@ -18,13 +18,12 @@ use a3d_init::pipeline::{
     self, check::VerifyOptions, check::runout::RunOptions, stability::fos::FosOptions,
 };
 
+/// What `verify` and `run` share: the mapped state, the damping, the output
+/// and the water's treatment.
 #[derive(Debug, clap::Args)]
-pub struct VerifyArgs {
+pub struct SolverArgs {
     #[command(flatten)]
     pub inputs: StateInputs,
-    /// Maximum number of explicit steps.
-    #[arg(long, default_value_t = 20_000)]
-    pub max_steps: usize,
     /// Local damping α (default: the CPS `$$HOMOGENEOUS_LOCAL_DAMPING`; without
     /// one, 0.75 for `verify`, 0.05 for `run`).
     #[arg(long)]
@@ -34,9 +33,6 @@ pub struct VerifyArgs {
     pub out: Option<PathBuf>,
     #[arg(long)]
     pub force: bool,
-    /// Find the factor of safety by strength reduction instead (as `a3d-init fos`).
-    #[arg(long)]
-    pub fos: bool,
     /// Hold every pore pressure at its mapped value (drained). Without it,
     /// `saturated_material_coupled` materials run Anura3D's two-phase
     /// formulation (the water flows) and `saturated_material_undrained_effective`
@@ -46,9 +42,23 @@ pub struct VerifyArgs {
 }
 
 #[derive(Debug, clap::Args)]
+pub struct VerifyArgs {
+    #[command(flatten)]
+    pub solver: SolverArgs,
+    /// Maximum number of explicit steps.
+    #[arg(long, default_value_t = 20_000)]
+    pub max_steps: usize,
+    /// Find the factor of safety by strength reduction instead (as `a3d-init fos`).
+    #[arg(long)]
+    pub fos: bool,
+}
+
+/// `run`'s options: `verify`'s solver without its step cap or `--fos` (a
+/// run lasts `--time`; `a3d-init fos` gives the factor of safety).
+#[derive(Debug, clap::Args)]
 pub struct RunArgs {
     #[command(flatten)]
-    pub verify: VerifyArgs,
+    pub solver: SolverArgs,
     /// Simulated time (s); the paper's run-out, 3 s.
     #[arg(long, default_value_t = 3.0)]
     pub time: f64,
@@ -57,7 +67,7 @@ pub struct RunArgs {
     pub snapshots: String,
 }
 
-impl VerifyArgs {
+impl SolverArgs {
     /// `--out` and `--force`.
     fn destination(&self) -> Destination<'_> {
         Destination::new(self.out.as_deref(), self.force)
@@ -65,8 +75,13 @@ impl VerifyArgs {
 }
 
 pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
+    let VerifyArgs {
+        solver: args,
+        max_steps,
+        fos,
+    } = args;
     let source = args.inputs.source()?;
-    if args.fos {
+    if fos {
         let started = Instant::now();
         // Pore pressures held, as `fos` holds them.
         let options = FosOptions {
@@ -79,7 +94,7 @@ pub fn run_verify(args: VerifyArgs) -> anyhow::Result<()> {
         return Ok(());
     }
     let options = VerifyOptions {
-        max_steps: args.max_steps,
+        max_steps,
         damping: args.damping,
         drained: args.drained,
     };
@@ -104,14 +119,14 @@ fn snapshot_times(text: &str) -> anyhow::Result<Vec<f64>> {
 }
 
 pub fn run_run(args: RunArgs) -> anyhow::Result<()> {
-    let source = args.verify.inputs.source()?;
+    let source = args.solver.inputs.source()?;
     let options = RunOptions {
         time: args.time,
         snapshots: snapshot_times(&args.snapshots)?,
-        damping: args.verify.damping,
-        drained: args.verify.drained,
+        damping: args.solver.damping,
+        drained: args.solver.drained,
     };
-    let outcome = pipeline::check::runout::run(&source, &options, args.verify.destination())?;
+    let outcome = pipeline::check::runout::run(&source, &options, args.solver.destination())?;
     let r = &outcome.report;
     say!(
         "run        {} MPs, {} steps, t = {:.3} s, damping α = {}",

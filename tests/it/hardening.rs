@@ -1513,3 +1513,39 @@ fn regression_38_run_names_each_material_and_says_dry() {
         serde_json::json!(["silty_sand", "compacted_clay"])
     );
 }
+
+/// Regression (#38), options that were silently dropped, found by fuzzing:
+/// - `run --fos` and `run --max-steps` were listed by `run --help` and did
+///   nothing (a run lasts `--time`): now clap refuses them;
+/// - `inspect MODEL --fem FEM` ignored the model and any `--mps`, and
+///   `inspect --fem FEM --mps OUT` wrote nothing with exit 0: now both are
+///   refused, naming why, and nothing is written.
+#[test]
+fn regression_38_no_option_is_dropped_in_silence() {
+    let tmp = tempfile::tempdir().unwrap();
+    let slope = fixture("slope");
+    let fem = fixture("slope/sand-nodes.csv");
+    for extra in [["--fos"].as_slice(), &["--max-steps", "200"]] {
+        let mut args: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![&"run", &slope];
+        args.extend(extra.iter().map(|a| a as &dyn AsRef<std::ffi::OsStr>));
+        let (code, text) = run(&args);
+        assert_eq!(code, 2, "{text}");
+        assert_contains(&text, &[&format!("unexpected argument '{}'", extra[0])]);
+    }
+    let out = tmp.path().join("mps.csv");
+    let (code, text) = run(&[&"inspect", &slope, &"--fem", &fem, &"--mps", &out]);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(&text, &["or --fem FILE, not both"]);
+    let (code, text) = run(&[&"inspect", &"--fem", &fem, &"--mps", &out]);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(&text, &["the MP table is predicted from an Anura3D model"]);
+    let vtu = fixture("fem-vtu/hm2d_quad8_ascii.vtu");
+    let (code, text) = run(&[&"inspect", &vtu, &"--mps", &out]);
+    assert_eq!(code, 2, "{text}");
+    assert_contains(&text, &["is not one"]);
+    assert!(!out.exists());
+    // The model alone still writes its table.
+    let (code, text) = run(&[&"inspect", &slope, &"--mps", &out]);
+    assert_eq!(code, 0, "{text}");
+    assert!(out.is_file());
+}
