@@ -1549,3 +1549,36 @@ fn regression_38_no_option_is_dropped_in_silence() {
     assert_eq!(code, 0, "{text}");
     assert!(out.is_file());
 }
+
+/// Regression (#38): `demo --out` naming a file, or a folder without
+/// `--force`, was refused only after steps 1 to 4 (about half a minute):
+/// fuzzing under a 20 s limit saw a hang. Now it is refused before the first
+/// step, and nothing is written.
+#[test]
+fn regression_38_demo_checks_its_output_before_any_work() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("existing.txt");
+    std::fs::write(&file, "mine").unwrap();
+    let folder = tmp.path().join("folder");
+    std::fs::create_dir(&folder).unwrap();
+    std::fs::write(folder.join("paper.docx"), "mine").unwrap();
+    for (out, force, says) in [
+        (&file, false, "exists; pass --force"),
+        (&file, true, "exists and is not a folder"),
+        (&folder, false, "exists; pass --force"),
+        (&folder, true, "a3d-init did not write it"),
+    ] {
+        let mut args: Vec<&dyn AsRef<std::ffi::OsStr>> = vec![&"demo", &"--no-fos", &"--out", out];
+        if force {
+            args.push(&"--force");
+        }
+        let (code, text) = run(&args);
+        assert_eq!(code, 2, "{text}");
+        assert_contains(&text, &[says]);
+        // Refused before step 1 printed its line.
+        assert!(!text.contains("1 inspect"), "{text}");
+    }
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "mine");
+    assert_eq!(std::fs::read_dir(&folder).unwrap().count(), 1);
+    assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 2);
+}

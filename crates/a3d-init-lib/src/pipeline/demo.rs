@@ -418,6 +418,11 @@ pub fn demo(
     let started = Instant::now();
     let reads = ReadLog::start();
     let dir = fixture_dir()?;
+    // The output folder is checked (and its staging folder made) before any
+    // work: a `--out` that names a file, or a folder without `--force`, is
+    // refused at once rather than after the minutes of steps 1 to 4. The
+    // commit checks it against every input read again.
+    let out = OutputDir::create(&options.out, options.force, &reads, "demo")?;
     let pvd = dir.join("ogs/results/rain.pvd");
     say(DemoLine::Text(
         "a3d-init demo: the rainfall-loaded slope of the seed paper (Lora et al. 2016)".into(),
@@ -500,7 +505,6 @@ pub fn demo(
         fem_vtu: false,
     };
     let mapped = job::compute(&job)?;
-    let out = OutputDir::create(&options.out, options.force, &reads, "demo")?;
     let mut written = crate::pipeline::map::write::write_project(&mapped, &out.staging(), false)?;
     write_figures(&out, &mapped, &outcome, &curve, &series, &mut written)?;
     let target = out.commit()?;
