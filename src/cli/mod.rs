@@ -224,9 +224,26 @@ fn message(e: &anyhow::Error) -> String {
         Some(a3d_init::pipeline::PipelineError::Exists(path)) => {
             format!("{} exists; pass --force to replace it", path.display())
         }
-        _ => spelled(&format!("{e:#}")),
+        _ => spelled(&chain_text(e)),
     };
     a3d_init::formats::error::clip_long_words(&text, MAX_PRINTED_WORD).into_owned()
+}
+
+/// The chain as `a: b: c`, as `{:#}` writes it, leaving out a cause that the
+/// text before it already ends with (an error that prints its own source,
+/// `{path}: {source}`, would otherwise say it twice).
+fn chain_text(e: &anyhow::Error) -> String {
+    let mut text = String::new();
+    for cause in e.chain() {
+        let part = cause.to_string();
+        if text.is_empty() {
+            text = part;
+        } else if !text.ends_with(&part) {
+            text.push_str(": ");
+            text.push_str(&part);
+        }
+    }
+    text
 }
 
 /// The command-line flag of each setting the library names.

@@ -681,11 +681,19 @@ pub fn diff(a: &Path, b: &Path, options: &DiffOptions) -> Result<DiffReport, Pip
     let mut files = Vec::new();
     let mut notes = Vec::new();
     for path in [a, b] {
-        if !path.exists() {
-            return Err(PipelineError::Input(format!(
-                "{}: no such file or folder",
-                path.display()
-            )));
+        // The reason itself where it is not a missing path (a symlink loop,
+        // a folder it may not read).
+        match std::fs::metadata(path) {
+            Ok(_) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+                return Err(PipelineError::Input(format!(
+                    "{}: no such file or folder",
+                    path.display()
+                )));
+            }
+            Err(e) => {
+                return Err(PipelineError::Input(format!("{}: {e}", path.display())));
+            }
         }
     }
     match (a.is_dir(), b.is_dir()) {
