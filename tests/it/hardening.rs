@@ -1582,3 +1582,35 @@ fn regression_38_demo_checks_its_output_before_any_work() {
     assert_eq!(std::fs::read_dir(&folder).unwrap().count(), 1);
     assert_eq!(std::fs::read_dir(tmp.path()).unwrap().count(), 2);
 }
+
+/// Regression (#38): a symlink loop given as an input was reported with its
+/// reason twice (`l1: Too many levels of symbolic links (os error 40): Too
+/// many levels …`), and `diff` called it "no such file or folder".
+#[test]
+fn regression_38_a_symlink_loop_is_named_once_with_its_reason() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (l1, l2) = (tmp.path().join("l1"), tmp.path().join("l2"));
+    std::os::unix::fs::symlink(&l2, &l1).unwrap();
+    std::os::unix::fs::symlink(&l1, &l2).unwrap();
+    let reason = "Too many levels of symbolic links";
+    let out = tmp.path().join("out");
+    for args in [
+        vec![&"inspect" as &dyn AsRef<std::ffi::OsStr>, &l1],
+        vec![&"inspect", &"--fem", &l1],
+        vec![
+            &"map",
+            &"--fem",
+            &l1,
+            &"--mpm",
+            &fixture("slope"),
+            &"--out",
+            &out,
+        ],
+        vec![&"diff", &l1, &l2],
+    ] {
+        let (code, text) = run(&args);
+        assert_eq!(code, 2, "{text}");
+        assert_eq!(text.matches(reason).count(), 1, "{text}");
+        assert_contains(&text, &[&l1.display().to_string()]);
+    }
+}
