@@ -31,7 +31,7 @@ pub struct FosArgs {
     /// CPS `$$HOMOGENEOUS_LOCAL_DAMPING`, else 0.75).
     #[arg(long)]
     pub damping: Option<f64>,
-    /// Strength reduction: half-width of the final bracket on F.
+    /// Strength reduction: half-width of the final bracket on F (at least 1e-4).
     #[arg(long, default_value_t = 0.01)]
     pub tolerance: f64,
     /// Strength reduction: time window of one trial (s).

@@ -81,7 +81,8 @@ pub struct FosSettings {
     /// `max_steps` caps the steps of one trial (a trial that hits it is judged
     /// on what it has).
     pub run: RunSettings,
-    /// Half-width of the final bracket (default 0.01).
+    /// Half-width of the final bracket (default 0.01, at least
+    /// [`MIN_TOLERANCE`]).
     pub tolerance: f64,
     /// First trial factor (default 1).
     pub start: f64,
@@ -131,12 +132,22 @@ impl Default for FosSettings {
     }
 }
 
+/// The narrowest half-width of the final bracket [`FosSettings::validate`]
+/// takes.
+pub const MIN_TOLERANCE: f64 = 1e-4;
+
 impl FosSettings {
     fn validate(&self) -> Result<(), FosError> {
         let bad = |s: String| Err(FosError::InvalidSettings(s));
         let positive = |v: f64| v > 0.0 && v.is_finite();
-        if !(positive(self.tolerance) && self.tolerance < 1.0) {
-            return bad(format!("tolerance {} must lie in (0, 1)", self.tolerance));
+        // Each trial judges failure from a run's displacements, which no
+        // bracket narrower than about 10⁻⁴ in F can resolve; a tolerance
+        // below that only adds trials (1e-15 asked for about 50 bisections).
+        if !(self.tolerance >= MIN_TOLERANCE && self.tolerance < 1.0) {
+            return bad(format!(
+                "tolerance {} must lie in [{MIN_TOLERANCE}, 1)",
+                self.tolerance
+            ));
         }
         if !(positive(self.f_min) && positive(self.f_max) && self.f_min < self.f_max) {
             return bad(format!(
