@@ -47,6 +47,22 @@ pub fn read(path: &Path) -> Result<Series, FormatError> {
     Ok(series)
 }
 
+/// The (device, inode) of the file at `path`, links followed; `None` where
+/// it cannot be read (a missing output is reported where it is opened) or
+/// off Unix.
+fn identity(path: &Path) -> Option<(u64, u64)> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        std::fs::metadata(path).ok().map(|m| (m.dev(), m.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = path;
+        None
+    }
+}
+
 /// Parses the text of a `.pvd` at `path`.
 pub fn parse(path: &Path, text: &str) -> Result<Series, FormatError> {
     let doc = roxmltree::Document::parse(text).map_err(|e| {
@@ -76,6 +92,11 @@ pub fn parse(path: &Path, text: &str) -> Result<Series, FormatError> {
     // Each output is its own file: a file listed twice would be read (and
     // held by `fos-time`) once per listing.
     let mut listed: std::collections::HashMap<PathBuf, f64> = std::collections::HashMap::new();
+    // The same by file identity, where the file exists: a hard link or a
+    // symlink is another spelling of one output (1000 hard links of one
+    // file made `fos-time` analyse it 1000 times).
+    let mut identities: std::collections::HashMap<(u64, u64), (PathBuf, f64)> =
+        std::collections::HashMap::new();
     for node in collection.children().filter(|n| n.has_tag_name("DataSet")) {
         let time = node
             .attribute("timestep")
@@ -127,6 +148,22 @@ pub fn parse(path: &Path, text: &str) -> Result<Series, FormatError> {
                     file.display(),
                     time_text(first),
                     time_text(time)
+                ),
+            )
+            .into());
+        }
+        if let Some(id) = identity(&file)
+            && let Some((first, first_time)) = identities.insert(id, (file.clone(), time))
+        {
+            return Err(ParseError::new(
+                path,
+                at(node),
+                format!(
+                    "`{}` (t = {}) is the file `{}` listed at t = {} (a link to it): each output of a series is its own file",
+                    file.display(),
+                    time_text(time),
+                    first.display(),
+                    time_text(first_time)
                 ),
             )
             .into());
@@ -214,6 +251,30 @@ mod tests {
   </Collection>
 </VTKFile>"#;
         parse(Path::new("d/r.pvd"), text).unwrap()
+    }
+
+    /// Regression (#38): 1000 hard links of one output passed the check on
+    /// the listed names, and `fos-time` analysed the file 1000 times.
+    #[cfg(unix)]
+    #[test]
+    fn a_link_to_a_listed_file_is_refused_at_its_listing() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("a.vtu"), "x").unwrap();
+        std::fs::hard_link(dir.path().join("a.vtu"), dir.path().join("b.vtu")).unwrap();
+        std::os::unix::fs::symlink("a.vtu", dir.path().join("c.vtu")).unwrap();
+        std::fs::write(dir.path().join("d.vtu"), "x").unwrap();
+        let pvd = dir.path().join("r.pvd");
+        let text = |second: &str| {
+            format!(
+                "<VTKFile type=\"Collection\"><Collection>\n<DataSet timestep=\"0\" file=\"a.vtu\"/>\n<DataSet timestep=\"1\" file=\"{second}\"/>\n</Collection></VTKFile>"
+            )
+        };
+        for link in ["b.vtu", "c.vtu"] {
+            let e = parse(&pvd, &text(link)).unwrap_err().to_string();
+            assert!(e.contains(":3:") && e.contains("a link to it"), "{e}");
+        }
+        // Two files with the same bytes are two outputs.
+        assert_eq!(parse(&pvd, &text("d.vtu")).unwrap().outputs.len(), 2);
     }
 
     #[test]
