@@ -91,6 +91,16 @@ pub fn choose_h(
                     kernel.support() * h
                 )));
             }
+            // A support holding thousands of nodes (h in the wrong unit):
+            // the mapping's cost grows with the count, to hours.
+            if let Some(mean) =
+                crowded_support(&nodes.positions, dim, kernel.support() * h, spacing)
+            {
+                return Err(PipelineError::Option(format!(
+                    "smoothing length h = {h} m: the kernel support {:.4} m holds about {mean:.0} FEM nodes around each node (at h near the node spacing l = {spacing:.4} m, a few dozen), so every MP would weigh that many; give an h near l (is h in metres?), or calibrate h",
+                    kernel.support() * h
+                )));
+            }
             // A support far below the node spacing reaches no node.
             if spacing > 0.0 && kernel.support() * h < 1e-3 * spacing {
                 return Err(PipelineError::Option(format!(
@@ -120,4 +130,85 @@ pub fn choose_h(
             )
         }
     })
+}
+
+/// The most FEM nodes a given h's support may hold on average: 200 times
+/// what the paper's h ≈ l gives in 3D (about 50), far past any smoothing a
+/// mapping means.
+pub const MAX_MEAN_NEIGHBOURS: f64 = 10_000.0;
+
+/// The mean number of nodes within `support` of a node, where it passes
+/// [`MAX_MEAN_NEIGHBOURS`]. An estimate from the median spacing `spacing`
+/// first (a triangle mesh holds about 1.15/l² nodes per m², a tetrahedral
+/// one about 1.41/l³ per m³), free for every sensible h; past the limit, the
+/// count itself around up to 64 nodes spread through the list, so that a
+/// graded mesh (a median spacing far below the mean) is not refused on an
+/// estimate.
+fn crowded_support(positions: &[[f64; 3]], dim: usize, support: f64, spacing: f64) -> Option<f64> {
+    use rayon::prelude::*;
+    let (ball, density) = if dim == 3 {
+        (
+            4.0 / 3.0 * std::f64::consts::PI * support.powi(3),
+            std::f64::consts::SQRT_2 / spacing.powi(3),
+        )
+    } else {
+        (
+            std::f64::consts::PI * support.powi(2),
+            2.0 / 3.0f64.sqrt() / spacing.powi(2),
+        )
+    };
+    // NaN (no spacing) counts too.
+    if ball * density <= MAX_MEAN_NEIGHBOURS || positions.is_empty() {
+        return None;
+    }
+    let step = positions.len().div_ceil(64);
+    let r2 = support * support;
+    let counts: Vec<usize> = positions
+        .par_iter()
+        .step_by(step)
+        .map(|q| {
+            positions
+                .iter()
+                .filter(|p| (0..dim).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>() <= r2)
+                .count()
+                - 1
+        })
+        .collect();
+    let mean = counts.iter().sum::<usize>() as f64 / counts.len() as f64;
+    (mean > MAX_MEAN_NEIGHBOURS).then_some(mean)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn grid(n: usize, l: f64) -> Vec<[f64; 3]> {
+        (0..n * n)
+            .map(|k| [(k % n) as f64 * l, (k / n) as f64 * l, 0.0])
+            .collect()
+    }
+
+    /// Regression (#38): `--h 5` on a 28,000-node FEM 11 m across (l =
+    /// 0.04 m) passed the extent rule, and the map ran for minutes with
+    /// every MP weighing nearly every node.
+    #[test]
+    fn a_support_holding_thousands_of_nodes_is_refused() {
+        let nodes = grid(150, 0.01);
+        let mean = crowded_support(&nodes, 2, 1.0, 0.01).expect("refused");
+        assert!(mean > 15_000.0, "{mean}");
+        // The paper's h ≈ l, and an h of 20 l, pass.
+        assert_eq!(crowded_support(&nodes, 2, 0.02, 0.01), None);
+        assert_eq!(crowded_support(&nodes, 2, 0.4, 0.01), None);
+    }
+
+    /// The estimate alone never refuses: twin nodes 1 µm apart give a median
+    /// spacing of 1 µm, and an estimate of millions, while the support holds
+    /// a few dozen nodes.
+    #[test]
+    fn a_graded_cloud_is_judged_by_its_counts() {
+        let mut nodes = grid(60, 1.0);
+        let twins: Vec<[f64; 3]> = nodes.iter().map(|p| [p[0] + 1e-6, p[1], 0.0]).collect();
+        nodes.extend(twins);
+        assert_eq!(crowded_support(&nodes, 2, 2.0, 1e-6), None);
+    }
 }
