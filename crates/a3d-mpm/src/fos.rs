@@ -132,8 +132,8 @@ impl Default for FosSettings {
     }
 }
 
-/// The narrowest half-width of the final bracket [`FosSettings::validate`]
-/// takes.
+/// The narrowest half-width of the final bracket that the settings take
+/// ([`FosSettings::tolerance`]).
 pub const MIN_TOLERANCE: f64 = 1e-4;
 
 impl FosSettings {
