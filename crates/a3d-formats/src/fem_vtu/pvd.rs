@@ -253,7 +253,7 @@ mod tests {
         parse(Path::new("d/r.pvd"), text).unwrap()
     }
 
-    /// Regression (#38): 1000 hard links of one output passed the check on
+    /// Regression: 1000 hard links of one output passed the check on
     /// the listed names, and `fos-time` analysed the file 1000 times.
     #[cfg(unix)]
     #[test]

@@ -188,7 +188,7 @@ mod tests {
             .collect()
     }
 
-    /// Regression (#38): `--h 5` on a 28,000-node FEM 11 m across (l =
+    /// Regression: `--h 5` on a 28,000-node FEM 11 m across (l =
     /// 0.04 m) passed the extent rule, and the map ran for minutes with
     /// every MP weighing nearly every node.
     #[test]
