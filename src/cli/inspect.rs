@@ -6,6 +6,7 @@ use std::io::Write;
 use std::path::PathBuf;
 
 use a3d_init::formats::fem_vtu::{self, VtuReport};
+use a3d_init::pipeline::fem::{FemReader, reader_for};
 use a3d_init::pipeline::inspect::{
     self, CbGeoSummary, FemSummary, GszStep, GszSummary, ProjectSummary, VtuSummary,
 };
@@ -38,10 +39,12 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
         );
     }
     if let Some(path) = &args.mps {
-        let model = args.model.as_deref().filter(|m| {
-            !fem_vtu::is_vtk_path(m)
-                && !m.extension().is_some_and(|e| e.eq_ignore_ascii_case("gsz"))
-        });
+        // An Anura3D model: neither a `.gsz` nor a VTK file (what `run`
+        // below inspects as the model).
+        let model = args
+            .model
+            .as_deref()
+            .filter(|m| reader_for(m) == FemReader::Csv);
         if model.is_none() {
             anyhow::bail!(
                 "--mps {}: the MP table is predicted from an Anura3D model (GOM, CPS or folder); {}",
@@ -65,10 +68,8 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
     let Some(model) = &args.model else {
         anyhow::bail!("give a model (GOM, CPS or folder) or --fem FILE");
     };
-    if model
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("gsz"))
-    {
+    let reader = reader_for(model);
+    if reader == FemReader::Gsz {
         let summary = inspect::gsz(model)?;
         let mut out = std::io::stdout().lock();
         if args.json {
@@ -81,7 +82,7 @@ pub fn run(args: InspectArgs) -> anyhow::Result<()> {
             None => Ok(()),
         };
     }
-    if fem_vtu::is_vtk_path(model) {
+    if reader == FemReader::Vtu {
         let summary = inspect::vtu(model)?;
         let mut out = std::io::stdout().lock();
         if args.json {

@@ -139,6 +139,19 @@ pub fn protect(path: &Path) {
     record(path);
 }
 
+/// A file's identity (device, inode) where the platform has one: two paths
+/// with the same identity are one file (a hard link, a symlink, `..`).
+#[cfg(unix)]
+pub fn identity(meta: &std::fs::Metadata) -> Option<(u64, u64)> {
+    use std::os::unix::fs::MetadataExt;
+    Some((meta.dev(), meta.ino()))
+}
+
+#[cfg(not(unix))]
+pub fn identity(_meta: &std::fs::Metadata) -> Option<(u64, u64)> {
+    None
+}
+
 /// Opens `path` for reading if it is a regular file (symlinks followed) and
 /// returns it with its size. Anything else is refused without blocking: the
 /// type is checked before opening, and the open itself is non-blocking so a file

@@ -47,22 +47,6 @@ pub fn read(path: &Path) -> Result<Series, FormatError> {
     Ok(series)
 }
 
-/// The (device, inode) of the file at `path`, links followed; `None` where
-/// it cannot be read (a missing output is reported where it is opened) or
-/// off Unix.
-fn identity(path: &Path) -> Option<(u64, u64)> {
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::MetadataExt;
-        std::fs::metadata(path).ok().map(|m| (m.dev(), m.ino()))
-    }
-    #[cfg(not(unix))]
-    {
-        let _ = path;
-        None
-    }
-}
-
 /// Parses the text of a `.pvd` at `path`.
 pub fn parse(path: &Path, text: &str) -> Result<Series, FormatError> {
     let doc = roxmltree::Document::parse(text).map_err(|e| {
@@ -152,7 +136,11 @@ pub fn parse(path: &Path, text: &str) -> Result<Series, FormatError> {
             )
             .into());
         }
-        if let Some(id) = identity(&file)
+        // Where the file can be read (a missing output is reported where it
+        // is opened).
+        if let Some(id) = std::fs::metadata(&file)
+            .ok()
+            .and_then(|m| crate::input::identity(&m))
             && let Some((first, first_time)) = identities.insert(id, (file.clone(), time))
         {
             return Err(ParseError::new(

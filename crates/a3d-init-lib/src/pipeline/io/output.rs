@@ -47,6 +47,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Mutex, MutexGuard, PoisonError};
 
 pub use crate::formats::input::ReadLog;
+use crate::formats::input::identity;
 use crate::pipeline::PipelineError;
 
 /// Where a command writes its output folder, and whether an existing one may
@@ -78,18 +79,6 @@ fn refused(message: String) -> PipelineError {
 
 fn io_error(what: impl std::fmt::Display, e: std::io::Error) -> PipelineError {
     PipelineError::Output(format!("{what}: {e}"))
-}
-
-/// A file's identity (device, inode) where the platform has one.
-#[cfg(unix)]
-fn identity(meta: &std::fs::Metadata) -> Option<(u64, u64)> {
-    use std::os::unix::fs::MetadataExt;
-    Some((meta.dev(), meta.ino()))
-}
-
-#[cfg(not(unix))]
-fn identity(_meta: &std::fs::Metadata) -> Option<(u64, u64)> {
-    None
 }
 
 /// Refuses an output path that is an input, or a folder holding one (compared by
