@@ -71,6 +71,63 @@ fn gaussian_truncated_mass_at_3h() {
     assert!(g.truncated_mass(1) < 3e-5 && g.truncated_mass(3) < 5e-4);
 }
 
+#[test]
+#[allow(clippy::print_stderr)] // the skip must be visible in the test output
+fn cubic_weights_in_avx512_equal_the_scalar_shape_bit_for_bit() {
+    let Some(simd) = a3d_init::kernel::simd::Avx512::detect() else {
+        eprintln!("no AVX-512 here: the portable weights are the only path");
+        return;
+    };
+    let mut rng = ChaCha8Rng::seed_from_u64(61);
+    let (mut vector, mut scalar) = (Vec::new(), Vec::new());
+    for round in 0..4000 {
+        let h = 10f64.powf(rng.random_range(-4.0..4.0));
+        // Lists of every length around the vector width, their distances up
+        // to the support and past it.
+        let n = round % 67;
+        let mut d2: Vec<f64> = (0..n)
+            .map(|_| (rng.random_range(0.0..2.2) * h).powi(2))
+            .collect();
+        if round % 5 == 0 {
+            // r of exactly 0, 1 and 2, and the doubles beside 1 and 2.
+            for r in [0.0, 1.0, 2.0] {
+                for v in [
+                    r,
+                    f64::from_bits(f64::to_bits(r).wrapping_sub(1)),
+                    r.next_up(),
+                ] {
+                    d2.push((v * h).powi(2));
+                }
+            }
+            d2.retain(|v| v.is_finite() && *v >= 0.0);
+        }
+        simd.cubic(&d2, h, &mut vector);
+        KernelKind::Cubic.weights_squared(&d2, h, None, &mut scalar);
+        let want: Vec<u64> = d2
+            .iter()
+            .map(|v| a3d_init::kernel::CubicSpline.shape(v.sqrt() / h).to_bits())
+            .collect();
+        let bits = |w: &[f64]| w.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&vector), want, "h {h}, {n} distances");
+        assert_eq!(bits(&scalar), want, "h {h}, {n} distances");
+    }
+    // The division by 6 without the divider, over the whole range of (2 − r)³.
+    let mut w = Vec::new();
+    for _ in 0..200 {
+        let d2: Vec<f64> = (0..64)
+            .map(|_| {
+                let t = 2f64.powf(-rng.random_range(0.0..52.0)) * rng.random_range(0.5..1.0);
+                (2.0 - t).powi(2)
+            })
+            .collect();
+        simd.cubic(&d2, 1.0, &mut w);
+        for (v, got) in d2.iter().zip(&w) {
+            let t = 2.0 - v.sqrt();
+            assert_eq!(got.to_bits(), (t * t * t / 6.0).to_bits(), "t {t}");
+        }
+    }
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(128))]
 

@@ -685,16 +685,13 @@ fn lanes(count: u32) -> u32 {
 const LANES: usize = 8;
 
 impl Hits {
-    /// The hits of the last [`Grid::collect`] as (grid positions, distances),
-    /// in the order collect found them: the stencil's rows in ascending order,
-    /// each row's points in the grid's order, so ascending grid position. The
-    /// distances are `sqrt` of the squared distances, as in [`Grid::sorted`].
+    /// The hits of the last [`Grid::collect`] as (grid positions, squared
+    /// distances), in the order collect found them: the stencil's rows in
+    /// ascending order, each row's points in the grid's order, so ascending
+    /// grid position. [`Grid::sorted`]'s distances are their square roots.
     #[inline(always)]
-    pub fn in_grid_order(&mut self) -> (&[u32], &[f64]) {
-        let n = self.len;
-        self.d.clear();
-        self.d.extend(self.d2[..n].iter().map(|v| v.sqrt()));
-        (&self.pos[..n], &self.d[..n])
+    pub fn in_grid_order(&self) -> (&[u32], &[f64]) {
+        (&self.pos[..self.len], &self.d2[..self.len])
     }
 
     /// Tests the `blocks` of the padded columns `xs`, `ys`, `zs` (`zs`

@@ -219,6 +219,26 @@ impl KernelKind {
             KernelKind::Wendland { dim1 } => fill(d, h, w, |q| WendlandC2 { dim1 }.shape(q)),
         }
     }
+
+    /// [`KernelKind::weights`] on the distances `sqrt(d2[i])`, from the
+    /// squared distances the grid finds: the cubic spline's in AVX-512 where
+    /// `simd` is given ([`simd::Avx512::cubic`], the same bits).
+    #[inline(always)]
+    pub fn weights_squared(self, d2: &[f64], h: f64, simd: Option<simd::Avx512>, w: &mut Vec<f64>) {
+        #[inline(always)]
+        fn fill(d2: &[f64], h: f64, w: &mut Vec<f64>, shape: impl Fn(f64) -> f64) {
+            w.clear();
+            w.extend(d2.iter().map(|&v| shape(v.sqrt() / h)));
+        }
+        match (self, simd) {
+            (KernelKind::Cubic, Some(simd)) => simd.cubic(d2, h, w),
+            (KernelKind::Cubic, None) => fill(d2, h, w, |q| CubicSpline.shape(q)),
+            (KernelKind::Gaussian { cutoff }, _) => {
+                fill(d2, h, w, |q| Gaussian { cutoff }.shape(q))
+            }
+            (KernelKind::Wendland { dim1 }, _) => fill(d2, h, w, |q| WendlandC2 { dim1 }.shape(q)),
+        }
+    }
 }
 
 impl Kernel for KernelKind {

@@ -206,8 +206,16 @@ fn build_indices(nodes: &NodeCloud<'_>, search: Search, radius: f64) -> Vec<Inde
 struct Query<'a> {
     p: [f64; 3],
     pos: &'a [u32],
-    d: &'a [f64],
+    d: Distances<'a>,
     ws: &'a mut Vec<f64>,
+}
+
+/// A point's neighbour distances: squared as the grid finds them, or as the
+/// k-d tree gives them.
+#[derive(Clone, Copy)]
+enum Distances<'a> {
+    Squared(&'a [f64]),
+    Plain(&'a [f64]),
 }
 
 /// Σ w·v and Σ w over the neighbours with a positive weight, in their
@@ -266,7 +274,14 @@ fn map_one(
     out: &mut [f64],
 ) -> (u32, f64, PointStatus) {
     let alpha = settings.kernel.alpha(nodes.dim, settings.h);
-    settings.kernel.weights(d, settings.h, ws);
+    match d {
+        Distances::Squared(d2) => {
+            settings
+                .kernel
+                .weights_squared(d2, settings.h, idx.grid.simd(), ws)
+        }
+        Distances::Plain(d) => settings.kernel.weights(d, settings.h, ws),
+    }
     // The sums in registers for the usual field counts (the same operations
     // in the same order for every count, so the same bits).
     let (count, sum_w) = match out.len() {
@@ -415,7 +430,8 @@ impl Chunk<'_> {
                         blocks_of = Some((g, cell));
                     }
                     ix.grid.collect(&blocks, p, support, &mut hits);
-                    hits.in_grid_order()
+                    let (pos, d2) = hits.in_grid_order();
+                    (pos, Distances::Squared(d2))
                 }
                 Some((tree, rank)) => {
                     // The reference: the tree's hits by their positions in
@@ -429,7 +445,7 @@ impl Chunk<'_> {
                     tree_d.clear();
                     tree_pos.extend(found.iter().map(|e| e.0));
                     tree_d.extend(found.iter().map(|e| e.1));
-                    (&tree_pos[..], &tree_d[..])
+                    (&tree_pos[..], Distances::Plain(&tree_d[..]))
                 }
             };
             let query = Query {

@@ -24,6 +24,8 @@ impl Avx512 {
         {
             if std::arch::is_x86_feature_detected!("avx512f")
                 && std::arch::is_x86_feature_detected!("avx512vl")
+                && std::arch::is_x86_feature_detected!("fma")
+                && std::arch::is_x86_feature_detected!("popcnt")
             {
                 return Some(Avx512(()));
             }
@@ -44,6 +46,30 @@ impl Avx512 {
         }
         #[cfg(not(target_arch = "x86_64"))]
         f()
+    }
+
+    /// The cubic spline's shapes of the neighbours at squared distances `d2`
+    /// for smoothing length `h` into `w` (its length set to `d2`'s): eight
+    /// at a time, the last eight masked, with the operations of
+    /// [`crate::CubicSpline`]'s shape in its order on `sqrt(d2) / h` (IEEE
+    /// square root and division, no fused multiply-add), so the bits of
+    /// [`crate::KernelKind::weights`] on `sqrt(d2)`, without the scalar loop
+    /// and its mispredicted branch the compiler leaves for a list's tail.
+    pub fn cubic(self, d2: &[f64], h: f64, w: &mut Vec<f64>) {
+        w.clear();
+        w.resize(d2.len(), 0.0);
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: the token exists only where the processor has AVX-512F and
+        // VL; `w` is as long as `d2`, and every load and store is masked to
+        // the lanes below that length.
+        unsafe {
+            x86::cubic(d2, h, w)
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        {
+            let _ = (d2, h);
+            unreachable!("no AVX-512 token off x86-64")
+        }
     }
 
     /// Tests the `blocks` of the padded columns against `q` (`zs` unread
@@ -93,9 +119,66 @@ mod x86 {
         f()
     }
 
+    /// See [`super::Avx512::cubic`]; the caller makes `w` as long as `d2`.
+    #[target_feature(enable = "avx512f,avx512vl,fma")]
+    pub(super) unsafe fn cubic(d2: &[f64], h: f64, w: &mut [f64]) {
+        let n = d2.len().min(w.len());
+        let (h, one, two) = (_mm512_set1_pd(h), _mm512_set1_pd(1.0), _mm512_set1_pd(2.0));
+        let (third2, half, six) = (
+            _mm512_set1_pd(2.0 / 3.0),
+            _mm512_set1_pd(0.5),
+            _mm512_set1_pd(6.0),
+        );
+        let sixth = _mm512_set1_pd(1.0 / 6.0);
+        let mut i = 0;
+        while i < n {
+            let m: u8 = if n - i >= 8 {
+                0xff
+            } else {
+                (1u8 << (n - i)) - 1
+            };
+            // SAFETY: the lanes of `m` lie below n, within both slices.
+            unsafe {
+                let r = _mm512_div_pd(
+                    _mm512_sqrt_pd(_mm512_maskz_loadu_pd(m, d2.as_ptr().add(i))),
+                    h,
+                );
+                // 2/3 − r·r + 0.5·r·r·r, left to right.
+                let cube = _mm512_mul_pd(_mm512_mul_pd(_mm512_mul_pd(half, r), r), r);
+                let inner = _mm512_add_pd(_mm512_sub_pd(third2, _mm512_mul_pd(r, r)), cube);
+                // (2 − r)³ / 6, left to right.
+                let t = _mm512_sub_pd(two, r);
+                let outer = div6(_mm512_mul_pd(_mm512_mul_pd(t, t), t), sixth, six);
+                // outer where r < 2, else 0; inner where r < 1 (NaN: 0).
+                let v = _mm512_maskz_mov_pd(_mm512_cmp_pd_mask::<_CMP_LT_OQ>(r, two), outer);
+                let v = _mm512_mask_mov_pd(v, _mm512_cmp_pd_mask::<_CMP_LT_OQ>(r, one), inner);
+                _mm512_mask_storeu_pd(w.as_mut_ptr().add(i), m, v);
+            }
+            i += 8;
+        }
+    }
+
+    /// `x / 6`, correctly rounded as the division gives it, for x in
+    /// [2⁻¹⁶⁰, 1] (the cubic's (2 − r)³ with r < 2, r a double): without
+    /// the divider, which the square root and d/h keep busy. q₀ = x·(1/6) is
+    /// within an ulp of x/6, so the remainder x − 6q₀ is exact (one fused
+    /// multiply-add) and q₀ + rem·(1/6), rounded once, lies within 2⁻⁵² ulp
+    /// of x/6. x/6 never lies within a sixth of an ulp of a midpoint between
+    /// two doubles (x = X·2ᵉ with X an integer, X/3 is a whole number plus
+    /// 0, 1/3 or 2/3, which sits at least 1/12 from an odd multiple of 1/4
+    /// or 1/24 from one of 1/8, a sixth of the ulp either way), so both round
+    /// to the same double. Lanes outside the range are never kept.
+    #[inline]
+    #[target_feature(enable = "avx512f,fma")]
+    fn div6(x: __m512d, sixth: __m512d, six: __m512d) -> __m512d {
+        let q = _mm512_mul_pd(x, sixth);
+        let rem = _mm512_fnmadd_pd(q, six, x);
+        _mm512_fmadd_pd(rem, sixth, q)
+    }
+
     /// See [`super::Avx512::test`]; the caller checks the bounds.
     #[allow(clippy::too_many_arguments)]
-    #[target_feature(enable = "avx512f,avx512vl")]
+    #[target_feature(enable = "avx512f,avx512vl,popcnt")]
     pub(super) unsafe fn test(
         xs: &[f64],
         ys: &[f64],
