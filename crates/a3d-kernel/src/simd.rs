@@ -52,7 +52,8 @@ impl Avx512 {
     /// for smoothing length `h` into `w` (its length set to `d2`'s): eight
     /// at a time, the last eight masked, with the operations of
     /// [`crate::CubicSpline`]'s shape in its order on `sqrt(d2) / h` (IEEE
-    /// square root and division, no fused multiply-add), so the bits of
+    /// square root and division, and no multiply and add fused, but for the
+    /// division by 6, done exactly without the divider), so the bits of
     /// [`crate::KernelKind::weights`] on `sqrt(d2)`, without the scalar loop
     /// and its mispredicted branch the compiler leaves for a list's tail.
     pub fn cubic(self, d2: &[f64], h: f64, w: &mut Vec<f64>) {
