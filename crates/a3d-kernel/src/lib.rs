@@ -190,34 +190,45 @@ impl KernelKind {
 }
 
 impl KernelKind {
+    /// `w[i] = shape(distance(xs[i]) / h)` for every entry of `xs`, the kernel
+    /// chosen once for the whole list, in one loop the compiler vectorises:
+    /// what [`KernelKind::shapes`], [`KernelKind::weights`] and
+    /// [`KernelKind::weights_squared`] share.
+    #[inline(always)]
+    fn fill<T: Copy>(self, xs: &[T], h: f64, w: &mut Vec<f64>, distance: impl Fn(T) -> f64) {
+        #[inline(always)]
+        fn each<T: Copy>(
+            xs: &[T],
+            h: f64,
+            w: &mut Vec<f64>,
+            distance: impl Fn(T) -> f64,
+            shape: impl Fn(f64) -> f64,
+        ) {
+            w.clear();
+            w.extend(xs.iter().map(|&x| shape(distance(x) / h)));
+        }
+        match self {
+            KernelKind::Cubic => each(xs, h, w, distance, |q| CubicSpline.shape(q)),
+            KernelKind::Gaussian { cutoff } => {
+                each(xs, h, w, distance, |q| Gaussian { cutoff }.shape(q))
+            }
+            KernelKind::Wendland { dim1 } => {
+                each(xs, h, w, distance, |q| WendlandC2 { dim1 }.shape(q))
+            }
+        }
+    }
+
     /// `w[i] = shape(d[i] / h)` for every neighbour `(_, d)` of `found`, the
     /// kernel chosen once for the whole list.
     pub fn shapes(self, found: &[(u32, f64)], h: f64, w: &mut Vec<f64>) {
-        fn fill(found: &[(u32, f64)], h: f64, w: &mut Vec<f64>, shape: impl Fn(f64) -> f64) {
-            w.clear();
-            w.extend(found.iter().map(|&(_, d)| shape(d / h)));
-        }
-        match self {
-            KernelKind::Cubic => fill(found, h, w, |q| CubicSpline.shape(q)),
-            KernelKind::Gaussian { cutoff } => fill(found, h, w, |q| Gaussian { cutoff }.shape(q)),
-            KernelKind::Wendland { dim1 } => fill(found, h, w, |q| WendlandC2 { dim1 }.shape(q)),
-        }
+        self.fill(found, h, w, |(_, d)| d);
     }
 
     /// `w[i] = shape(d[i] / h)` for every distance of `d` (the same values
     /// as [`KernelKind::shapes`]), in one loop the compiler vectorises.
     #[inline(always)]
     pub fn weights(self, d: &[f64], h: f64, w: &mut Vec<f64>) {
-        #[inline(always)]
-        fn fill(d: &[f64], h: f64, w: &mut Vec<f64>, shape: impl Fn(f64) -> f64) {
-            w.clear();
-            w.extend(d.iter().map(|&d| shape(d / h)));
-        }
-        match self {
-            KernelKind::Cubic => fill(d, h, w, |q| CubicSpline.shape(q)),
-            KernelKind::Gaussian { cutoff } => fill(d, h, w, |q| Gaussian { cutoff }.shape(q)),
-            KernelKind::Wendland { dim1 } => fill(d, h, w, |q| WendlandC2 { dim1 }.shape(q)),
-        }
+        self.fill(d, h, w, |d| d);
     }
 
     /// [`KernelKind::weights`] on the distances `sqrt(d2[i])`, from the
@@ -225,18 +236,9 @@ impl KernelKind {
     /// `simd` is given ([`simd::Avx512::cubic`], the same bits).
     #[inline(always)]
     pub fn weights_squared(self, d2: &[f64], h: f64, simd: Option<simd::Avx512>, w: &mut Vec<f64>) {
-        #[inline(always)]
-        fn fill(d2: &[f64], h: f64, w: &mut Vec<f64>, shape: impl Fn(f64) -> f64) {
-            w.clear();
-            w.extend(d2.iter().map(|&v| shape(v.sqrt() / h)));
-        }
         match (self, simd) {
             (KernelKind::Cubic, Some(simd)) => simd.cubic(d2, h, w),
-            (KernelKind::Cubic, None) => fill(d2, h, w, |q| CubicSpline.shape(q)),
-            (KernelKind::Gaussian { cutoff }, _) => {
-                fill(d2, h, w, |q| Gaussian { cutoff }.shape(q))
-            }
-            (KernelKind::Wendland { dim1 }, _) => fill(d2, h, w, |q| WendlandC2 { dim1 }.shape(q)),
+            _ => self.fill(d2, h, w, f64::sqrt),
         }
     }
 }
