@@ -84,6 +84,36 @@ pub fn map(args: &BenchArgs) -> anyhow::Result<()> {
         args.points as f64 / best,
         args.points as f64 / best / threads as f64
     );
+    // The weights alone, as the map computes them from its squared distances:
+    // the floor the exact square root and d/h set (the divider), per neighbour.
+    let simd = match args.search {
+        SearchArg::Grid => a3d_init::kernel::simd::Avx512::detect(),
+        _ => None,
+    };
+    let d2: Vec<f64> = (0..4096)
+        .map(|_| (support * rng.random_range(0.0f64..1.0).powf(1.0 / dim as f64)).powi(2))
+        .collect();
+    let mut w = Vec::with_capacity(d2.len());
+    let reps = 5000;
+    let mut weights = f64::INFINITY;
+    for _ in 0..3 {
+        let t = Instant::now();
+        for _ in 0..reps {
+            KernelKind::Cubic.weights_squared(std::hint::black_box(&d2), h, simd, &mut w);
+            std::hint::black_box(&w);
+        }
+        weights = weights.min(t.elapsed().as_secs_f64() / (reps * d2.len()) as f64);
+    }
+    say!(
+        "  the cubic weights alone ({}): {:.2} ns per neighbour, {:.0} % of the map's time at {mean_neighbours:.1} neighbours per query",
+        if simd.is_some() {
+            "AVX-512"
+        } else {
+            "portable"
+        },
+        weights * 1e9,
+        100.0 * weights * mean_neighbours * args.points as f64 / (best * threads as f64)
+    );
     Ok(())
 }
 
