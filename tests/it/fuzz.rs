@@ -1,5 +1,6 @@
 //! Bounded, seeded fuzzing of every reader (#15): GOM (through the typed model
-//! and MP placement), CPS, MAPF, FEM CSV, PLY, `.gsz` and mps.csv. Each case is
+//! and MP placement), CPS, MAPF, FEM CSV, PLY, `.gsz`, mps.csv, CB-Geo's files,
+//! FEM VTU in each encoding, `.pvd` series and the MP VTU (#38). Each case is
 //! a fixture with one to three structure-aware mutations: truncation, bit flips,
 //! duplicated, deleted, swapped or inserted lines, extreme numbers (0, −1, 2⁶²,
 //! 10¹⁸, 1e308, NaN, …) anywhere or as the count after a `$$KEYWORD`, numbers
@@ -661,4 +662,82 @@ fn fuzz_cbgeo_mesh_and_particles() {
             case
         }));
     }
+}
+
+/// FEM results as VTK XML, in every encoding the reader takes: ASCII, inline
+/// base64 with and without zlib, appended raw, float32 from meshio, and a 3D
+/// hexahedral mesh. Each is read as `map --fem` reads it and
+/// described as `inspect` does.
+#[test]
+fn fuzz_fem_vtu() {
+    use a3d_init::formats::fem_vtu::{self, VtuOptions};
+    let mut failures = Vec::new();
+    for name in [
+        "hm2d_quad8_ascii.vtu",
+        "hm2d_quad8_binary.vtu",
+        "hm2d_quad8_raw.vtu",
+        "hm2d_quad8_uncompressed.vtu",
+        "hm2d_quad8_meshio_float32.vtu",
+        "shear3d_hex8.vtu",
+    ] {
+        let base = std::fs::read(fixture("fem-vtu").join(name)).unwrap();
+        // The unmutated file reads.
+        let tmp = tempfile::tempdir().unwrap();
+        let good = tmp.path().join(name);
+        std::fs::write(&good, &base).unwrap();
+        fem_vtu::read_vtu(&good, &VtuOptions::default()).unwrap();
+        failures.extend(fuzz(&format!("vtu-{name}"), &base, None, |path, bytes| {
+            let path = path.with_extension("vtu");
+            std::fs::write(&path, bytes).unwrap();
+            let _ = fem_vtu::describe(&path);
+            fem_vtu::read_vtu(&path, &VtuOptions::default()).into()
+        }));
+    }
+    check(failures);
+}
+
+/// A `.pvd` series over the fixture's steps, each step chosen by number,
+/// time and `last`.
+#[test]
+fn fuzz_pvd() {
+    use a3d_init::formats::fem::StepChoice;
+    use a3d_init::formats::fem_vtu::{self, VtuOptions};
+    let dir = fixture("fem-vtu");
+    let base = std::fs::read(dir.join("hm2d_quad4_series.pvd")).unwrap();
+    check(fuzz("pvd", &base, None, |path, bytes| {
+        let beside = path.parent().unwrap();
+        for t in ["0", "0.5", "1", "2", "5"] {
+            let name = format!("hm2d_quad4_series_t_{t}.vtu");
+            if !beside.join(&name).exists() {
+                std::fs::copy(dir.join(&name), beside.join(&name)).unwrap();
+            }
+        }
+        let path = path.with_extension("pvd");
+        std::fs::write(&path, bytes).unwrap();
+        let options = VtuOptions::default();
+        let _ = fem_vtu::read(&path, &options, &StepChoice::Number(2));
+        let _ = fem_vtu::read(&path, &options, &StepChoice::Time(0.5));
+        fem_vtu::read(&path, &options, &StepChoice::Last).into()
+    }));
+}
+
+/// The material point VTU that `map` writes (read back by tests and tools).
+#[test]
+fn fuzz_mp_vtu() {
+    use a3d_init::formats::vtu;
+    let (mps, states) = mini_state();
+    let arrays = [
+        vtu::ArrayFn::scalar("pwp", |i| states[i].pwp),
+        vtu::ArrayFn {
+            name: "total_stress".into(),
+            components: 6,
+            fill: Box::new(|i, out: &mut [f64]| out.copy_from_slice(&states[i].total)),
+        },
+    ];
+    let mut base = Vec::new();
+    vtu::write_points_with(&mut base, mps.len(), &|i| mps[i].position, &arrays).unwrap();
+    vtu::parse(Path::new("mps.vtu"), &base).unwrap();
+    check(fuzz("mp-vtu", &base, None, |path, bytes| {
+        vtu::parse(path, bytes).into()
+    }));
 }
