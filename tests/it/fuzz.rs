@@ -665,8 +665,8 @@ fn fuzz_cbgeo_mesh_and_particles() {
 }
 
 /// FEM results as VTK XML, in every encoding the reader takes: ASCII, inline
-/// base64 with and without zlib, appended raw, float32 from meshio, and a 3D
-/// hexahedral mesh. Each is read as `map --fem` reads it and
+/// base64 with and without zlib, appended raw, float32 from meshio, VTK's LZ4
+/// and LZMA blocks, and a 3D hexahedral mesh. Each is read as `map --fem` reads it and
 /// described as `inspect` does.
 #[test]
 fn fuzz_fem_vtu() {
@@ -678,6 +678,9 @@ fn fuzz_fem_vtu() {
         "hm2d_quad8_raw.vtu",
         "hm2d_quad8_uncompressed.vtu",
         "hm2d_quad8_meshio_float32.vtu",
+        "hm2d_quad8_meshio_lzma.vtu",
+        "hm2d_quad8_vtk_lz4.vtu",
+        "hm2d_quad8_vtk_lzma.vtu",
         "shear3d_hex8.vtu",
     ] {
         let base = std::fs::read(fixture("fem-vtu").join(name)).unwrap();

@@ -1,7 +1,7 @@
 //! The values of a `DataArray`, whatever its encoding: ASCII numbers, inline
 //! base64 (`format="binary"`), or appended data (base64 or raw), each binary
 //! block a header (UInt32 or UInt64 integers) then the data, uncompressed or in
-//! zlib blocks. Every count is checked against what the piece declares before
+//! zlib, LZ4 or LZMA blocks. Every count is checked against what the piece declares before
 //! anything is decompressed, so a damaged or hostile file cannot make us
 //! allocate more than the array it claims to hold. Errors give the array's tag
 //! position, or a byte offset into the file for the binary data.
@@ -11,7 +11,7 @@ use std::path::Path;
 
 use base64::Engine as _;
 
-use super::xml::{AppendedEncoding, ArrayTag, Layout, Place, Scalar, VtuXml};
+use super::xml::{AppendedEncoding, ArrayTag, Compressor, Layout, Place, Scalar, VtuXml};
 use crate::error::{ParseError, Position};
 
 /// The values of `tag`, which must hold `tuples` tuples of its components,
@@ -223,7 +223,7 @@ fn read_uint(bytes: &[u8], layout: Layout) -> u64 {
     }
 }
 
-/// One array's block: header then data, uncompressed or zlib blocks.
+/// One array's block: header then data, uncompressed or compressed blocks.
 fn block(
     path: &Path,
     source: &mut dyn Source,
@@ -239,7 +239,7 @@ fn block(
         .checked_mul(scalar.size())
         .ok_or_else(|| fail((0, "too many values".into())))?;
     let h = layout.header_bytes;
-    let raw = if !layout.zlib {
+    let raw = if layout.compressor == Compressor::None {
         let size = read_uint(&source.take(h).map_err(fail)?, layout);
         if size != expected as u64 {
             return Err(fail((
@@ -290,15 +290,14 @@ fn block(
             } as usize;
             let compressed = source.take(csize).map_err(fail)?;
             let before = out.len();
-            flate2::read::ZlibDecoder::new(compressed.as_slice())
-                .take(want as u64 + 1)
-                .read_to_end(&mut out)
-                .map_err(|e| fail((0, format!("zlib block {}: {e}", k + 1))))?;
+            let name = layout.compressor.name();
+            inflate(layout.compressor, &compressed, want, &mut out)
+                .map_err(|e| fail((0, format!("{name} block {}: {e}", k + 1))))?;
             if out.len() - before != want {
                 return Err(fail((
                     0,
                     format!(
-                        "zlib block {} holds {} bytes, the header says {want}",
+                        "{name} block {} holds {} bytes, the header says {want}",
                         k + 1,
                         out.len() - before
                     ),
@@ -309,6 +308,55 @@ fn block(
     };
     Ok(convert(&raw, scalar, layout.big_endian))
 }
+
+/// Appends the block `compressed` to `out`, as inflated by `compressor`:
+/// `want` bytes when the block is whole, never more than one byte past
+/// them, so that a block that inflates past its header's size is caught
+/// without inflating it all (LZ4 is told its size and stops there).
+fn inflate(
+    compressor: Compressor,
+    compressed: &[u8],
+    want: usize,
+    out: &mut Vec<u8>,
+) -> Result<(), String> {
+    match compressor {
+        Compressor::None => {
+            out.extend_from_slice(compressed);
+            Ok(())
+        }
+        Compressor::Zlib => flate2::read::ZlibDecoder::new(compressed)
+            .take(want as u64 + 1)
+            .read_to_end(out)
+            .map(drop)
+            .map_err(|e| e.to_string()),
+        Compressor::Lz4 => {
+            // VTK's LZ4 blocks are bare (no frame): the size comes from the
+            // header, and a block that decodes to anything else is refused.
+            let before = out.len();
+            out.resize(before + want, 0);
+            let n = lz4_flex::block::decompress_into(compressed, &mut out[before..])
+                .map_err(|e| e.to_string())?;
+            out.truncate(before + n);
+            Ok(())
+        }
+        Compressor::Lzma => {
+            // An `.xz` stream (VTK's `lzma_easy_buffer_encode`, Python's
+            // `lzma.compress`), streamed and capped as zlib's is; liblzma
+            // refuses a header asking for a dictionary past LZMA_MEMLIMIT.
+            let stream = liblzma::stream::Stream::new_stream_decoder(LZMA_MEMLIMIT, 0)
+                .map_err(|e| e.to_string())?;
+            liblzma::read::XzDecoder::new_stream(compressed, stream)
+                .take(want as u64 + 1)
+                .read_to_end(out)
+                .map(drop)
+                .map_err(|e| e.to_string())
+        }
+    }
+}
+
+/// The memory liblzma may take to decode one block: 256 MiB, four times
+/// what xz's strongest preset (`-9`, a 64 MiB dictionary) needs.
+const LZMA_MEMLIMIT: u64 = 256 << 20;
 
 fn convert(raw: &[u8], scalar: Scalar, big_endian: bool) -> Vec<f64> {
     macro_rules! each {
@@ -348,7 +396,7 @@ mod tests {
     const LE64: Layout = Layout {
         big_endian: false,
         header_bytes: 8,
-        zlib: false,
+        compressor: Compressor::None,
     };
 
     fn doubles(v: &[f64]) -> Vec<u8> {
@@ -400,13 +448,119 @@ mod tests {
         let layout = Layout {
             big_endian: false,
             header_bytes: 4,
-            zlib: true,
+            compressor: Compressor::Zlib,
         };
         assert_eq!(decode(&text, layout, 100).unwrap(), v);
         // A header declaring more bytes than the array holds is refused before
         // anything is decompressed.
         let e = decode(&text, layout, 99).unwrap_err().to_string();
         assert!(e.contains("declares 800 bytes"), "{e}");
+    }
+
+    /// `data` as VTK's compressed blocks of `size` bytes (UInt32 headers),
+    /// each compressed by `pack`, in base64.
+    fn blocks(data: &[u8], size: usize, pack: impl Fn(&[u8]) -> Vec<u8>) -> String {
+        let blobs: Vec<Vec<u8>> = data.chunks(size).map(pack).collect();
+        let last = data.len() - (blobs.len() - 1) * size;
+        let mut header = Vec::new();
+        for n in [blobs.len(), size, last] {
+            header.extend((n as u32).to_le_bytes());
+        }
+        for b in &blobs {
+            header.extend((b.len() as u32).to_le_bytes());
+        }
+        STANDARD.encode(&header) + &STANDARD.encode(blobs.concat())
+    }
+
+    fn layout(compressor: Compressor) -> Layout {
+        Layout {
+            big_endian: false,
+            header_bytes: 4,
+            compressor,
+        }
+    }
+
+    fn xz(data: &[u8]) -> Vec<u8> {
+        let mut out = Vec::new();
+        liblzma::read::XzEncoder::new(data, 6)
+            .read_to_end(&mut out)
+            .unwrap();
+        out
+    }
+
+    #[test]
+    fn lz4_and_lzma_blocks_decode_to_the_values() {
+        let v: Vec<f64> = (0..100).map(|i| (i as f64).sqrt() - 3.0).collect();
+        let data = doubles(&v);
+        let lz4 = blocks(&data, 256, lz4_flex::block::compress);
+        assert_eq!(decode(&lz4, layout(Compressor::Lz4), 100).unwrap(), v);
+        let lzma = blocks(&data, 256, xz);
+        assert_eq!(decode(&lzma, layout(Compressor::Lzma), 100).unwrap(), v);
+    }
+
+    #[test]
+    fn a_block_that_inflates_past_its_header_is_refused_early() {
+        // 1 MiB of zeros in one block whose header says 256 bytes: refused
+        // without inflating the megabyte.
+        let zeros = vec![0u8; 1 << 20];
+        for (compressor, blob) in [
+            (Compressor::Lz4, lz4_flex::block::compress(&zeros)),
+            (Compressor::Lzma, xz(&zeros)),
+        ] {
+            let mut header = Vec::new();
+            for n in [1u32, 256, 256, blob.len() as u32] {
+                header.extend(n.to_le_bytes());
+            }
+            let text = STANDARD.encode(&header) + &STANDARD.encode(&blob);
+            let e = decode(&text, layout(compressor), 32)
+                .unwrap_err()
+                .to_string();
+            assert!(e.contains(&format!("{} block 1", compressor.name())), "{e}");
+        }
+        // A block cut short, and bytes that are no stream at all.
+        let data = doubles(&[1.0; 32]);
+        for compressor in [Compressor::Lz4, Compressor::Lzma, Compressor::Zlib] {
+            for blob in [xz(&data)[..20].to_vec(), vec![0xff; 40]] {
+                let mut header = Vec::new();
+                for n in [1u32, 256, 256, blob.len() as u32] {
+                    header.extend(n.to_le_bytes());
+                }
+                let text = STANDARD.encode(&header) + &STANDARD.encode(&blob);
+                let e = decode(&text, layout(compressor), 32)
+                    .unwrap_err()
+                    .to_string();
+                assert!(e.contains("block 1"), "{e}");
+            }
+        }
+    }
+
+    #[test]
+    fn an_lzma_dictionary_past_the_memory_limit_is_refused() {
+        // A valid stream whose block header asks for a 4 GiB dictionary (the
+        // LZMA2 property 40), its header's CRC32 mended: refused, nothing
+        // allocated for it.
+        let data = doubles(&[2.5; 32]);
+        let mut blob = xz(&data);
+        let at = 12; // the block header follows the 12-byte stream header
+        let size = (usize::from(blob[at]) + 1) * 4;
+        assert_eq!(
+            &blob[at + 2..at + 4],
+            &[0x21, 0x01],
+            "LZMA2, one property byte"
+        );
+        blob[at + 4] = 40;
+        let mut crc = flate2::Crc::new();
+        crc.update(&blob[at..at + size - 4]);
+        blob[at + size - 4..at + size].copy_from_slice(&crc.sum().to_le_bytes());
+        let mut header = Vec::new();
+        for n in [1u32, 256, 256, blob.len() as u32] {
+            header.extend(n.to_le_bytes());
+        }
+        let text = STANDARD.encode(&header) + &STANDARD.encode(&blob);
+        let e = decode(&text, layout(Compressor::Lzma), 32)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("LZMA block 1") && e.contains("emory"), "{e}");
     }
 
     #[test]

@@ -104,8 +104,33 @@ pub struct Layout {
     pub big_endian: bool,
     /// Bytes of each header integer: 4 (`UInt32`, VTK's default) or 8 (`UInt64`).
     pub header_bytes: usize,
-    /// `vtkZLibDataCompressor`.
-    pub zlib: bool,
+    /// The `compressor` of the binary blocks.
+    pub compressor: Compressor,
+}
+
+/// The compressors of VTK's XML writer (ParaView's `CompressorType`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Compressor {
+    /// No `compressor` attribute: each array is one header word and its data.
+    None,
+    /// `vtkZLibDataCompressor`: zlib streams (VTK's, OGS's and meshio's default).
+    Zlib,
+    /// `vtkLZ4DataCompressor`: LZ4 blocks without a frame (ParaView's fastest).
+    Lz4,
+    /// `vtkLZMADataCompressor`: `.xz` streams (ParaView's smallest, meshio's `lzma`).
+    Lzma,
+}
+
+impl Compressor {
+    /// Its name in the report and in messages.
+    pub fn name(self) -> &'static str {
+        match self {
+            Compressor::None => "uncompressed",
+            Compressor::Zlib => "zlib",
+            Compressor::Lz4 => "LZ4",
+            Compressor::Lzma => "LZMA",
+        }
+    }
 }
 
 /// The appended data: encoding and byte range (after the `_` marker).
@@ -161,7 +186,7 @@ impl Budget {
         let left = self.left.get();
         if bytes > left {
             return Err(format!(
-                "{values} values take {bytes} bytes decoded, past the {} bytes that the arrays of a file of {} bytes may decode to ({}× its size, at least {} MiB; a zlib bomb, or a count the file cannot hold?)",
+                "{values} values take {bytes} bytes decoded, past the {} bytes that the arrays of a file of {} bytes may decode to ({}× its size, at least {} MiB; a compression bomb, or a count the file cannot hold?)",
                 self.limit,
                 self.file_bytes,
                 crate::input::ENTRY_EXPANSION,
@@ -367,15 +392,17 @@ fn layout_of(path: &Path, root: roxmltree::Node, root_at: Position) -> Result<La
             ));
         }
     };
-    let zlib = match root.attribute("compressor") {
-        None | Some("") => false,
-        Some("vtkZLibDataCompressor") => true,
+    let compressor = match root.attribute("compressor") {
+        None | Some("") => Compressor::None,
+        Some("vtkZLibDataCompressor") => Compressor::Zlib,
+        Some("vtkLZ4DataCompressor") => Compressor::Lz4,
+        Some("vtkLZMADataCompressor") => Compressor::Lzma,
         Some(other) => {
             return Err(err(
                 path,
                 root_at,
                 format!(
-                    "compressor `{other}` is not read (zlib is): write the file with zlib or without compression"
+                    "compressor `{other}` is not read (vtkZLibDataCompressor, vtkLZ4DataCompressor and vtkLZMADataCompressor are): write the file with one of them or without compression"
                 ),
             ));
         }
@@ -383,7 +410,7 @@ fn layout_of(path: &Path, root: roxmltree::Node, root_at: Position) -> Result<La
     Ok(Layout {
         big_endian,
         header_bytes,
-        zlib,
+        compressor,
     })
 }
 
@@ -397,11 +424,8 @@ fn encoding_text(formats: &[&str], appended: Option<&Appended>, layout: &Layout)
             AppendedEncoding::Raw => " (raw)",
         });
     }
-    encoding.push_str(if layout.zlib {
-        ", zlib"
-    } else {
-        ", uncompressed"
-    });
+    encoding.push_str(", ");
+    encoding.push_str(layout.compressor.name());
     encoding.push_str(if layout.header_bytes == 8 {
         ", UInt64 headers"
     } else {
