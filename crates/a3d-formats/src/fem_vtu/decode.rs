@@ -480,6 +480,16 @@ mod tests {
         }
     }
 
+    /// `blob` as the one compressed block of 256 bytes (32 doubles) that a
+    /// UInt32 header declares, in base64.
+    fn one_block(blob: &[u8]) -> String {
+        let mut header = Vec::new();
+        for n in [1u32, 256, 256, blob.len() as u32] {
+            header.extend(n.to_le_bytes());
+        }
+        STANDARD.encode(&header) + &STANDARD.encode(blob)
+    }
+
     fn xz(data: &[u8]) -> Vec<u8> {
         let mut out = Vec::new();
         liblzma::read::XzEncoder::new(data, 6)
@@ -507,12 +517,7 @@ mod tests {
             (Compressor::Lz4, lz4_flex::block::compress(&zeros)),
             (Compressor::Lzma, xz(&zeros)),
         ] {
-            let mut header = Vec::new();
-            for n in [1u32, 256, 256, blob.len() as u32] {
-                header.extend(n.to_le_bytes());
-            }
-            let text = STANDARD.encode(&header) + &STANDARD.encode(&blob);
-            let e = decode(&text, layout(compressor), 32)
+            let e = decode(&one_block(&blob), layout(compressor), 32)
                 .unwrap_err()
                 .to_string();
             assert!(e.contains(&format!("{} block 1", compressor.name())), "{e}");
@@ -521,12 +526,7 @@ mod tests {
         let data = doubles(&[1.0; 32]);
         for compressor in [Compressor::Lz4, Compressor::Lzma, Compressor::Zlib] {
             for blob in [xz(&data)[..20].to_vec(), vec![0xff; 40]] {
-                let mut header = Vec::new();
-                for n in [1u32, 256, 256, blob.len() as u32] {
-                    header.extend(n.to_le_bytes());
-                }
-                let text = STANDARD.encode(&header) + &STANDARD.encode(&blob);
-                let e = decode(&text, layout(compressor), 32)
+                let e = decode(&one_block(&blob), layout(compressor), 32)
                     .unwrap_err()
                     .to_string();
                 assert!(e.contains("block 1"), "{e}");
@@ -552,12 +552,7 @@ mod tests {
         let mut crc = flate2::Crc::new();
         crc.update(&blob[at..at + size - 4]);
         blob[at + size - 4..at + size].copy_from_slice(&crc.sum().to_le_bytes());
-        let mut header = Vec::new();
-        for n in [1u32, 256, 256, blob.len() as u32] {
-            header.extend(n.to_le_bytes());
-        }
-        let text = STANDARD.encode(&header) + &STANDARD.encode(&blob);
-        let e = decode(&text, layout(Compressor::Lzma), 32)
+        let e = decode(&one_block(&blob), layout(Compressor::Lzma), 32)
             .unwrap_err()
             .to_string();
         assert!(e.contains("LZMA block 1") && e.contains("emory"), "{e}");
