@@ -10,7 +10,7 @@
 //! base: anura3d-mini/TwoMat.GOM     (a file under fixtures/, or `none`)
 //! append: text after $$FINISH\n     (edits, in order; `\n` is a line break)
 //! replace: old text => new text     (the first occurrence)
-//! expect: ok | error <text the message holds>
+//! expect: ok | warning <text a warning holds> | error <text the message holds>
 //! ```
 
 use crate::common;
@@ -31,7 +31,9 @@ struct Rule {
     reader: String,
     base: Option<String>,
     edits: Vec<Edit>,
-    expect: Result<(), String>,
+    /// Read, with a warning holding the text if one is given; or refused
+    /// with a message holding the text.
+    expect: Result<Option<String>, String>,
 }
 
 #[derive(Debug)]
@@ -42,6 +44,19 @@ enum Edit {
 
 fn unescape(s: &str) -> String {
     s.replace("\\n", "\n").replace("\\t", "\t")
+}
+
+/// The warnings of a file `read` took (the FEM readers' reports; none for
+/// the other readers).
+fn warnings(reader: &str, path: &Path) -> Vec<String> {
+    match reader {
+        "fem-csv" | "fem-vtu" | "fem-pvd" => {
+            a3d_init::pipeline::fem::load(&FemOptions::files(vec![path.to_path_buf()]))
+                .map(|l| l.reports.into_iter().flat_map(|r| r.warnings).collect())
+                .unwrap_or_default()
+        }
+        _ => Vec::new(),
+    }
 }
 
 /// Every rule block of `text` (the page `page`).
@@ -58,7 +73,7 @@ fn rules_of(page: &str, text: &str) -> Vec<Rule> {
             reader: String::new(),
             base: None,
             edits: Vec::new(),
-            expect: Ok(()),
+            expect: Ok(None),
         };
         for (_, body) in lines.by_ref() {
             if body.trim() == "```" {
@@ -80,9 +95,10 @@ fn rules_of(page: &str, text: &str) -> Vec<Rule> {
                 }
                 "expect" => {
                     rule.expect = match value.split_once(' ') {
-                        _ if value == "ok" => Ok(()),
+                        _ if value == "ok" => Ok(None),
+                        Some(("warning", text)) => Ok(Some(text.to_string())),
                         Some(("error", text)) => Err(text.to_string()),
-                        _ => panic!("{page}:{}: `expect: ok | error TEXT`", i + 1),
+                        _ => panic!("{page}:{}: `expect: ok | warning TEXT | error TEXT`", i + 1),
                     }
                 }
                 other => panic!("{page}:{}: unknown key `{other}`", i + 1),
@@ -217,15 +233,20 @@ fn every_rule_example_of_every_format_page_holds() {
             let path = dir.join(file_name(&rule.reader));
             std::fs::write(&path, &bytes).unwrap();
             let got = read(&rule.reader, &path);
-            let ok = match (&rule.expect, &got) {
-                (Ok(()), Ok(())) => true,
+            let warned = match got {
+                Ok(()) => Ok(warnings(&rule.reader, &path)),
+                Err(e) => Err(e),
+            };
+            let ok = match (&rule.expect, &warned) {
+                (Ok(None), Ok(_)) => true,
+                (Ok(Some(want)), Ok(ws)) => ws.iter().any(|w| w.contains(want.as_str())),
                 (Err(want), Err(message)) => message.contains(want.as_str()),
                 _ => false,
             };
             if !ok {
                 failures.push(format!(
                     "{}:{}: expected {:?}, the reader gave {:?}",
-                    rule.page, rule.line, rule.expect, got
+                    rule.page, rule.line, rule.expect, warned
                 ));
             }
             checked += 1;

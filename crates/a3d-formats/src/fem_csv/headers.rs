@@ -49,7 +49,9 @@ impl Field {
 }
 
 /// Normalises a header for matching: drops units in () or [], lower-cases and
-/// keeps letters and digits only.
+/// keeps letters and digits only, with σ spelt `sig`, τ `tau` and a prime
+/// (`'`, `′`, `’`: effective) `prime`, so that `σ'xx [kN/m²]` reads as
+/// `sigprimexx` and `τxy` as `tauxy`.
 pub fn normalise(header: &str) -> String {
     let mut out = String::new();
     let mut depth = 0;
@@ -57,9 +59,11 @@ pub fn normalise(header: &str) -> String {
         match c {
             '(' | '[' => depth += 1,
             ')' | ']' => depth = (depth as i32 - 1).max(0) as usize,
-            c if depth == 0 && c.is_alphanumeric() && c.is_ascii() => {
-                out.push(c.to_ascii_lowercase())
-            }
+            _ if depth > 0 => {}
+            'σ' | 'Σ' => out.push_str("sig"),
+            'τ' => out.push_str("tau"),
+            '\'' | '′' | '’' => out.push_str("prime"),
+            c if c.is_alphanumeric() && c.is_ascii() => out.push(c.to_ascii_lowercase()),
             _ => {}
         }
     }
@@ -124,11 +128,16 @@ pub fn synonym(n: &str) -> Option<Field> {
         "xzshearstress" | "tauxz" | "sxz" | "sigxz" | "sigmaxz" | "shearstressxz"
         | "zxshearstress" | "tauzx" | "s13" => t(Xz),
         "xeffectivestress" | "sigxxe" | "esxx" | "effectivestressx" | "sigmaxeff"
-        | "sigmaxprime" => e(Xx),
+        | "sigmaxprime" | "sigprimexx" | "sigxxprime" | "sigmaprimexx" | "sigmaxxprime" => e(Xx),
         "yeffectivestress" | "sigyye" | "esyy" | "effectivestressy" | "sigmayeff"
-        | "sigmayprime" => e(Yy),
+        | "sigmayprime" | "sigprimeyy" | "sigyyprime" | "sigmaprimeyy" | "sigmayyprime" => e(Yy),
         "zeffectivestress" | "sigzze" | "eszz" | "effectivestressz" | "sigmazeff"
-        | "sigmazprime" => e(Zz),
+        | "sigmazprime" | "sigprimezz" | "sigzzprime" | "sigmaprimezz" | "sigmazzprime" => e(Zz),
+        // An effective shear stress is the total one (the pore pressure has
+        // no shear part).
+        "sigprimexy" | "sigxyprime" | "sigmaprimexy" | "tauprimexy" => t(Xy),
+        "sigprimeyz" | "sigyzprime" | "sigmaprimeyz" | "tauprimeyz" => t(Yz),
+        "sigprimexz" | "sigxzprime" | "sigmaprimexz" | "tauprimexz" | "sigprimezx" => t(Xz),
         _ => None,
     }
 }

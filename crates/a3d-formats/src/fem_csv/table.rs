@@ -15,6 +15,7 @@ use super::schema::{Rows, Schema};
 use super::source::{Source, decode, nth_line_start};
 use crate::error::{FormatError, ParseError};
 use crate::extent::{far_outlier, first_coincident};
+use crate::fem::SignConvention;
 use crate::fem::{ColumnReport, FemReadReport};
 use a3d_model::{FemNodes, Quantity};
 
@@ -163,6 +164,7 @@ pub(super) fn parse_csv_stream(
     let mut taken = take_values(path, &headers, &value_cols, &mut values, &lines_of)?;
     nodes.fields.append(&mut taken.fields);
     warnings.append(&mut taken.warnings);
+    warnings.extend(tensile_vertical_stress(&nodes.fields, options.sign));
     if cregion.is_some() {
         nodes.region = Some(regions);
     }
@@ -571,6 +573,46 @@ fn check_ids(
         .into()),
         _ => Ok(None),
     }
+}
+
+/// A warning where the vertical stress (effective where the file has it,
+/// else total) comes out tensile at nine nodes in ten or more, as read in
+/// `sign`: ground at rest is in compression, so the file is most likely in
+/// the other convention (compression positive for GeoStudio, tension
+/// positive for PLAXIS, Anura3D and OGS) and every stress and pore pressure
+/// would be read with the wrong sign.
+fn tensile_vertical_stress(
+    fields: &[(Quantity, Vec<f64>)],
+    sign: SignConvention,
+) -> Option<String> {
+    use a3d_model::StressComponent::Yy;
+    let (q, v) = fields
+        .iter()
+        .find(|(q, _)| *q == Quantity::EffectiveStress(Yy))
+        .or_else(|| fields.iter().find(|(q, _)| *q == Quantity::TotalStress(Yy)))?;
+    let loaded = v.iter().filter(|x| **x != 0.0).count();
+    let tensile = v.iter().filter(|x| **x > 0.0).count();
+    if loaded < 3 || 10 * tensile < 9 * loaded {
+        return None;
+    }
+    let (read, other) = match sign {
+        SignConvention::GeoStudio => (
+            "GeoStudio's signs (compression positive)",
+            "`--fem-sign tension-positive` (PLAXIS, Anura3D) or `--fem-sign ogs`",
+        ),
+        SignConvention::TensionPositive | SignConvention::Ogs => (
+            "tension positive",
+            "`--fem-sign geostudio` (compression positive)",
+        ),
+    };
+    let kind = match q {
+        Quantity::EffectiveStress(_) => "effective",
+        _ => "total",
+    };
+    Some(format!(
+        "the vertical {kind} stress ({}) is tensile at {tensile} of {loaded} loaded nodes, read with {read}: ground at rest is in compression, so the file is likely in the other convention; if so, give {other}",
+        q.name()
+    ))
 }
 
 /// The value columns that every row fills, and warnings for those no row

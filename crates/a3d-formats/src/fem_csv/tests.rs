@@ -11,6 +11,7 @@ use super::schema::{Rows, Schema};
 use super::table::{Sizes, parse_csv_stream};
 use super::*;
 use crate::extent::{far_outlier, first_coincident};
+use crate::fem::SignConvention;
 use a3d_model::{Quantity, StressComponent};
 
 #[test]
@@ -45,6 +46,36 @@ fn headers_normalise_to_synonyms() {
         ),
         ("Node", Field::Node),
         ("Material ID", Field::Region),
+        // Greek letters and primes (effective), as tables written by hand
+        // or by other programs spell them.
+        (
+            "σ'xx [kN/m²]",
+            Field::Value(Quantity::EffectiveStress(StressComponent::Xx)),
+        ),
+        (
+            "σ′_yy (kPa)",
+            Field::Value(Quantity::EffectiveStress(StressComponent::Yy)),
+        ),
+        (
+            "σ_zz'",
+            Field::Value(Quantity::EffectiveStress(StressComponent::Zz)),
+        ),
+        (
+            "σxx",
+            Field::Value(Quantity::TotalStress(StressComponent::Xx)),
+        ),
+        (
+            "τxy [kPa]",
+            Field::Value(Quantity::TotalStress(StressComponent::Xy)),
+        ),
+        (
+            "σ'xy",
+            Field::Value(Quantity::TotalStress(StressComponent::Xy)),
+        ),
+        (
+            "Σyz",
+            Field::Value(Quantity::TotalStress(StressComponent::Yz)),
+        ),
     ] {
         assert_eq!(
             synonym(&strip_unit_suffix(&normalise(header), header)),
@@ -395,4 +426,32 @@ fn a_blank_or_bom_only_input_is_empty_and_utf16_is_refused() {
             assert!(e.starts_with(expected), "{e}");
         }
     }
+}
+
+/// A table whose vertical stress reads tensile nearly everywhere is in the
+/// other sign convention, most likely: said, with the option that reads it.
+#[test]
+fn a_tensile_vertical_stress_questions_the_sign_convention() {
+    // A PLAXIS-like table: tension positive, σ' and p_water in kN/m².
+    let plaxis = "X [m],Y [m],σ'yy [kN/m²],σ'xx [kN/m²],p_water [kN/m²]\n\
+                  0,0,-20,-10,-10\n1,0,-20,-10,-10\n0,1,-10,-5,0\n1,1,-10,-5,0\n";
+    let (_, report) = parse(plaxis, 1 << 20).unwrap();
+    assert_eq!(report.warnings.len(), 1, "{:?}", report.warnings);
+    let w = &report.warnings[0];
+    assert!(
+        w.contains("vertical effective stress (esyy) is tensile at 4 of 4 loaded nodes")
+            && w.contains("--fem-sign tension-positive"),
+        "{w}"
+    );
+    // The same read as tension positive, and a GeoStudio table with one
+    // node in tension among compressed ones, raise nothing.
+    let options = CsvOptions {
+        sign: SignConvention::TensionPositive,
+        ..CsvOptions::default()
+    };
+    let (_, report) = parse_csv(Path::new("t.csv"), plaxis.as_bytes(), &options).unwrap();
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
+    let geostudio = "X,Y,Y-Total Stress,PWP\n0,0,20,10\n1,0,20,10\n0,1,-1,0\n1,1,10,0\n";
+    let (_, report) = parse(geostudio, 1 << 20).unwrap();
+    assert!(report.warnings.is_empty(), "{:?}", report.warnings);
 }
