@@ -332,6 +332,16 @@ fn inflate(
         Compressor::Lz4 => {
             // VTK's LZ4 blocks are bare (no frame): the size comes from the
             // header, and a block that decodes to anything else is refused.
+            // The buffer is sized before decoding, so the size is first held
+            // against what the block's bytes can give: each byte of an LZ4
+            // block adds at most 255 bytes of output.
+            let most = compressed.len().saturating_mul(255).saturating_add(64);
+            if want > most {
+                return Err(format!(
+                    "its {} bytes cannot decode to the {want} its header gives (at most {most})",
+                    compressed.len()
+                ));
+            }
             let before = out.len();
             out.resize(before + want, 0);
             let n = lz4_flex::block::decompress_into(compressed, &mut out[before..])
@@ -431,25 +441,12 @@ mod tests {
         let v: Vec<f64> = (0..100).map(|i| i as f64 * 0.25).collect();
         let data = doubles(&v);
         // Two blocks of 512 and 288 bytes, as VTK splits them.
-        let mut header = Vec::new();
-        let mut blobs = Vec::new();
-        for chunk in data.chunks(512) {
+        let text = blocks(&data, 512, |chunk| {
             let mut z = flate2::write::ZlibEncoder::new(Vec::new(), flate2::Compression::default());
             z.write_all(chunk).unwrap();
-            blobs.push(z.finish().unwrap());
-        }
-        for n in [2u32, 512, 288] {
-            header.extend(n.to_le_bytes());
-        }
-        for b in &blobs {
-            header.extend((b.len() as u32).to_le_bytes());
-        }
-        let text = STANDARD.encode(&header) + &STANDARD.encode(blobs.concat());
-        let layout = Layout {
-            big_endian: false,
-            header_bytes: 4,
-            compressor: Compressor::Zlib,
-        };
+            z.finish().unwrap()
+        });
+        let layout = layout(Compressor::Zlib);
         assert_eq!(decode(&text, layout, 100).unwrap(), v);
         // A header declaring more bytes than the array holds is refused before
         // anything is decompressed.
@@ -462,12 +459,18 @@ mod tests {
     fn blocks(data: &[u8], size: usize, pack: impl Fn(&[u8]) -> Vec<u8>) -> String {
         let blobs: Vec<Vec<u8>> = data.chunks(size).map(pack).collect();
         let last = data.len() - (blobs.len() - 1) * size;
+        encoded(&blobs, size, last)
+    }
+
+    /// Compressed `blobs` under their UInt32 header (count, block size, last
+    /// block's size, each blob's size), in base64.
+    fn encoded(blobs: &[Vec<u8>], size: usize, last: usize) -> String {
         let mut header = Vec::new();
-        for n in [blobs.len(), size, last] {
+        for n in [blobs.len(), size, last]
+            .into_iter()
+            .chain(blobs.iter().map(Vec::len))
+        {
             header.extend((n as u32).to_le_bytes());
-        }
-        for b in &blobs {
-            header.extend((b.len() as u32).to_le_bytes());
         }
         STANDARD.encode(&header) + &STANDARD.encode(blobs.concat())
     }
@@ -483,11 +486,7 @@ mod tests {
     /// `blob` as the one compressed block of 256 bytes (32 doubles) that a
     /// UInt32 header declares, in base64.
     fn one_block(blob: &[u8]) -> String {
-        let mut header = Vec::new();
-        for n in [1u32, 256, 256, blob.len() as u32] {
-            header.extend(n.to_le_bytes());
-        }
-        STANDARD.encode(&header) + &STANDARD.encode(blob)
+        encoded(&[blob.to_vec()], 256, 256)
     }
 
     fn xz(data: &[u8]) -> Vec<u8> {
@@ -522,6 +521,20 @@ mod tests {
                 .to_string();
             assert!(e.contains(&format!("{} block 1", compressor.name())), "{e}");
         }
+        // An LZ4 block of a few bytes whose header claims more than they
+        // can give: refused before its buffer is sized.
+        let mut header = Vec::new();
+        for n in [1u32, 1 << 30, 1 << 30, 4] {
+            header.extend(n.to_le_bytes());
+        }
+        let text = STANDARD.encode(&header) + &STANDARD.encode([0u8; 4]);
+        let e = decode(&text, layout(Compressor::Lz4), 1 << 27)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("LZ4 block 1: its 4 bytes cannot decode to the 1073741824"),
+            "{e}"
+        );
         // A block cut short, and bytes that are no stream at all.
         let data = doubles(&[1.0; 32]);
         for compressor in [Compressor::Lz4, Compressor::Lzma, Compressor::Zlib] {
