@@ -15,8 +15,7 @@ use super::schema::{Rows, Schema};
 use super::source::{Source, decode, nth_line_start};
 use crate::error::{FormatError, ParseError};
 use crate::extent::{far_outlier, first_coincident};
-use crate::fem::SignConvention;
-use crate::fem::{ColumnReport, FemReadReport};
+use crate::fem::{ColumnReport, FemReadReport, SignConvention};
 use a3d_model::{FemNodes, Quantity};
 
 /// Block and chunk sizes of the data-row pass (tests make them tiny).
